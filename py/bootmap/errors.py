@@ -1,0 +1,26 @@
+"""Exceptions bootmap raises. Every one carries a message a person can act on."""
+
+
+class BootmapError(Exception):
+    """Base class of every error bootmap raises on purpose."""
+
+
+class TableauError(BootmapError, ValueError):
+    """A tableau is malformed. ``where`` names the place: file, step index, field."""
+
+    def __init__(self, message: str, where: str = ""):
+        self.where = where
+        self.reason = message
+        super().__init__(f"{where}: {message}" if where else message)
+
+
+class AxiomError(BootmapError):
+    """The axiom files cannot be loaded: missing directory, unknown level, or clingo rejects the text."""
+
+
+class InconsistentTableau(BootmapError):
+    """No map satisfies the axioms for this tableau, whatever the number of dstates."""
+
+
+class SolveTimeout(BootmapError):
+    """The solver ran out of time before it proved a minimal map."""

@@ -1,0 +1,247 @@
+"""The tableau: a robot's experience as views (or images) at dstates and the actions between them.
+
+This is the public, versioned exchange format of bootmap (``bootmap.tableau/1``), defined by the JSON
+Schema in ``schemas/tableau-1.schema.json``. Loading validates against that schema and then checks what a
+schema cannot say (every step but the last has an action, numbers are finite, images share one length).
+Every problem is reported as a :class:`~bootmap.errors.TableauError` naming the step index and the field.
+
+Example
+-------
+>>> t = Tableau.from_dict({"format": "bootmap.tableau/1", "steps": [
+...     {"view": "V0", "action": {"type": "turn", "angle_deg": -90}}, {"view": "V1"}]})
+>>> len(t), t.steps[0].action
+(2, Turn(angle_deg=-90.0))
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from functools import lru_cache
+from importlib import resources
+from pathlib import Path
+from typing import Any, Union
+
+import jsonschema
+
+from .errors import TableauError
+
+FORMAT = "bootmap.tableau/1"
+
+
+@dataclass(frozen=True)
+class Turn:
+    """Turn in place. Negative angles turn right (clockwise), positive left; near +-180 turns around."""
+
+    angle_deg: float
+
+    def to_dict(self) -> dict:
+        return {"type": "turn", "angle_deg": self.angle_deg}
+
+
+@dataclass(frozen=True)
+class Travel:
+    """Travel along a path to the next dstate, with the net heading change of a curved path."""
+
+    distance_m: float
+    heading_change_deg: float = 0.0
+
+    def to_dict(self) -> dict:
+        d = {"type": "travel", "distance_m": self.distance_m}
+        if self.heading_change_deg:
+            d["heading_change_deg"] = self.heading_change_deg
+        return d
+
+
+Action = Union[Turn, Travel]
+
+
+@dataclass(frozen=True)
+class Step:
+    """One time point: the view (or image) at a dstate, and the action to the next time point."""
+
+    view: str | None = None
+    action: Action | None = None
+    image: tuple[float, ...] | None = None
+    truth: str | int | None = None
+    pose: tuple[float, float, float] | None = None
+
+    def to_dict(self) -> dict:
+        d: dict[str, Any] = {}
+        if self.view is not None:
+            d["view"] = self.view
+        if self.action is not None:
+            d["action"] = self.action.to_dict()
+        if self.image is not None:
+            d["image"] = list(self.image)
+        if self.truth is not None:
+            d["truth"] = self.truth
+        if self.pose is not None:
+            d["pose"] = list(self.pose)
+        return d
+
+
+@dataclass(frozen=True)
+class Tableau:
+    """A validated tableau. Build one with :meth:`from_dict`, :meth:`loads` or :func:`load`."""
+
+    steps: tuple[Step, ...]
+    world: str | None = None
+    meta: dict = field(default_factory=dict)
+
+    def __len__(self) -> int:
+        return len(self.steps)
+
+    @property
+    def views(self) -> list[str | None]:
+        return [s.view for s in self.steps]
+
+    @property
+    def actions(self) -> list[Action]:
+        return [s.action for s in self.steps[:-1]]  # type: ignore[misc]
+
+    def require_views(self, source: str = "tableau") -> None:
+        """Raise unless every step has a view label (the resolver works on views, not raw images)."""
+        for i, s in enumerate(self.steps):
+            if s.view is None:
+                raise TableauError("has an image but no view; cluster the images into views first "
+                                   "(bootmap views) or give view labels", f"{source}: steps[{i}].view")
+
+    def with_views(self, views: list[str]) -> "Tableau":
+        """A copy with the given view labels (one per step), e.g. after clustering images."""
+        if len(views) != len(self.steps):
+            raise TableauError(f"got {len(views)} views for {len(self.steps)} steps")
+        steps = tuple(Step(v, s.action, s.image, s.truth, s.pose) for v, s in zip(views, self.steps))
+        return Tableau(steps, self.world, dict(self.meta))
+
+    def to_dict(self) -> dict:
+        d: dict[str, Any] = {"format": FORMAT}
+        if self.world is not None:
+            d["world"] = self.world
+        if self.meta:
+            d["meta"] = self.meta
+        d["steps"] = [s.to_dict() for s in self.steps]
+        return d
+
+    def dumps(self) -> str:
+        return json.dumps(self.to_dict())
+
+    @classmethod
+    def loads(cls, text: str | bytes, source: str = "tableau") -> "Tableau":
+        """Parse JSON text. NaN and Infinity, which Python's json accepts but JSON forbids, are rejected."""
+        try:
+            data = json.loads(text, parse_constant=_reject_constant)
+        except _NonFinite as e:
+            raise TableauError(f"{e.args[0]} is not a finite number (JSON allows none)", source) from None
+        except json.JSONDecodeError as e:
+            raise TableauError(f"not valid JSON: {e.msg} at line {e.lineno} column {e.colno}", source) from None
+        except RecursionError:
+            raise TableauError("JSON nested too deeply", source) from None
+        return cls.from_dict(data, source)
+
+    @classmethod
+    def from_dict(cls, data: Any, source: str = "tableau") -> "Tableau":
+        """Validate a parsed JSON document and build the tableau."""
+        _check_schema(data, source)
+        raw = data["steps"]
+        steps = tuple(_step(s, i, i == len(raw) - 1, source) for i, s in enumerate(raw))
+        _check_images(steps, source)
+        return cls(steps, data.get("world"), dict(data.get("meta", {})))
+
+
+def load(path: str | Path) -> Tableau:
+    """Read and validate a tableau file; errors name the file."""
+    path = Path(path)
+    try:
+        text = path.read_bytes()
+    except OSError as e:
+        raise TableauError(f"cannot read: {e.strerror}", str(path)) from None
+    return Tableau.loads(text, str(path))
+
+
+@lru_cache(maxsize=1)
+def schema() -> dict:
+    """The JSON Schema of the tableau format (also served by the HTTP service)."""
+    text = resources.files("bootmap").joinpath("schemas/tableau-1.schema.json").read_text()
+    return json.loads(text)
+
+
+class _NonFinite(Exception):
+    pass
+
+
+def _reject_constant(name: str):
+    raise _NonFinite(name)
+
+
+def _pointer(path) -> str:
+    """steps/3/action/angle_deg -> steps[3].action.angle_deg"""
+    out = ""
+    for p in path:
+        out += f"[{p}]" if isinstance(p, int) else (f".{p}" if out else str(p))
+    return out or "(top level)"
+
+
+@lru_cache(maxsize=1)
+def _validator() -> jsonschema.protocols.Validator:
+    return jsonschema.Draft202012Validator(schema())
+
+
+def _check_schema(data: Any, source: str) -> None:
+    errors = list(_validator().iter_errors(data))
+    if not errors:
+        return
+    # The deepest error is the one that names the field a person has to fix.
+    err = max(errors, key=lambda e: (len(e.absolute_path), -len(e.context)))
+    if err.validator == "anyOf" and err.absolute_path and err.absolute_path[-1] != "action":
+        msg = "a step needs a view or an image"
+    elif err.validator == "additionalProperties":
+        msg = err.message.replace("Additional properties are not allowed", "unknown field")
+    elif err.validator == "enum" and list(err.absolute_path)[-2:-1] == ["action"]:
+        msg = f"unknown action type {err.instance!r} (expected 'turn' or 'travel')"
+    elif err.validator == "const" and list(err.absolute_path) == ["format"]:
+        msg = f"unsupported format {err.instance!r} (expected {FORMAT!r})"
+    elif err.validator == "minItems" and list(err.absolute_path) == ["steps"]:
+        msg = "a tableau needs at least one step"
+    else:
+        msg = err.message
+    raise TableauError(msg, f"{source}: {_pointer(err.absolute_path)}")
+
+
+def _finite(x: float, where: str) -> float:
+    if isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x):
+        raise TableauError(f"{x!r} is not a finite number", where)
+    return float(x)
+
+
+def _step(d: dict, i: int, last: bool, source: str) -> Step:
+    where = f"{source}: steps[{i}]"
+    a = d.get("action")
+    if a is None and not last:
+        raise TableauError("missing: every step but the last needs an action to the next step", where + ".action")
+    if a is not None and last:
+        raise TableauError("the last step has an action but no step follows it", where + ".action")
+    action: Action | None = None
+    if a is not None and a["type"] == "turn":
+        action = Turn(_finite(a["angle_deg"], where + ".action.angle_deg"))
+    elif a is not None:
+        action = Travel(_finite(a["distance_m"], where + ".action.distance_m"),
+                        _finite(a.get("heading_change_deg", 0.0), where + ".action.heading_change_deg"))
+    image = None
+    if "image" in d:
+        image = tuple(_finite(x, f"{where}.image[{j}]") for j, x in enumerate(d["image"]))
+    pose = None
+    if "pose" in d:
+        pose = tuple(_finite(x, f"{where}.pose[{j}]") for j, x in enumerate(d["pose"]))
+    return Step(d.get("view"), action, image, d.get("truth"), pose)  # type: ignore[arg-type]
+
+
+def _check_images(steps: tuple[Step, ...], source: str) -> None:
+    lengths = {len(s.image) for s in steps if s.image is not None}
+    if len(lengths) > 1:
+        first = next(len(s.image) for s in steps if s.image is not None)
+        for i, s in enumerate(steps):
+            if s.image is not None and len(s.image) != first:
+                raise TableauError(f"has {len(s.image)} values where steps before have {first}",
+                                   f"{source}: steps[{i}].image")
