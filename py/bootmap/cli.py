@@ -1,3 +1,155 @@
-"""Placeholder, replaced below."""
-def main():
-    raise SystemExit(0)
+"""The ``bootmap`` command. Each sub-command is a thin shell over a library call.
+
+Exit codes: 0 success, 1 failure (no map satisfies the axioms, time-out), 2 bad input (a tableau,
+world or axiom file that is malformed, an unknown level).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from typing import Callable, Sequence
+
+from . import __version__
+from .errors import AxiomError, BootmapError, InconsistentTableau, SolveTimeout, TableauError
+
+EXIT_OK, EXIT_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
+
+
+def _levels(text: str) -> list[str]:
+    return [x.strip() for x in text.split(",") if x.strip()]
+
+
+def _add_theory_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--axioms", metavar="DIR",
+                   help="axiom directory (default: $BOOTMAP_AXIOMS, else the shipped asp/)")
+    p.add_argument("--levels", type=_levels, metavar="L1,L2",
+                   help="levels to load, e.g. causal,topological (default: every .lp file in the directory)")
+    p.add_argument("--quantum", type=float, default=15.0, metavar="DEG",
+                   help="round turn angles and heading changes to this many degrees (default 15)")
+
+
+def cmd_map(args: argparse.Namespace) -> int:
+    from .resolver import Resolver
+    from .tableau import load
+
+    tableau = load(args.tableau)
+    resolver = Resolver(axioms=args.axioms, levels=args.levels, quantum_deg=args.quantum,
+                        time_limit=args.time_limit, max_models=args.max_models)
+    cmap = resolver.resolve(tableau)
+    if args.format == "json":
+        print(json.dumps(cmap.to_dict(), indent=1))
+        return EXIT_OK
+    print(cmap.to_text())
+    if args.all:
+        for i, alt in enumerate(cmap.alternatives, 1):
+            print(f"\nminimal map {i + 1}: " + " ".join(alt))
+    elif cmap.alternatives:
+        print(f"\n{len(cmap.alternatives)} more minimal map(s): see --all")
+    return EXIT_OK
+
+
+def cmd_axioms(args: argparse.Namespace) -> int:
+    from .axioms import load_theory
+
+    theory = load_theory(args.axioms, args.levels)
+    print(f"axiom directory: {theory.directory}")
+    for rule in theory.rules():
+        print(f"{rule.level:12} {rule.name:36} {rule.file}:{rule.line}")
+    return EXIT_OK
+
+
+def cmd_schema(args: argparse.Namespace) -> int:
+    from .tableau import schema
+
+    print(json.dumps(schema(), indent=2))
+    return EXIT_OK
+
+
+def cmd_demo(args: argparse.Namespace) -> int:
+    from . import examples
+    from .resolver import Resolver
+
+    tableau = examples.notched_rectangle(circuits=50)
+    print("The paper's notched rectangle: 50 clockwise circuits, 401 time points, 4 views.\n")
+    cmap = Resolver().resolve(tableau)
+    print(cmap.to_text(all_steps=False))
+    for levels in (["causal", "topological"], ["causal", "metrical"], ["causal"]):
+        m = Resolver(levels=levels).resolve(tableau)
+        print(f"\nwith levels {','.join(levels)}: {m.n_dstates} dstates, {m.n_places} places, "
+              f"{m.n_paths} paths ({m.stats['total_s']:.3f} s)")
+    return EXIT_OK
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="bootmap",
+        description="Bootstrap learning of a robot's cognitive map (Kuipers & Beeson 2002): "
+                    "resolve a tableau of views and actions into dstates, places and paths.")
+    parser.add_argument("--version", action="version", version=f"bootmap {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    p = sub.add_parser("map", help="resolve a tableau into its minimal cognitive map",
+                       description="Resolve a tableau (JSON, format bootmap.tableau/1) into dstates, places and "
+                                   "paths with the ASP axioms, and print the map: text shows the tableau annotated "
+                                   "like the paper's table (t, view, dstate, place, path, dir, action).")
+    p.add_argument("tableau", help="tableau JSON file")
+    p.add_argument("--format", choices=["text", "json"], default="text")
+    p.add_argument("--all", action="store_true", help="also print every other minimal map found")
+    p.add_argument("--time-limit", type=float, default=60.0, metavar="S", help="seconds for the search (default 60)")
+    p.add_argument("--max-models", type=int, default=10, metavar="N",
+                   help="minimal maps to enumerate before calling the count capped (default 10)")
+    _add_theory_options(p)
+    p.set_defaults(handler=cmd_map)
+
+    p = sub.add_parser("axioms", help="list the axiom files and their named rules",
+                       description="List the levels (.lp files) of the axiom directory and every rule named by a "
+                                   "'%%! name' comment, with file and line. A file that does not parse is reported "
+                                   "with clingo's message.")
+    _add_theory_options(p)
+    p.set_defaults(handler=cmd_axioms)
+
+    p = sub.add_parser("schema", help="print the JSON Schema of the tableau format")
+    p.set_defaults(handler=cmd_schema)
+
+    p = sub.add_parser("demo", help="run the main job: resolve the paper's notched-rectangle tableau",
+                       description="Resolve the paper's 401-step notched-rectangle tableau with every level, then "
+                                   "with each level switched off, and print the maps.")
+    p.set_defaults(handler=cmd_demo)
+
+    _register_optional(sub)
+    return parser
+
+
+def _register_optional(sub) -> None:
+    """Sub-commands of parts that register themselves (the simulator)."""
+    try:
+        from .sim.commands import register
+    except ImportError:
+        return
+    register(sub)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    handler: Callable[[argparse.Namespace], int] = args.handler
+    try:
+        return handler(args)
+    except (TableauError, AxiomError) as e:
+        print(f"bootmap: error: {e}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except (InconsistentTableau, SolveTimeout) as e:
+        print(f"bootmap: {e}", file=sys.stderr)
+        return EXIT_FAILURE
+    except BootmapError as e:
+        print(f"bootmap: {e}", file=sys.stderr)
+        return EXIT_FAILURE
+    except BrokenPipeError:  # output piped into e.g. `head`, which closed early
+        sys.stderr.close()
+        return EXIT_OK
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -23,4 +23,8 @@ class InconsistentTableau(BootmapError):
 
 
 class SolveTimeout(BootmapError):
-    """The solver ran out of time before it proved a minimal map."""
+    """The solver ran out of time before it proved a minimal map; ``lower_bound`` dstates are needed."""
+
+    def __init__(self, message: str, lower_bound: int = 0):
+        self.lower_bound = lower_bound
+        super().__init__(message)

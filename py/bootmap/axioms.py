@@ -1,0 +1,129 @@
+"""The theory: the .lp files of the axiom directory, grouped into levels.
+
+Every ``*.lp`` file at the top of the axiom directory is a *level*, named by its file stem
+(``causal``, ``topological``, ``metrical``, or any file a user drops in, e.g. ``daylight.lp``).
+Files under ``core/`` lay out the search and are always loaded. Rules are named by a ``%! name``
+comment line directly above them; :meth:`Theory.rules` lists them with file and line, which is
+how explanations cite the axiom a proof uses.
+
+The directory is, in order: the ``axioms`` argument, the ``BOOTMAP_AXIOMS`` environment variable,
+the copy inside an installed wheel (``bootmap/asp``), the repository's top-level ``asp/``.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Iterable, Sequence
+
+import clingo
+
+from .errors import AxiomError
+
+MANDATORY = "causal"
+_RULE_NAME = re.compile(r"^%!\s*([a-z][a-z0-9_]*)\s*$")
+
+
+def default_axioms_dir() -> Path:
+    """Where the axioms are when nobody says otherwise."""
+    env = os.environ.get("BOOTMAP_AXIOMS")
+    if env:
+        return Path(env)
+    here = Path(__file__).resolve().parent
+    for candidate in (here / "asp", here.parent.parent / "asp"):
+        if (candidate / f"{MANDATORY}.lp").is_file():
+            return candidate
+    raise AxiomError("cannot find the axiom directory (asp/); set BOOTMAP_AXIOMS or pass --axioms")
+
+
+@dataclass(frozen=True)
+class Rule:
+    """A named rule: where it is and what it says."""
+
+    name: str
+    level: str
+    file: str
+    line: int
+    text: str
+
+
+@dataclass(frozen=True)
+class Theory:
+    """The loaded axiom files. ``levels`` maps level name -> file; ``core`` lists the search files."""
+
+    directory: Path
+    levels: dict[str, Path]
+    core: tuple[Path, ...]
+
+    @property
+    def files(self) -> list[Path]:
+        return list(self.core) + list(self.levels.values())
+
+    def load_into(self, ctl: clingo.Control) -> None:
+        for f in self.files:
+            ctl.load(str(f))
+
+    def rules(self) -> list[Rule]:
+        """Every ``%! name`` labelled rule, in file order."""
+        out = []
+        for level, path in [("core", p) for p in self.core] + list(self.levels.items()):
+            out.extend(_labelled_rules(path, level))
+        return out
+
+
+def available_levels(directory: str | Path | None = None) -> list[str]:
+    d = Path(directory) if directory else default_axioms_dir()
+    return sorted(p.stem for p in d.glob("*.lp"))
+
+
+def load_theory(directory: str | Path | None = None, levels: Sequence[str] | None = None) -> Theory:
+    """Find, select and check the axiom files. Raises :class:`AxiomError` with clingo's message."""
+    d = Path(directory) if directory else default_axioms_dir()
+    if not d.is_dir():
+        raise AxiomError(f"axiom directory not found: {d}")
+    found = {p.stem: p for p in sorted(d.glob("*.lp"))}
+    if MANDATORY not in found:
+        raise AxiomError(f"{d} has no {MANDATORY}.lp: the causal level defines the dstates")
+    chosen = list(found) if levels is None else _select(levels, found, d)
+    theory = Theory(d, {name: found[name] for name in chosen}, tuple(sorted((d / "core").glob("*.lp"))))
+    check_syntax(theory.files)
+    return theory
+
+
+def _select(levels: Iterable[str], found: dict[str, Path], d: Path) -> list[str]:
+    chosen = [lv.strip() for lv in levels if lv.strip()]
+    unknown = [lv for lv in chosen if lv not in found]
+    if unknown:
+        raise AxiomError(f"unknown level(s) {', '.join(unknown)}; {d} has: {', '.join(found)}")
+    if MANDATORY not in chosen:
+        raise AxiomError(f"the {MANDATORY} level cannot be switched off: it defines what a dstate is")
+    return chosen
+
+
+def check_syntax(files: Iterable[Path]) -> None:
+    """Parse every file with clingo; a file that does not parse raises AxiomError with clingo's words."""
+    for f in files:
+        messages: list[str] = []
+        ctl = clingo.Control(["--warn=none"], logger=lambda _code, msg: messages.append(msg.strip()))
+        try:
+            ctl.load(str(f))
+        except RuntimeError:
+            raise AxiomError(f"{f} does not parse:\n" + "\n".join(messages)) from None
+
+
+def _labelled_rules(path: Path, level: str) -> list[Rule]:
+    lines = path.read_text().splitlines()
+    out = []
+    for i, line in enumerate(lines):
+        m = _RULE_NAME.match(line.strip())
+        if not m:
+            continue
+        text = []  # the rule (possibly several lines, and several rules under one name) up to a blank line
+        for nxt in lines[i + 1:]:
+            if not nxt.strip() or nxt.lstrip().startswith("%"):
+                break
+            text.append(nxt.strip())
+        out.append(Rule(m.group(1), level, str(path), i + 2, " ".join(text)))
+    return out

@@ -1,0 +1,48 @@
+"""Tableau -> clingo facts, as data.
+
+Labels and numbers reach clingo as symbols built with clingo's API (``String``, ``Number``) and are
+added through the backend, so a view label such as ``a). #script (python)`` is just a string: no user
+text ever becomes program text. Angles are rounded to a quantum here, so that sensor noise on turns
+does not make the same action look like many actions, nor accumulate in headings.
+
+Facts (see docs/asp.md): ``time(T)``, ``view(T, "label")``, ``turn(T, A)``, ``travel(T, C)``, with
+``A``, ``C`` integer degrees in (-180, 180]; ``turn(T, 180)`` is a turn-around.
+"""
+
+from __future__ import annotations
+
+from typing import Iterable
+
+import clingo
+from clingo import Function, Number, String, Symbol
+
+from .tableau import Tableau, Turn
+
+
+def quantise(angle_deg: float, quantum_deg: float) -> int:
+    """Round an angle to the quantum and wrap it into (-180, 180]; -180 becomes 180 (turn-around)."""
+    q = round(angle_deg / quantum_deg) * quantum_deg
+    a = int(round(((q + 180.0) % 360.0) - 180.0))
+    return 180 if a == -180 else a
+
+
+def tableau_facts(tableau: Tableau, quantum_deg: float = 15.0) -> list[Symbol]:
+    """The tableau as ground facts (symbols). Requires every step to have a view label."""
+    tableau.require_views()
+    out: list[Symbol] = []
+    for t, step in enumerate(tableau.steps):
+        out.append(Function("time", [Number(t)]))
+        out.append(Function("view", [Number(t), String(step.view)]))  # type: ignore[arg-type]
+        a = step.action
+        if isinstance(a, Turn):
+            out.append(Function("turn", [Number(t), Number(quantise(a.angle_deg, quantum_deg))]))
+        elif a is not None:
+            out.append(Function("travel", [Number(t), Number(quantise(a.heading_change_deg, quantum_deg))]))
+    return out
+
+
+def add_facts(ctl: clingo.Control, facts: Iterable[Symbol]) -> None:
+    """Add ground facts through the backend (before grounding, so the grounder sees them as facts)."""
+    with ctl.backend() as backend:
+        for sym in facts:
+            backend.add_rule([backend.add_atom(sym)])

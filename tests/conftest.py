@@ -1,0 +1,24 @@
+"""Shared fixtures: the real axioms, the paper's tableau."""
+
+from pathlib import Path
+
+import pytest
+
+from bootmap import examples
+
+REPO = Path(__file__).resolve().parent.parent
+
+
+@pytest.fixture(scope="session")
+def paper_tableau():
+    return examples.notched_rectangle(circuits=50)
+
+
+@pytest.fixture
+def axioms_copy(tmp_path):
+    """A private copy of the axiom directory a test may extend or break."""
+    import shutil
+
+    dest = tmp_path / "asp"
+    shutil.copytree(REPO / "asp", dest)
+    return dest

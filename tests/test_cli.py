@@ -1,0 +1,86 @@
+"""The bootmap command, run as a user runs it: exit codes, help, text and JSON maps."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from bootmap import examples
+
+
+def bootmap(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "bootmap.cli", *map(str, args)], capture_output=True,
+                          text=True, cwd=cwd, timeout=120)
+
+
+@pytest.fixture
+def paper_file(tmp_path):
+    path = tmp_path / "paper.json"
+    path.write_text(examples.notched_rectangle(circuits=50).dumps())
+    return path
+
+
+def test_help_explains_every_sub_command():
+    out = bootmap("--help")
+    assert out.returncode == 0
+    for cmd in ("map", "axioms", "schema", "demo"):
+        assert cmd in out.stdout
+    sub = bootmap("map", "--help")
+    assert "--levels" in sub.stdout and "--time-limit" in sub.stdout and "--format" in sub.stdout
+
+
+def test_map_prints_the_annotated_tableau(paper_file):
+    out = bootmap("map", paper_file)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.startswith("8 dstates, 4 places, 4 paths; unique minimal map")
+    assert "t4    V0    S4      P2     Pa2   pos  turn -90" in out.stdout
+    assert "t400  V0    S0" in out.stdout
+
+
+def test_map_json_is_machine_readable(paper_file):
+    out = bootmap("map", paper_file, "--format", "json", "--levels", "causal,topological")
+    data = json.loads(out.stdout)
+    assert data["summary"]["dstates"] == 8 and data["summary"]["unique"] is True
+    assert data["summary"]["levels"] == ["causal", "topological"]
+    assert data["steps"][4]["dstate"] == "S4"
+
+
+def test_bad_tableau_exits_2_with_the_place_named(tmp_path):
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"format": "bootmap.tableau/1", "steps": [{"view": "a", "action": {"type": "fly"}}, {"view": "b"}]}')
+    out = bootmap("map", bad)
+    assert out.returncode == 2
+    assert "bad.json: steps[0].action.type: unknown action type 'fly'" in out.stderr
+    assert "Traceback" not in out.stderr
+
+
+def test_unknown_level_exits_2(paper_file):
+    out = bootmap("map", paper_file, "--levels", "causal,astrology")
+    assert out.returncode == 2 and "unknown level(s) astrology" in out.stderr
+
+
+def test_time_out_exits_1_and_says_so(paper_file):
+    out = bootmap("map", paper_file, "--levels", "causal,topological", "--time-limit", "0")
+    assert out.returncode == 1 and "time limit" in out.stderr and "Traceback" not in out.stderr
+
+
+def test_inconsistent_tableau_exits_1(tmp_path):
+    path = tmp_path / "t.json"
+    path.write_text(json.dumps({"format": "bootmap.tableau/1", "steps": [
+        {"view": "A", "action": {"type": "turn", "angle_deg": 180}},
+        {"view": "B", "action": {"type": "turn", "angle_deg": 180}}, {"view": "C"}]}))
+    out = bootmap("map", path)
+    assert out.returncode == 1 and "no map satisfies the axioms" in out.stderr
+
+
+def test_axioms_lists_named_rules_with_file_and_line():
+    out = bootmap("axioms")
+    assert out.returncode == 0
+    assert any(line.split()[:2] == ["topological", "right_by_turn"] and "topological.lp:" in line
+               for line in out.stdout.splitlines())
+
+
+def test_schema_prints_the_json_schema():
+    out = bootmap("schema")
+    assert json.loads(out.stdout)["title"].startswith("bootmap tableau")

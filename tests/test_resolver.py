@@ -1,0 +1,172 @@
+"""The resolver with real clingo: the paper's map, hand-checked tableaux, and every level load-bearing."""
+
+import pytest
+
+from bootmap import examples
+from bootmap.errors import AxiomError, InconsistentTableau, SolveTimeout
+from bootmap.resolver import Resolver
+from bootmap.tableau import Step, Tableau, Travel, Turn
+
+ALL = None
+NO_METRICAL = ["causal", "topological"]
+NO_TOPOLOGICAL = ["causal", "metrical"]
+CAUSAL = ["causal"]
+
+
+def truth_accuracy(tableau, cmap):
+    """Fraction of time points whose dstate matches the truth, up to renaming (one-to-one)."""
+    pairs = {}
+    for step, d in zip(tableau.steps, cmap.dstate_of):
+        pairs.setdefault(d, set()).add(step.truth)
+    one_to_one = all(len(v) == 1 for v in pairs.values()) and len(pairs) == len({s.truth for s in tableau.steps})
+    return one_to_one
+
+
+# --- The paper's notched rectangle ---------------------------------------------------------------------
+
+def test_paper_tableau_gives_8_dstates_4_places_4_paths_unique(paper_tableau):
+    m = Resolver().resolve(paper_tableau)
+    assert len(paper_tableau) == 401
+    assert (m.n_dstates, m.n_places, m.n_paths) == (8, 4, 4)
+    assert m.unique and m.n_models == 1
+    assert m.same(8, 0) and not m.same(4, 0)
+    assert truth_accuracy(paper_tableau, m)
+
+
+def test_paper_tableau_reads_like_the_papers_table(paper_tableau):
+    m = Resolver().resolve(paper_tableau)
+    rows = [(s["dstate"], s["place"], s["path"], s["dir"]) for s in m.steps[:9]]
+    assert rows == [("S0", "P0", "Pa0", "pos"), ("S1", "P0", "Pa1", "pos"), ("S2", "P1", "Pa1", "pos"),
+                    ("S3", "P1", "Pa2", "pos"), ("S4", "P2", "Pa2", "pos"), ("S5", "P2", "Pa3", "pos"),
+                    ("S6", "P3", "Pa3", "pos"), ("S7", "P3", "Pa0", "pos"), ("S0", "P0", "Pa0", "pos")]
+    assert {("P0", "Pa0"), ("P0", "Pa1"), ("P1", "Pa1")} <= set(m.on)
+    assert ("Pa1", "P0", "P1") in m.order  # PO(Pa1, pos, P0, P1)
+    assert ("P1", "Pa0") in m.right_of      # turning right off Pa0 at P0 and travelling reaches P1
+
+
+def test_paper_tableau_without_metrical_level_still_8_by_the_boundary_rules(paper_tableau):
+    m = Resolver(levels=NO_METRICAL).resolve(paper_tableau)
+    assert (m.n_dstates, m.n_places, m.n_paths) == (8, 4, 4) and m.unique
+    assert not m.same(4, 0) and m.same(8, 0)
+    assert [b["result"] for b in m.stats["bounds"]] == ["unsat"] * 4 + ["sat"]  # 4..7 proved impossible
+
+
+def test_paper_tableau_with_causal_level_only_folds_to_4_views(paper_tableau):
+    m = Resolver(levels=CAUSAL).resolve(paper_tableau)
+    assert m.n_dstates == 4 and m.same(4, 0)
+
+
+def test_counter_clockwise_circuits_mirror_the_map():
+    t = examples.notched_rectangle(circuits=5, clockwise=False)
+    m = Resolver().resolve(t)
+    assert (m.n_dstates, m.n_places, m.n_paths) == (8, 4, 4) and m.unique
+    assert m.left_of and not m.right_of
+    assert Resolver(levels=NO_METRICAL).resolve(t).n_dstates == 8
+
+
+# --- Every level is load-bearing -----------------------------------------------------------------------
+
+def test_square_room_is_a_triangle_without_metrical_level_and_a_square_with_it():
+    t = examples.square_room(circuits=3)
+    triangle = Resolver(levels=NO_METRICAL).resolve(t)
+    assert (triangle.n_dstates, triangle.n_places) == (6, 3)
+    square = Resolver().resolve(t)
+    assert (square.n_dstates, square.n_places, square.n_paths) == (8, 4, 4) and square.unique
+    assert truth_accuracy(t, square)
+
+
+def test_one_way_run_past_look_alike_junctions_needs_the_topological_order():
+    t = examples.one_way_run(junctions=5)
+    assert Resolver(levels=NO_TOPOLOGICAL).resolve(t).n_dstates == 1
+    m = Resolver().resolve(t)
+    assert m.n_dstates == 5 and m.unique and m.n_places == 5 and m.n_paths == 1
+    assert m.paths["Pa0"] == ["P0", "P1", "P2", "P3", "P4"]
+
+
+def test_corridor_with_turn_arounds_at_both_dead_ends():
+    t = examples.corridor(laps=2, middle=False)
+    assert Resolver(levels=CAUSAL).resolve(t).n_dstates == 2
+    for levels in (ALL, NO_METRICAL):
+        m = Resolver(levels=levels).resolve(t)
+        assert (m.n_dstates, m.n_places, m.n_paths) == (4, 2, 1) and m.unique
+        assert truth_accuracy(t, m)
+    m = Resolver().resolve(t)
+    dirs = {s["dstate"]: s["dir"] for s in m.steps}
+    assert sorted(dirs.values()) == ["neg", "neg", "pos", "pos"]
+
+
+def test_corridor_with_a_doorway_passed_both_ways():
+    t = examples.corridor(laps=2, middle=True)
+    m = Resolver().resolve(t)
+    assert m.n_dstates == 6 and m.unique and truth_accuracy(t, m)
+    # The doorway is passed in both directions but never turned at: the SSH defines places by turns,
+    # so the map holds it as two places on the one path, between the two ends either way.
+    assert (m.n_places, m.n_paths) == (4, 1)
+    west, east = m.place_of["S0"], m.place_of[m.dstate_of[2]]
+    assert m.paths["Pa0"][0] == west and m.paths["Pa0"][-1] == east
+
+
+# --- Data, not program text ----------------------------------------------------------------------------
+
+def test_view_labels_that_look_like_asp_are_ordinary_labels():
+    evil = ['a). #script (python) import os #end.', 'b" :- . #show x/0.', "#const n=1.", "c).\n#program x."]
+    rows = [Step(view=evil[t % 4], action=(Turn(-90.0) if t % 2 == 0 else Travel(3.0))) for t in range(16)]
+    t = Tableau(tuple(rows) + (Step(view=evil[0]),))
+    m = Resolver().resolve(t)
+    assert set(m.views.values()) == set(evil)
+    assert m.n_dstates == 8  # the four labels behave as the notched rectangle's four views
+
+
+# --- Bounds, failures and extensions -------------------------------------------------------------------
+
+def test_inconsistent_tableau_is_reported():
+    # Turning around twice returns to the same dstate (one dstate per place and directed path),
+    # yet the robot saw another view: no partition of the time points explains that.
+    t = Tableau((Step("A", Turn(180.0)), Step("B", Turn(180.0)), Step("C")))
+    with pytest.raises(InconsistentTableau, match="no map satisfies the axioms"):
+        Resolver().resolve(t)
+    assert Resolver(levels=CAUSAL).resolve(t).n_dstates == 3  # the causal level alone has no such rule
+
+
+def test_time_limit_is_reported_with_the_bound_proved(paper_tableau):
+    with pytest.raises(SolveTimeout, match="time limit") as e:
+        Resolver(levels=NO_METRICAL, time_limit=0.0).resolve(paper_tableau)
+    assert e.value.lower_bound >= 4
+
+
+def test_unknown_level_and_missing_causal_level_are_refused():
+    with pytest.raises(AxiomError, match="unknown level"):
+        Resolver(levels=["causal", "nope"])
+    with pytest.raises(AxiomError, match="cannot be switched off"):
+        Resolver(levels=["topological"])
+
+
+def test_axiom_file_that_does_not_parse_is_refused_with_clingos_message(axioms_copy):
+    (axioms_copy / "broken.lp").write_text("this is not ( asp.\n")
+    with pytest.raises(AxiomError) as e:
+        Resolver(axioms=axioms_copy)
+    assert "broken.lp" in str(e.value) and "syntax error" in str(e.value)
+
+
+def test_a_new_lp_file_extends_the_theory_without_python_changes(axioms_copy):
+    # Two visits that look the same, but one by day and one by night: a user's new level tells them apart.
+    (axioms_copy / "daylight.lp").write_text(
+        "% daylight.lp: the light at a time point is a feature of its dstate\n"
+        "%! light_is_feature\n"
+        "feature(T, light, night) :- time(T), T >= 4.\n")
+    t = examples.notched_rectangle(circuits=2)
+    plain = Resolver(axioms=axioms_copy, levels=["causal"]).resolve(t)
+    extended = Resolver(axioms=axioms_copy, levels=["causal", "daylight"]).resolve(t)
+    assert plain.n_dstates == 4 and plain.same(0, 4) and plain.same(0, 8)
+    night = range(4, len(t))
+    assert not any(extended.same(a, b) for a in range(4) for b in night)
+    assert extended.n_dstates > plain.n_dstates
+
+
+def test_shipped_paper_tableau_file_is_the_one_the_examples_build():
+    from pathlib import Path
+
+    from bootmap.tableau import load
+
+    assert load(Path(__file__).parent / "data" / "paper_notched_rectangle.json").steps == \
+        examples.notched_rectangle(circuits=50).steps

@@ -1,0 +1,114 @@
+"""The tableau format: valid documents load, every malformed one is refused with its place named."""
+
+import json
+import math
+
+import pytest
+from hypothesis import given, strategies as st
+
+from bootmap.errors import TableauError
+from bootmap.tableau import Tableau, Travel, Turn, load, schema
+
+OK_STEPS = [{"view": "V0", "action": {"type": "turn", "angle_deg": -90}},
+            {"view": "V1", "action": {"type": "travel", "distance_m": 4.0, "heading_change_deg": 0}},
+            {"view": "V2"}]
+
+
+def doc(steps):
+    return {"format": "bootmap.tableau/1", "steps": steps}
+
+
+def test_valid_tableau_loads_with_its_actions():
+    t = Tableau.from_dict(doc(OK_STEPS))
+    assert t.views == ["V0", "V1", "V2"]
+    assert t.actions == [Turn(-90.0), Travel(4.0, 0.0)]
+
+
+def test_round_trip_through_json_keeps_everything():
+    steps = [dict(OK_STEPS[0], image=[1.0, 2.5], truth="S0", pose=[0.0, 1.0, 3.1]),
+             dict(OK_STEPS[1], truth=3), {"view": "V2", "truth": "S2"}]
+    t = Tableau.from_dict(doc(steps))
+    assert Tableau.loads(t.dumps()) == t
+
+
+BAD = [
+    ("unknown action type", [{"view": "a", "action": {"type": "jump"}}, {"view": "b"}],
+     "steps[0].action.type", "unknown action type 'jump'"),
+    ("missing action", [{"view": "a"}, {"view": "b"}], "steps[0].action", "needs an action"),
+    ("action on last step", [{"view": "a", "action": {"type": "turn", "angle_deg": 90}}], "steps[0].action",
+     "no step follows"),
+    ("empty", [], "steps", "at least one step"),
+    ("string distance", [{"view": "a", "action": {"type": "travel", "distance_m": "4"}}, {"view": "b"}],
+     "steps[0].action.distance_m", "not of type 'number'"),
+    ("boolean angle", [{"view": "a", "action": {"type": "turn", "angle_deg": True}}, {"view": "b"}],
+     "steps[0].action.angle_deg", "not of type 'number'"),
+    ("integer view", [{"view": "a", "action": {"type": "turn", "angle_deg": 90}}, {"view": 7}],
+     "steps[1].view", "not of type 'string'"),
+    ("negative distance", [{"view": "a", "action": {"type": "travel", "distance_m": -1}}, {"view": "b"}],
+     "steps[0].action.distance_m", "less than or equal to the minimum"),
+    ("absurd angle", [{"view": "a", "action": {"type": "turn", "angle_deg": 1e9}}, {"view": "b"}],
+     "steps[0].action.angle_deg", "greater than the maximum"),
+    ("unknown field", [{"view": "a", "action": {"type": "turn", "angle_deg": 9, "speed": 1}}, {"view": "b"}],
+     "steps[0].action", "unknown field"),
+    ("no view nor image", [{"action": {"type": "turn", "angle_deg": 9}}, {"view": "b"}], "steps[0]",
+     "needs a view or an image"),
+    ("ragged images", [{"view": "a", "image": [1, 2], "action": {"type": "turn", "angle_deg": 9}},
+                       {"view": "b", "image": [1]}], "steps[1].image", "has 1 values"),
+]
+
+
+@pytest.mark.parametrize("name,steps,where,what", BAD, ids=[b[0] for b in BAD])
+def test_malformed_tableau_names_step_and_field(name, steps, where, what):
+    with pytest.raises(TableauError) as e:
+        Tableau.from_dict(doc(steps), source="t.json")
+    assert f"t.json: {where}" in str(e.value)
+    assert what in str(e.value)
+
+
+@pytest.mark.parametrize("constant", ["NaN", "Infinity", "-Infinity"])
+def test_non_finite_numbers_are_refused(constant):
+    text = '{"format": "bootmap.tableau/1", "steps": [{"view": "a", "action": {"type": "turn", "angle_deg": %s}}, ' \
+           '{"view": "b"}]}' % constant
+    with pytest.raises(TableauError, match="not a finite number"):
+        Tableau.loads(text)
+
+
+def test_non_finite_number_built_in_python_is_refused():
+    steps = [{"view": "a", "action": {"type": "turn", "angle_deg": math.nan}}, {"view": "b"}]
+    with pytest.raises(TableauError, match=r"steps\[0\].action.angle_deg"):
+        Tableau.from_dict(doc(steps))
+
+
+@pytest.mark.parametrize("text,what", [("{", "not valid JSON"), ("[" * 100000, "nested too deeply"),
+                                        ('{"format": "bootmap.tableau/2", "steps": [{"view": "a"}]}',
+                                         "unsupported format"),
+                                        ('{"steps": [{"view": "a"}]}', "'format' is a required property")])
+def test_broken_documents_are_refused(text, what):
+    with pytest.raises(TableauError, match=what):
+        Tableau.loads(text)
+
+
+def test_missing_file_is_named(tmp_path):
+    with pytest.raises(TableauError, match="nope.json: cannot read"):
+        load(tmp_path / "nope.json")
+
+
+def test_schema_is_valid_json_schema_and_describes_the_format():
+    import jsonschema
+
+    jsonschema.Draft202012Validator.check_schema(schema())
+    assert schema()["properties"]["format"]["const"] == "bootmap.tableau/1"
+
+
+labels = st.text(min_size=1, max_size=30)
+
+
+@given(st.lists(st.tuples(labels, st.sampled_from(["turn", "travel"]),
+                          st.floats(-359, 359, allow_nan=False)), min_size=1, max_size=12), labels)
+def test_any_well_formed_tableau_round_trips(rows, last):
+    steps = [{"view": v, "action": ({"type": "turn", "angle_deg": x} if k == "turn"
+                                    else {"type": "travel", "distance_m": abs(x) + 0.1})} for v, k, x in rows]
+    steps.append({"view": last})
+    t = Tableau.from_dict(doc(steps))
+    assert len(t) == len(steps)
+    assert Tableau.loads(json.dumps(t.to_dict())) == t
