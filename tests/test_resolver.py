@@ -153,7 +153,8 @@ def test_a_new_lp_file_extends_the_theory_without_python_changes(axioms_copy):
     (axioms_copy / "daylight.lp").write_text(
         "% daylight.lp: the light at a time point is a feature of its dstate\n"
         "%! light_is_feature\n"
-        "feature(T, light, night) :- time(T), T >= 4.\n")
+        "feature(T, light, night) :- time(T), T >= 4.\n"
+        "feature(T, light, day) :- time(T), T < 4.\n")
     t = examples.notched_rectangle(circuits=2)
     plain = Resolver(axioms=axioms_copy, levels=["causal"]).resolve(t)
     extended = Resolver(axioms=axioms_copy, levels=["causal", "daylight"]).resolve(t)
@@ -170,3 +171,11 @@ def test_shipped_paper_tableau_file_is_the_one_the_examples_build():
 
     assert load(Path(__file__).parent / "data" / "paper_notched_rectangle.json").steps == \
         examples.notched_rectangle(circuits=50).steps
+
+
+def test_a_feature_only_some_time_points_show_does_not_split_the_others(axioms_copy):
+    # Only night visits are marked: an unmarked visit may still be the same dstate as a marked one.
+    (axioms_copy / "night.lp").write_text("feature(T, light, night) :- time(T), T >= 16.\n")
+    t = examples.notched_rectangle(circuits=3)
+    m = Resolver(axioms=axioms_copy).resolve(t)
+    assert m.n_dstates == 8 and m.same(0, 16) and m.same(0, 8)

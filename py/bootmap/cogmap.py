@@ -160,12 +160,8 @@ def build_map(tableau: Tableau, models: list[list[Symbol]], exhausted: bool, the
     n = len(tableau)
     seq, sname = dstate_sequence(models[0], n)
     atoms = _by_name(models[0])
-    views, headings = {}, {}
-    for d, f, x in atoms.get("dstate_feature", []):
-        if f.name == "view":
-            views[sname[d]] = x.string
-        elif f.name == "heading":
-            headings[sname[d]] = x.number
+    views = {sname[d]: v.string for d, v in atoms.get("view_of", [])}
+    headings = {sname[d]: h.number for d, h in atoms.get("heading_of", [])}
     place_term = {d: p for d, p in atoms.get("place_of", [])}
     pname = {p: f"P{i}" for p, i in _first_appearance(place_term[d] for d in seq if d in place_term).items()}
     path_term = {d: (pa, dr.name) for d, pa, dr in atoms.get("path_of", [])}
