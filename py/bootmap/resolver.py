@@ -5,10 +5,11 @@ different. Concretely:
 
 1. Ground the theory once with the tableau alone and read the *features* it derives for certain.
    Features every time point shows (its view; with the metrical level, its heading) group time points
-   into *classes*: only time points of one class can share a dstate. Features only some show (what was
-   seen after a given sequence of actions) tell time points of a class apart: a set of pairwise
-   disagreeing time points is a lower bound on the dstates of that class.
-2. For a bound N on the number of dstates, from the sum of those lower bounds upwards: give each class
+   into *classes*: only time points of one class can share a dstate, so one dstate per class is the
+   first bound tried. If that fails, features only some time points show (what was seen after a given
+   sequence of actions) tell time points of a class apart: a set of pairwise disagreeing time points is
+   a lower bound on the dstates of that class, and the search goes on from the sum of those bounds.
+2. For a bound N on the number of dstates, from that lower bound upwards: give each class
    as many candidate slots as the bound leaves it (core/partition.lp numbers them by first appearance)
    and ask clingo for maps with at most N dstates. The first N that is satisfiable is the minimal
    number of dstates: every smaller bound was proved unsatisfiable.
@@ -109,10 +110,11 @@ class Resolver:
         start = time.perf_counter()
         deadline = None if self.time_limit is None else start + self.time_limit
         facts = tableau_facts(tableau, self.quantum_deg)
-        classes = self.classes(facts, len(tableau))
-        stats = {"ground_s": 0.0, "solve_s": 0.0, "bounds": [], "classes": classes.count,
-                 "lower_bound": classes.lower_bound}
-        for bound in range(classes.lower_bound, len(tableau) + 1):
+        prepass = self._ground_prepass(facts)
+        classes = self.classes(prepass, len(tableau))
+        stats = {"ground_s": 0.0, "solve_s": 0.0, "bounds": [], "classes": classes.count}
+        bound = classes.count
+        while bound <= len(tableau):
             outcome = self._solve(facts, classes.facts(bound), deadline, stats)
             stats["bounds"].append({"bound": bound, "result": outcome.result})
             if outcome.result == "timeout":
@@ -120,48 +122,58 @@ class Resolver:
                                    f"({bound - 1} or fewer was proved impossible); no map was proved minimal",
                                    lower_bound=bound)
             if outcome.models:
+                stats["lower_bound"] = classes.lower_bound
                 stats["total_s"] = time.perf_counter() - start
                 return build_map(tableau, outcome.models, outcome.exhausted, self.theory, stats)
+            if bound == classes.count:
+                # One dstate per class did not do: bound each class from below before trying more.
+                classes.lower = self.lower_bounds(prepass, classes)
+            bound = max(bound + 1, classes.lower_bound)
         raise InconsistentTableau(
             "no map satisfies the axioms, even with every time point its own dstate; "
             f"levels: {', '.join(self.theory.levels)}")
 
-    def classes(self, facts: list[Symbol], n: int) -> Classes:
-        """Group time points by the features the theory derives for certain (as facts) at every time point.
-
-        Features only some time points have (e.g. the view seen after a particular action sequence) do
-        not group, but they tell time points of a class apart and so bound its dstates from below.
-        """
-        features = self._certain_features(facts, n)
-        total = set.intersection(*(set(f) for f in features)) if features else set()
-        ids: dict[tuple, int] = {}
-        of_time, members, prev, last = [], [], [], {}
-        for t in range(n):
-            key = tuple(sorted((k, tuple(sorted(features[t][k]))) for k in total))
-            c = ids.setdefault(key, len(ids))
-            if c == len(members):
-                members.append([])
-            members[c].append(t)
-            of_time.append(c)
-            prev.append(last.get(c))
-            last[c] = t
-        partial = [{k: v for k, v in f.items() if k not in total} for f in features]
-        lower = [_apart_clique(ts, partial) for ts in members]
-        return Classes(of_time, [len(m) for m in members], prev, lower)
-
-    def _certain_features(self, facts: list[Symbol], n: int) -> list[dict[int, set[int]]]:
-        """Per time point: feature key -> values, as small ints (comparing clingo symbols costs a C call)."""
+    def _ground_prepass(self, facts: list[Symbol]) -> clingo.Control:
+        """The theory grounded with the tableau alone: what it derives for certain, before any search."""
         ctl = clingo.Control(["--warn=none"])
         self.theory.load_into(ctl)
         add_facts(ctl, facts)
         ctl.ground([("base", [])])
-        ids: dict[Symbol, int] = {}
-        features: list[dict[int, set[int]]] = [defaultdict(set) for _ in range(n)]
-        for sa in ctl.symbolic_atoms.by_signature("feature", 3):
+        return ctl
+
+    def classes(self, prepass: clingo.Control, n: int) -> Classes:
+        """Group time points by the features every time point shows (``group_by/3`` facts)."""
+        keys: list[list[tuple[Symbol, Symbol]]] = [[] for _ in range(n)]
+        for sa in prepass.symbolic_atoms.by_signature("group_by", 3):
             if sa.is_fact:
                 t, key, value = sa.symbol.arguments
-                features[t.number][ids.setdefault(key, len(ids))].add(ids.setdefault(value, len(ids)))
-        return features
+                keys[t.number].append((key, value))
+        ids: dict[tuple, int] = {}
+        of_time, sizes, prev, last = [], [], [], {}
+        for t in range(n):
+            c = ids.setdefault(tuple(sorted(keys[t])), len(ids))
+            if c == len(sizes):
+                sizes.append(0)
+            sizes[c] += 1
+            of_time.append(c)
+            prev.append(last.get(c))
+            last[c] = t
+        return Classes(of_time, sizes, prev, [1] * len(sizes))
+
+    def lower_bounds(self, prepass: clingo.Control, classes: Classes) -> list[int]:
+        """Per class, a set of time points that pairwise disagree on a feature only some of them show
+        (e.g. the view seen after the same actions): no two of them can share a dstate."""
+        grouping = {sa.symbol.arguments[0] for sa in prepass.symbolic_atoms.by_signature("shown_by_all", 1)}
+        ids: dict[Symbol, int] = {}  # small ints: comparing clingo symbols costs a C call each
+        partial: list[dict[int, set[int]]] = [defaultdict(set) for _ in classes.of_time]
+        for sa in prepass.symbolic_atoms.by_signature("feature", 3):
+            t, key, value = sa.symbol.arguments
+            if sa.is_fact and key not in grouping:
+                partial[t.number][ids.setdefault(key, len(ids))].add(ids.setdefault(value, len(ids)))
+        members: list[list[int]] = [[] for _ in classes.sizes]
+        for t, c in enumerate(classes.of_time):
+            members[c].append(t)
+        return [_apart_clique(ts, partial) for ts in members]
 
     def _solve(self, facts, layout, deadline, stats) -> "_Outcome":
         ctl = clingo.Control(["--warn=none", str(self.max_models + 1)])
