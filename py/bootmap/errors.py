@@ -28,3 +28,12 @@ class SolveTimeout(BootmapError):
     def __init__(self, message: str, lower_bound: int = 0):
         self.lower_bound = lower_bound
         super().__init__(message)
+
+
+class WorldError(BootmapError, ValueError):
+    """A world file is malformed. ``where`` names the file and the field (``worlds/x.toml: laser.max_range``)."""
+
+    def __init__(self, message: str, where: str = ""):
+        self.where = where
+        self.reason = message
+        super().__init__(f"{where}: {message}" if where else message)

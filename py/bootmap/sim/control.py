@@ -1,0 +1,183 @@
+"""Control laws: trajectory-following and hill-climbing to distinctive states, and turns.
+
+Each law sees only a :class:`~bootmap.sim.perception.Percept` of the current scan (and, for openings, the
+scan itself) and the odometry; never the map or the true pose. A law runs until its state stops changing
+- the fixed point of a hill-climbing law, which is a dstate (the paper's "isolated fixed point") - and
+then reports the tableau action it performed, measured by odometry.
+
+``Travel`` follows a wall on one side at a set distance (the paper's room circuits) or the middle of a
+corridor (hallways), then hill-climbs: to ``stop_distance`` from the wall ahead, or, at a side opening,
+to where the opening is symmetric about the robot (the near edge by odometry, where the side beams
+opened; the far edge in the scan). ``Turn`` rotates by odometry and then hill-climbs to alignment with
+the walls of the new path.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..tableau import Action, Travel as TravelAction, Turn as TurnAction
+from .perception import Percept, Perception
+from .physics import Odometry
+
+
+@dataclass(frozen=True)
+class Limits:
+    """The robot's motion limits and the control-law gains."""
+
+    v_max: float = 0.9  # m/s
+    w_max: float = 2.0  # rad/s
+    accel: float = 1.0  # m/s^2, braking profile towards a stop
+    w_accel: float = 4.0  # rad/s^2
+    k_heading: float = 3.0  # 1/s: turn rate per radian of wall angle
+    k_lateral: float = 2.5  # 1/(m s): turn rate per metre off the wall distance or centre line
+    k_stop: float = 4.0  # 1/s: final approach gain of the hill-climbing
+    k_align: float = 5.0  # 1/s
+    stop_tolerance: float = 0.008  # m: the hill-climbing has converged within this
+    align_tolerance: float = math.radians(0.6)
+    settle_ticks: int = 2  # consecutive converged control periods that make a fixed point
+
+
+def _approach_speed(error: float, lim: Limits) -> float:
+    """Speed towards a stop ``error`` metres ahead: full speed, then a braking profile, then linear."""
+    mag = min(lim.v_max, math.sqrt(2 * lim.accel * abs(error)), lim.k_stop * abs(error))
+    return math.copysign(mag, error)
+
+
+class ControlLaw:
+    """Base of the control laws: the fixed-point bookkeeping and the odometry-measured action."""
+
+    timeout = 60.0  # simulated seconds before the robot counts as stuck
+
+    def __init__(self, lim: Limits):
+        self.lim = lim
+        self.done = False
+        self._calm = 0
+        self.start: Odometry | None = None
+
+    def begin(self, odometry: Odometry) -> None:
+        self.start = odometry.copy()
+
+    def _settle(self, converged: bool) -> None:
+        self._calm = self._calm + 1 if converged else 0
+        self.done = self._calm >= self.lim.settle_ticks
+
+    def action(self, odometry: Odometry) -> Action:
+        raise NotImplementedError
+
+
+class Travel(ControlLaw):
+    """Follow the path ahead, then hill-climb to the next dstate.
+
+    Parameters
+    ----------
+    lim : Limits
+    perception : Perception
+        Used for the far edge of a side opening.
+    follow : {"left", "right", "centre"}
+        Keep ``wall_distance`` from the wall on that side, or the middle of the corridor.
+    wall_distance, stop_distance : float
+        Metres.
+    junctions : bool
+        Stop at side openings (hallways); otherwise pass them holding the heading (room circuits).
+    """
+
+    timeout = 300.0
+
+    def __init__(self, lim: Limits, perception: Perception, follow: str, wall_distance: float,
+                 stop_distance: float, junctions: bool):
+        super().__init__(lim)
+        self.perception, self.follow = perception, follow
+        self.wall_distance, self.stop_distance, self.junctions = wall_distance, stop_distance, junctions
+        self._armed = {+1: False, -1: False}
+        self._opened_at: dict[int, float] = {}
+        self._held = {+1: wall_distance, -1: wall_distance}
+
+    def step(self, p: Percept, ranges: np.ndarray, odo: Odometry) -> tuple[float, float]:
+        lim = self.lim
+        phi = 0.0 if math.isnan(p.wall_angle) else p.wall_angle
+        travelled = odo.distance - self.start.distance
+        self._track_openings(p, travelled)
+        omega = lim.k_heading * phi + lim.k_lateral * self._lateral_error(p)
+        omega = max(-lim.w_max, min(lim.w_max, omega))
+        error = self._stop_error(p, ranges, travelled)
+        v = _approach_speed(error, lim) if math.isfinite(error) else lim.v_max
+        converged = abs(error) < lim.stop_tolerance and abs(phi) < 2 * lim.align_tolerance
+        self._settle(converged)
+        if self.done:
+            return 0.0, 0.0
+        # Turning hard at full speed swings the robot off its line: slow down while correcting.
+        v *= max(0.3, 1.0 - abs(omega) / lim.w_max)
+        return v, omega
+
+    def _track_openings(self, p: Percept, travelled: float) -> None:
+        """Openings present where the travel starts belong to the place being left: ignore them until
+        the side closes. A side that opens afterwards is a new opening, noted with the distance."""
+        for side, is_open, dist in ((+1, p.left_open, p.left), (-1, p.right_open, p.right)):
+            if not is_open:
+                self._armed[side] = True
+                self._opened_at.pop(side, None)
+                if math.isfinite(dist):
+                    self._held[side] = dist
+            elif self._armed[side] and side not in self._opened_at:
+                self._opened_at[side] = travelled
+
+    def _lateral_error(self, p: Percept) -> float:
+        """Positive when the robot should turn left to get back onto its line."""
+        left, right = p.left, p.right  # inf where the side is open
+        if self.follow == "left":
+            return left - self.wall_distance if math.isfinite(left) else 0.0
+        if self.follow == "right":
+            return self.wall_distance - right if math.isfinite(right) else 0.0
+        if math.isfinite(left) and math.isfinite(right):
+            return 0.5 * (left - right)
+        if math.isfinite(right):  # one wall left: hold the distance it had before the opening
+            return self._held[-1] - right
+        if math.isfinite(left):
+            return left - self._held[+1]
+        return 0.0
+
+    def _stop_error(self, p: Percept, ranges: np.ndarray, travelled: float) -> float:
+        """Signed distance to the dstate ahead: the midpoint of a side opening, or the stop before the
+        wall ahead; ``inf`` while neither is in sight."""
+        front = p.front - self.stop_distance if p.front < self.perception.range_max * 0.98 else math.inf
+        if not self.junctions or not self._opened_at:
+            return front
+        errors = []
+        for side, opened in self._opened_at.items():
+            depth = self._held[side] + 0.5
+            far = min(p.front, self.perception.far_edge(ranges, side, depth))
+            errors.append(0.5 * (far - (travelled - opened)))
+        return min(min(errors), front)
+
+    def action(self, odometry: Odometry) -> Action:
+        dist = odometry.distance - self.start.distance
+        dtheta = math.degrees(odometry.theta - self.start.theta)
+        return TravelAction(round(max(dist, 1e-3), 4), round(dtheta, 3))
+
+
+class Turn(ControlLaw):
+    """Turn in place by ``angle`` (radians, positive left) by odometry, then hill-climb to alignment
+    with the walls of the new path."""
+
+    timeout = 30.0
+
+    def __init__(self, lim: Limits, angle: float, align_window: float = math.radians(12)):
+        super().__init__(lim)
+        self.angle, self.align_window = angle, align_window
+
+    def step(self, p: Percept, ranges: np.ndarray, odo: Odometry) -> tuple[float, float]:
+        lim = self.lim
+        remaining = self.angle - (odo.theta - self.start.theta)
+        if abs(remaining) > self.align_window or math.isnan(p.wall_angle):
+            mag = min(lim.w_max, math.sqrt(2 * lim.w_accel * abs(remaining)), lim.k_align * abs(remaining))
+            self._settle(abs(remaining) < lim.align_tolerance)
+            return 0.0, (0.0 if self.done else math.copysign(mag, remaining))
+        self._settle(abs(p.wall_angle) < lim.align_tolerance)
+        return 0.0, (0.0 if self.done else lim.k_align * p.wall_angle)
+
+    def action(self, odometry: Odometry) -> Action:
+        return TurnAction(round(math.degrees(odometry.theta - self.start.theta), 3))

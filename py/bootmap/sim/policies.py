@@ -1,0 +1,198 @@
+"""Exploration policies: which action to take at each dstate, from the robot's own experience only.
+
+A policy is told what the robot perceives at the dstate it has reached and the action (measured by
+odometry) that brought it there; it answers with the next action - travel along the path ahead, or turn
+- or None to stop. It never sees the world's map or the true pose.
+
+* :class:`Circuits` - the paper's circuits of a room: follow the wall on one side, and at each corner
+  turn away from it (clockwise circuits keep the wall on the left and turn right).
+* :class:`Explore` - a systematic hallway explorer: it takes every unexplored path direction at every
+  place and turns around at dead ends, then walks back to the nearest place with an untried direction.
+  Places are told apart by dead reckoning on a 90-degree grid (turns are rounded to quarter turns, since
+  every turn ends aligned with the walls; travels add their odometry distance), so a place it comes back
+  to is recognised by where it is, not by what it looks like.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..tableau import Action, Travel as TravelAction, Turn as TurnAction
+from .perception import Percept
+
+HEADINGS = np.array([[1, 0], [0, 1], [-1, 0], [0, -1]], dtype=float)  # quarter turns, counter-clockwise
+
+
+@dataclass(frozen=True)
+class Decision:
+    """The next action: ``"travel"``, or ``"turn"`` by ``angle`` radians (positive left)."""
+
+    kind: str
+    angle: float = 0.0
+
+
+TRAVEL = Decision("travel")
+
+
+@dataclass(frozen=True)
+class Observation:
+    """What a policy is told at a dstate: the percept of its image, the action that led there."""
+
+    percept: Percept
+    action: Action | None
+    front_open: bool
+
+
+class Circuits:
+    """The paper's circuits of a room.
+
+    Parameters
+    ----------
+    direction : {"cw", "ccw"}
+        Clockwise circuits follow the wall on the left and turn right at corners; counter-clockwise
+        the mirror image.
+    """
+
+    junctions = False
+
+    def __init__(self, direction: str = "cw"):
+        if direction not in ("cw", "ccw"):
+            raise ValueError(f"direction must be 'cw' or 'ccw', got {direction!r}")
+        self.direction = direction
+
+    @property
+    def follow(self) -> str:
+        return "left" if self.direction == "cw" else "right"
+
+    def reset(self, rng: np.random.Generator) -> None:
+        pass
+
+    def decide(self, obs: Observation) -> Decision:
+        if isinstance(obs.action, TurnAction):
+            return TRAVEL
+        return Decision("turn", -math.pi / 2 if self.direction == "cw" else math.pi / 2)
+
+
+@dataclass
+class _Place:
+    position: np.ndarray
+    exits: set[int] = field(default_factory=set)  # absolute quarter-turn directions with an open path
+    edges: dict[int, int] = field(default_factory=dict)  # direction -> place reached that way
+    tried: set[int] = field(default_factory=set)  # directions the robot has set out in from here
+
+    @property
+    def untried(self) -> set[int]:
+        return self.exits - self.tried
+
+
+class Explore:
+    """Systematic exploration of a hallway network, then (if asked for more steps) a random walk.
+
+    Parameters
+    ----------
+    wander : bool
+        After every direction of every place is explored, keep going at random (never turning back
+        except at dead ends) instead of stopping.
+    place_tolerance : float
+        Metres within which dead reckoning says two dstates are at the same place.
+
+    Attributes
+    ----------
+    places_ : list
+        The places found, with their exits and the edges travelled, in the explorer's own frame.
+    explored_ : bool
+        The robot has set out along every exit of every known place, so every path segment has been
+        travelled both ways (and every dead end turned around at).
+    """
+
+    junctions = True
+    follow = "centre"
+
+    def __init__(self, wander: bool = False, place_tolerance: float = 2.5):
+        self.wander, self.place_tolerance = wander, place_tolerance
+
+    def reset(self, rng: np.random.Generator) -> None:
+        self.rng = rng
+        self.places_: list[_Place] = []
+        self.explored_ = False
+        self._heading = 0  # quarter turns from the heading at the start
+        self._position = np.zeros(2)
+        self._here: int | None = None
+        self._intent: int | None = None
+
+    def decide(self, obs: Observation) -> Decision | None:
+        self._update(obs)
+        here = self.places_[self._here]
+        target = self._intent if self._intent is not None else self._choose(here)
+        if target is None:
+            return None
+        rel = (target - self._heading) % 4
+        if rel == 0:
+            self._intent = None
+            return TRAVEL
+        self._intent = target
+        return Decision("turn", {1: math.pi / 2, 2: math.pi, 3: -math.pi / 2}[rel])
+
+    # ------------------------------------------------------------------ dead reckoning and places
+    def _update(self, obs: Observation) -> None:
+        arrived_from = None
+        if isinstance(obs.action, TurnAction):
+            self._heading = (self._heading + round(obs.action.angle_deg / 90.0)) % 4
+        else:  # a travel (or the first dstate, reached by travelling from the start pose)
+            if isinstance(obs.action, TravelAction):
+                self._position = self._position + obs.action.distance_m * HEADINGS[self._heading]
+            arrived_from = self._here
+            self._here = self._locate()
+        place = self.places_[self._here]
+        h = self._heading
+        p = obs.percept
+        seen = {h: obs.front_open, (h + 1) % 4: p.left_open, (h - 1) % 4: p.right_open}
+        place.exits |= {d for d, is_open in seen.items() if is_open}
+        if not isinstance(obs.action, TurnAction):
+            place.exits.add((h + 2) % 4)  # the way it came is a path
+        if arrived_from is not None:
+            self.places_[arrived_from].edges[h] = self._here
+            self.places_[arrived_from].tried.add(h)
+            place.edges[(h + 2) % 4] = arrived_from  # known, but not yet travelled this way
+        self.explored_ = not any(pl.untried for pl in self.places_)
+
+    def _locate(self) -> int:
+        for i, pl in enumerate(self.places_):
+            if np.hypot(*(pl.position - self._position)) < self.place_tolerance:
+                return i
+        self.places_.append(_Place(self._position.copy()))
+        return len(self.places_) - 1
+
+    # ------------------------------------------------------------------ choices
+    def _choose(self, here: _Place) -> int | None:
+        h = self._heading
+        untried = [d for d in (h, (h + 1) % 4, (h - 1) % 4, (h + 2) % 4) if d in here.untried]
+        if untried:
+            return untried[0]
+        step = self._first_step_to_untried()
+        if step is not None:
+            return step
+        if not self.wander:
+            return None
+        onward = sorted(here.exits - {(h + 2) % 4}) or sorted(here.exits)
+        return int(self.rng.choice(onward)) if onward else None
+
+    def _first_step_to_untried(self) -> int | None:
+        """Breadth-first over travelled edges to the nearest place with an untried exit."""
+        start = self._here
+        first: dict[int, int | None] = {start: None}
+        queue = deque([start])
+        while queue:
+            i = queue.popleft()
+            pl = self.places_[i]
+            if i != start and pl.untried:
+                return first[i]
+            for d, j in sorted(pl.edges.items()):
+                if j not in first:
+                    first[j] = d if i == start else first[i]
+                    queue.append(j)
+        return None
