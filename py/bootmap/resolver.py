@@ -94,6 +94,9 @@ class Resolver:
         dstates were proved necessary so far.
     max_models : int
         Minimal maps to enumerate before calling the count capped.
+    future_depth : int
+        How many actions ahead the causal level compares what time points saw, to tell them apart
+        before the search (the ``future_depth`` constant of causal.lp).
     """
 
     axioms: str | Path | None = None
@@ -101,6 +104,7 @@ class Resolver:
     quantum_deg: float = 15.0
     time_limit: float | None = 60.0
     max_models: int = 10
+    future_depth: int = 8
     theory: Theory = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -110,12 +114,13 @@ class Resolver:
         start = time.perf_counter()
         deadline = None if self.time_limit is None else start + self.time_limit
         facts = tableau_facts(tableau, self.quantum_deg)
-        prepass = self._ground_prepass(facts)
-        classes = self.classes(prepass, len(tableau))
+        # Futures only matter once one dstate per class has failed: leave them out until then.
+        depth = 0
+        classes = self.classes(self._ground_prepass(facts, depth), len(tableau))
         stats = {"ground_s": 0.0, "solve_s": 0.0, "bounds": [], "classes": classes.count}
         bound = classes.count
         while bound <= len(tableau):
-            outcome = self._solve(facts, classes.facts(bound), deadline, stats)
+            outcome = self._solve(facts, classes.facts(bound), deadline, stats, depth)
             stats["bounds"].append({"bound": bound, "result": outcome.result})
             if outcome.result == "timeout":
                 raise SolveTimeout(f"time limit of {self.time_limit} s reached while trying {bound} dstates "
@@ -127,15 +132,16 @@ class Resolver:
                 return build_map(tableau, outcome.models, outcome.exhausted, self.theory, stats)
             if bound == classes.count:
                 # One dstate per class did not do: bound each class from below before trying more.
-                classes.lower = self.lower_bounds(prepass, classes)
+                depth = self.future_depth
+                classes.lower = self.lower_bounds(self._ground_prepass(facts, depth), classes)
             bound = max(bound + 1, classes.lower_bound)
         raise InconsistentTableau(
             "no map satisfies the axioms, even with every time point its own dstate; "
             f"levels: {', '.join(self.theory.levels)}")
 
-    def _ground_prepass(self, facts: list[Symbol]) -> clingo.Control:
+    def _ground_prepass(self, facts: list[Symbol], depth: int) -> clingo.Control:
         """The theory grounded with the tableau alone: what it derives for certain, before any search."""
-        ctl = clingo.Control(["--warn=none"])
+        ctl = clingo.Control(["--warn=none", "-c", f"future_depth={int(depth)}"])
         self.theory.load_into(ctl)
         add_facts(ctl, facts)
         ctl.ground([("base", [])])
@@ -143,11 +149,13 @@ class Resolver:
 
     def classes(self, prepass: clingo.Control, n: int) -> Classes:
         """Group time points by the features every time point shows (``group_by/3`` facts)."""
-        keys: list[list[tuple[Symbol, Symbol]]] = [[] for _ in range(n)]
+        interned: dict[Symbol, int] = {}  # small ints: comparing clingo symbols costs a C call each
+        keys: list[list[tuple[int, int]]] = [[] for _ in range(n)]
         for sa in prepass.symbolic_atoms.by_signature("group_by", 3):
             if sa.is_fact:
                 t, key, value = sa.symbol.arguments
-                keys[t.number].append((key, value))
+                keys[t.number].append((interned.setdefault(key, len(interned)),
+                                       interned.setdefault(value, len(interned))))
         ids: dict[tuple, int] = {}
         of_time, sizes, prev, last = [], [], [], {}
         for t in range(n):
@@ -175,8 +183,8 @@ class Resolver:
             members[c].append(t)
         return [_apart_clique(ts, partial) for ts in members]
 
-    def _solve(self, facts, layout, deadline, stats) -> "_Outcome":
-        ctl = clingo.Control(["--warn=none", str(self.max_models + 1)])
+    def _solve(self, facts, layout, deadline, stats, depth) -> "_Outcome":
+        ctl = clingo.Control(["--warn=none", "-c", f"future_depth={int(depth)}", str(self.max_models + 1)])
         self.theory.load_into(ctl)
         add_facts(ctl, facts + layout)
         t0 = time.perf_counter()
