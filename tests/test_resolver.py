@@ -48,7 +48,8 @@ def test_paper_tableau_without_metrical_level_still_8_by_the_boundary_rules(pape
     m = Resolver(levels=NO_METRICAL).resolve(paper_tableau)
     assert (m.n_dstates, m.n_places, m.n_paths) == (8, 4, 4) and m.unique
     assert not m.same(4, 0) and m.same(8, 0)
-    assert [b["result"] for b in m.stats["bounds"]] == ["unsat"] * 4 + ["sat"]  # 4..7 proved impossible
+    tried = [(b["bound"], b["result"]) for b in m.stats["bounds"] if b["bound"] is not None]
+    assert tried == [(4, "unsat"), (5, "unsat"), (6, "unsat"), (7, "unsat"), (8, "sat")]  # 4..7 proved impossible
 
 
 def test_paper_tableau_with_causal_level_only_folds_to_4_views(paper_tableau):
@@ -179,3 +180,25 @@ def test_a_feature_only_some_time_points_show_does_not_split_the_others(axioms_c
     t = examples.notched_rectangle(circuits=3)
     m = Resolver(axioms=axioms_copy).resolve(t)
     assert m.n_dstates == 8 and m.same(0, 16) and m.same(0, 8)
+
+
+def test_time_out_hands_back_a_valid_map_found_on_the_way(paper_tableau, monkeypatch):
+    from bootmap import resolver as resolver_module
+
+    real_solve = Resolver._solve
+
+    def solve_until_bound_6(self, facts, layout, deadline, stats, depth, models=None):
+        bound = next(s.arguments[0].number for s in layout if s.name == "dstate_bound")
+        if bound == 6:  # pretend the proof for 6 dstates runs out of time
+            return resolver_module._Outcome("timeout", [], False)
+        return real_solve(self, facts, layout, deadline, stats, depth, models)
+
+    monkeypatch.setattr(Resolver, "_solve", solve_until_bound_6)
+    with pytest.raises(SolveTimeout) as e:
+        Resolver(levels=NO_METRICAL).resolve(paper_tableau)
+    best = e.value.best_map
+    assert e.value.lower_bound == 6 and "not proved minimal" in str(e.value)
+    assert best is not None and not best.minimal and not best.unique
+    assert best.n_dstates >= 6 and "NOT PROVED MINIMAL" in best.to_text()
+    # valid: resolving with exactly its partition's size succeeds, and it separates S4 from S0 as it must
+    assert not best.same(0, 4)

@@ -37,7 +37,18 @@ def cmd_map(args: argparse.Namespace) -> int:
     tableau = load(args.tableau)
     resolver = Resolver(axioms=args.axioms, levels=args.levels, quantum_deg=args.quantum,
                         time_limit=args.time_limit, max_models=args.max_models)
-    cmap = resolver.resolve(tableau)
+    try:
+        cmap = resolver.resolve(tableau)
+    except SolveTimeout as e:
+        if e.best_map is None:
+            raise
+        print(f"bootmap: {e}", file=sys.stderr)
+        _print_map(e.best_map, args)
+        return EXIT_FAILURE
+    return _print_map(cmap, args)
+
+
+def _print_map(cmap, args: argparse.Namespace) -> int:
     if args.format == "json":
         print(json.dumps(cmap.to_dict(), indent=1))
         return EXIT_OK

@@ -34,6 +34,8 @@ class CognitiveMap:
         side taken facing ``pos``.
     n_models : int
         Minimal maps found (up to the cap); ``unique`` is True when exactly one exists.
+    minimal : bool
+        False for a fall-back map returned on time-out: valid, but not proved minimal.
     alternatives : list of list of str
         The dstate of each time point in the other minimal maps.
     stats : dict
@@ -58,6 +60,7 @@ class CognitiveMap:
     alternatives: list[list[str]]
     levels: list[str]
     stats: dict[str, Any] = field(default_factory=dict)
+    minimal: bool = True
 
     @property
     def n_dstates(self) -> int:
@@ -78,7 +81,7 @@ class CognitiveMap:
     def to_dict(self) -> dict:
         return {
             "summary": {"dstates": self.n_dstates, "places": self.n_places, "paths": self.n_paths,
-                        "minimal_maps": self.n_models, "unique": self.unique,
+                        "proved_minimal": self.minimal, "minimal_maps": self.n_models, "unique": self.unique,
                         "minimal_maps_capped": self.models_capped, "levels": self.levels},
             "steps": self.steps,
             "dstates": {d: {"view": self.views[d], "heading_deg": self.headings.get(d),
@@ -97,7 +100,8 @@ class CognitiveMap:
 
     def to_text(self, all_steps: bool = True) -> str:
         lines = [f"{self.n_dstates} dstates, {self.n_places} places, {self.n_paths} paths; "
-                 + ("unique minimal map" if self.unique else
+                 + ("NOT PROVED MINIMAL (time-out)" if not self.minimal else
+                    "unique minimal map" if self.unique else
                     f"{self.n_models}{'+' if self.models_capped else ''} minimal maps")
                  + f"  (levels: {', '.join(self.levels)}; {self.stats.get('total_s', 0):.3f} s)", ""]
         header = ("t", "view", "dstate", "place", "path", "dir", "action to next")
@@ -156,7 +160,8 @@ def dstate_sequence(symbols: list[Symbol], n: int) -> tuple[list[Symbol], dict[S
     return seq, {d: f"S{i}" for d, i in order.items()}
 
 
-def build_map(tableau: Tableau, models: list[list[Symbol]], exhausted: bool, theory, stats: dict) -> CognitiveMap:
+def build_map(tableau: Tableau, models: list[list[Symbol]], exhausted: bool, theory, stats: dict,
+              minimal: bool = True) -> CognitiveMap:
     n = len(tableau)
     seq, sname = dstate_sequence(models[0], n)
     atoms = _by_name(models[0])
@@ -204,8 +209,9 @@ def build_map(tableau: Tableau, models: list[list[Symbol]], exhausted: bool, the
         steps=steps, dstate_of=[sname[d] for d in seq], views=dict(sorted(views.items(), key=_natural1)),
         headings=headings, place_of=place_of, path_of=path_of, places=places, paths=paths, on=on,
         order=order, right_of=sorted(sides["right"], key=_natural), left_of=sorted(sides["left"], key=_natural),
-        n_models=len(models), unique=len(models) == 1 and exhausted, models_capped=not exhausted,
-        alternatives=alternatives, levels=list(theory.levels), stats=stats)
+        n_models=len(models) if minimal else 0, unique=minimal and len(models) == 1 and exhausted,
+        models_capped=minimal and not exhausted, alternatives=alternatives, levels=list(theory.levels),
+        stats=stats, minimal=minimal)
 
 
 def _natural(t: tuple) -> tuple:

@@ -23,10 +23,15 @@ class InconsistentTableau(BootmapError):
 
 
 class SolveTimeout(BootmapError):
-    """The solver ran out of time before it proved a minimal map; ``lower_bound`` dstates are needed."""
+    """The solver ran out of time before it proved a minimal map.
 
-    def __init__(self, message: str, lower_bound: int = 0):
+    ``lower_bound`` dstates are proved necessary; ``best_map`` is a valid map found on the way (not proved
+    minimal), or None.
+    """
+
+    def __init__(self, message: str, lower_bound: int = 0, best_map=None):
         self.lower_bound = lower_bound
+        self.best_map = best_map
         super().__init__(message)
 
 

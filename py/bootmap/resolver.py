@@ -64,9 +64,11 @@ class Classes:
     def lower_bound(self) -> int:
         return sum(self.lower)
 
-    def facts(self, bound: int) -> list[Symbol]:
-        # Within the bound, class c can hold at most its own lower bound plus what the others leave over.
-        spare = bound - self.lower_bound
+    def facts(self, bound: int, spare: int | None = None) -> list[Symbol]:
+        """The layout for a search with at most ``bound`` dstates. Within the bound a class can hold its
+        own lower bound plus what the others leave over; ``spare`` caps that (a quick, incomplete try)."""
+        if spare is None:
+            spare = bound - self.lower_bound
         out = [Function("dstate_bound", [Number(bound)])]
         for c, size in enumerate(self.sizes):
             out.append(Function("slots", [Number(c), Number(min(size, self.lower[c] + spare))]))
@@ -111,6 +113,16 @@ class Resolver:
         self.theory = load_theory(self.axioms, self.levels)
 
     def resolve(self, tableau: Tableau) -> CognitiveMap:
+        """The minimal map(s) of the tableau.
+
+        Raises
+        ------
+        InconsistentTableau
+            No map satisfies the axioms.
+        SolveTimeout
+            Out of time; it carries the dstates proved necessary and, if one was found on the way,
+            a valid map that is not proved minimal (``best_map``).
+        """
         start = time.perf_counter()
         deadline = None if self.time_limit is None else start + self.time_limit
         facts = tableau_facts(tableau, self.quantum_deg)
@@ -118,26 +130,43 @@ class Resolver:
         depth = 0
         classes = self.classes(self._ground_prepass(facts, depth), len(tableau))
         stats = {"ground_s": 0.0, "solve_s": 0.0, "bounds": [], "classes": classes.count}
-        bound = classes.count
+        bound, best = classes.count, None
         while bound <= len(tableau):
             outcome = self._solve(facts, classes.facts(bound), deadline, stats, depth)
             stats["bounds"].append({"bound": bound, "result": outcome.result})
+            stats["lower_bound"] = max(classes.lower_bound, bound if outcome.result == "sat" else bound + 1)
             if outcome.result == "timeout":
-                raise SolveTimeout(f"time limit of {self.time_limit} s reached while trying {bound} dstates "
-                                   f"({bound - 1} or fewer was proved impossible); no map was proved minimal",
-                                   lower_bound=bound)
+                raise self._timed_out(bound, best)
             if outcome.models:
-                stats["lower_bound"] = classes.lower_bound
                 stats["total_s"] = time.perf_counter() - start
                 return build_map(tableau, outcome.models, outcome.exhausted, self.theory, stats)
             if bound == classes.count:
                 # One dstate per class did not do: bound each class from below before trying more.
                 depth = self.future_depth
                 classes.lower = self.lower_bounds(self._ground_prepass(facts, depth), classes)
+            elif best is None:
+                # The search will take a while: find some valid map to fall back on if time runs out.
+                best = self._some_map(tableau, facts, classes, deadline, stats, depth)
             bound = max(bound + 1, classes.lower_bound)
         raise InconsistentTableau(
             "no map satisfies the axioms, even with every time point its own dstate; "
             f"levels: {', '.join(self.theory.levels)}")
+
+    def _some_map(self, tableau, facts, classes, deadline, stats, depth) -> CognitiveMap | None:
+        """A valid map with at most one dstate more per class than its lower bound, if one is found
+        within a quarter of the remaining time. Not minimal: a fall-back for time-outs only."""
+        quick = None if deadline is None else time.perf_counter() + (deadline - time.perf_counter()) / 4
+        outcome = self._solve(facts, classes.facts(len(tableau), spare=1), quick, stats, depth, models=1)
+        stats["bounds"].append({"bound": None, "result": f"fallback {outcome.result}"})
+        if not outcome.models:
+            return None
+        return build_map(tableau, outcome.models, False, self.theory, dict(stats), minimal=False)
+
+    def _timed_out(self, bound: int, best: CognitiveMap | None) -> SolveTimeout:
+        found = (f"; best map so far: {best.n_dstates} dstates, not proved minimal" if best
+                 else "; no map found yet")
+        return SolveTimeout(f"time limit of {self.time_limit} s reached while trying {bound} dstates "
+                            f"({bound - 1} or fewer was proved impossible){found}", lower_bound=bound, best_map=best)
 
     def _ground_prepass(self, facts: list[Symbol], depth: int) -> clingo.Control:
         """The theory grounded with the tableau alone: what it derives for certain, before any search."""
@@ -183,25 +212,26 @@ class Resolver:
             members[c].append(t)
         return [_apart_clique(ts, partial) for ts in members]
 
-    def _solve(self, facts, layout, deadline, stats, depth) -> "_Outcome":
-        ctl = clingo.Control(["--warn=none", "-c", f"future_depth={int(depth)}", str(self.max_models + 1)])
+    def _solve(self, facts, layout, deadline, stats, depth, models: int | None = None) -> "_Outcome":
+        wanted = self.max_models + 1 if models is None else models
+        ctl = clingo.Control(["--warn=none", "-c", f"future_depth={int(depth)}", str(wanted)])
         self.theory.load_into(ctl)
         add_facts(ctl, facts + layout)
         t0 = time.perf_counter()
         ctl.ground([("base", [])])
         t1 = time.perf_counter()
         stats["ground_s"] += t1 - t0
-        models: list[list[Symbol]] = []
+        found: list[list[Symbol]] = []
         remaining = None if deadline is None else max(0.0, deadline - t1)
-        with ctl.solve(on_model=lambda m: models.append(m.symbols(shown=True)), async_=True) as handle:
+        with ctl.solve(on_model=lambda m: found.append(m.symbols(shown=True)), async_=True) as handle:
             finished = handle.wait(remaining)
             if not finished:
                 handle.cancel()
             result = handle.get()
         stats["solve_s"] += time.perf_counter() - t1
         if not finished:
-            return _Outcome("timeout", models, False)
-        return _Outcome("sat" if result.satisfiable else "unsat", models, bool(result.exhausted))
+            return _Outcome("timeout", found, False)
+        return _Outcome("sat" if result.satisfiable else "unsat", found, bool(result.exhausted))
 
 def _apart(a: dict, b: dict) -> bool:
     """Two time points disagree on a feature both show, so they cannot share a dstate."""
