@@ -22,3 +22,14 @@ def axioms_copy(tmp_path):
     dest = tmp_path / "asp"
     shutil.copytree(REPO / "asp", dest)
     return dest
+
+
+# Property tests draw the same examples on every run (CI included): a failure is reproducible, and a
+# green run is not luck. Set HYPOTHESIS_PROFILE=explore locally to search new examples.
+import os
+
+from hypothesis import settings
+
+settings.register_profile("ci", derandomize=True, print_blob=True)
+settings.register_profile("explore", derandomize=False, print_blob=True)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))

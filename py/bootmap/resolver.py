@@ -149,8 +149,8 @@ class Resolver:
                 best = self._some_map(tableau, facts, classes, deadline, stats, depth)
             bound = max(bound + 1, classes.lower_bound)
         raise InconsistentTableau(
-            "no map satisfies the axioms, even with every time point its own dstate; "
-            f"levels: {', '.join(self.theory.levels)}")
+            "no map satisfies the axioms: no partition of the time points into dstates explains this "
+            f"experience (levels: {', '.join(self.theory.levels)})")
 
     def _some_map(self, tableau, facts, classes, deadline, stats, depth) -> CognitiveMap | None:
         """A valid map with at most one dstate more per class than its lower bound, if one is found
