@@ -48,8 +48,8 @@ def test_paper_tableau_without_metrical_level_still_8_by_the_boundary_rules(pape
     m = Resolver(levels=NO_METRICAL).resolve(paper_tableau)
     assert (m.n_dstates, m.n_places, m.n_paths) == (8, 4, 4) and m.unique
     assert not m.same(4, 0) and m.same(8, 0)
-    tried = [(b["bound"], b["result"]) for b in m.stats["bounds"] if b["bound"] is not None]
-    assert tried == [(4, "unsat"), (5, "unsat"), (6, "unsat"), (7, "unsat"), (8, "sat")]  # 4..7 proved impossible
+    assert m.stats["bounds"][0] == {"dstates": "at most 4", "result": "unsat"}  # one per view fails
+    assert m.stats["lower_bound"] == 8  # and the optimiser proved fewer than 8 impossible
 
 
 def test_paper_tableau_with_causal_level_only_folds_to_4_views(paper_tableau):
@@ -185,20 +185,28 @@ def test_a_feature_only_some_time_points_show_does_not_split_the_others(axioms_c
 def test_time_out_hands_back_a_valid_map_found_on_the_way(paper_tableau, monkeypatch):
     from bootmap import resolver as resolver_module
 
-    real_solve = Resolver._solve
+    real_solve = resolver_module._Search._solve
 
-    def solve_until_bound_6(self, facts, layout, deadline, stats, depth, models=None):
-        bound = next(s.arguments[0].number for s in layout if s.name == "dstate_bound")
-        if bound == 6:  # pretend the proof for 6 dstates runs out of time
-            return resolver_module._Outcome("timeout", [], False)
-        return real_solve(self, facts, layout, deadline, stats, depth, models)
+    def run_out_of_time_when_optimising(self, layout, what, models=None, optimise=False):
+        if optimise:  # pretend the optimiser's proof runs out of time before its first model
+            raise self._timed_out(what, [])
+        return real_solve(self, layout, what, models, optimise)
 
-    monkeypatch.setattr(Resolver, "_solve", solve_until_bound_6)
+    monkeypatch.setattr(resolver_module._Search, "_solve", run_out_of_time_when_optimising)
     with pytest.raises(SolveTimeout) as e:
         Resolver(levels=NO_METRICAL).resolve(paper_tableau)
     best = e.value.best_map
-    assert e.value.lower_bound == 6 and "not proved minimal" in str(e.value)
+    assert e.value.lower_bound == 5 and "not proved minimal" in str(e.value)  # 4 was proved impossible
     assert best is not None and not best.minimal and not best.unique
-    assert best.n_dstates >= 6 and "NOT PROVED MINIMAL" in best.to_text()
-    # valid: resolving with exactly its partition's size succeeds, and it separates S4 from S0 as it must
-    assert not best.same(0, 4)
+    assert best.n_dstates >= 8 and "NOT PROVED MINIMAL" in best.to_text()
+    assert not best.same(0, 4)  # a valid map must keep S4 apart from S0
+
+
+def test_several_minimal_maps_are_counted_and_listed():
+    # t0 and t2 both see A and travel, then see different views: they differ. The final A (t4) has no
+    # future, so it may be either of them: two minimal maps of 4 dstates.
+    rows = (Step("A", Travel(1.0)), Step("B", Travel(1.0)), Step("A", Travel(1.0)), Step("C", Travel(1.0)), Step("A"))
+    m = Resolver(levels=CAUSAL).resolve(Tableau(rows))
+    assert m.n_dstates == 4 and m.n_models == 2 and not m.unique and not m.models_capped
+    assert len(m.alternatives) == 1
+    assert {m.dstate_of[4], m.alternatives[0][4]} == {m.dstate_of[0], m.dstate_of[2]}

@@ -186,14 +186,20 @@ def build_map(tableau: Tableau, models: list[list[Symbol]], exhausted: bool, the
     places: dict[str, list[str]] = {p: [] for p in sorted(pname.values(), key=lambda x: int(x[1:]))}
     for d in sorted(place_of, key=lambda x: int(x[1:])):
         places[place_of[d]].append(d)
-    order = sorted({(paname[pa], pname[a], pname[b]) if not flip[pa] else (paname[pa], pname[b], pname[a])
-                    for pa, a, b in atoms.get("order", [])}, key=_natural)
-    sides = {"right": set(), "left": set()}
-    for side in ("right", "left"):
-        for p, pa, dr in atoms.get(f"{side}_of", []):
-            facing_pos = direction(pa, dr.name) == "pos"
-            sides[side if facing_pos else ("left" if side == "right" else "right")].add((pname[p], paname[pa]))
-    on = sorted({(pname[p], paname[pa]) for p, pa in atoms.get("on", [])}, key=_natural)
+    # The theory derives, per dstate D, the places ahead of it and on either side of the path it faces;
+    # here they are named by place and path, and sides are taken facing pos.
+    on = sorted({(place_of[d], path_of[d][0]) for d in place_of if d in path_of}, key=_natural)
+    order = set()
+    for d, p in atoms.get("ahead", []):
+        pa, dr = path_of[sname[d]]
+        here, there = place_of[sname[d]], pname[p]
+        order.add((pa, here, there) if dr == "pos" else (pa, there, here))
+    sides: dict[str, set] = {"right": set(), "left": set()}
+    for side, mirror in (("right", "left"), ("left", "right")):
+        for d, p in atoms.get(side, []):
+            pa, dr = path_of[sname[d]]
+            sides[side if dr == "pos" else mirror].add((pname[p], pa))
+    order = sorted(order, key=_natural)
     paths = {pa: _ordered_places(pa, on, order) for pa in sorted(set(paname.values()), key=_natural)}
     steps = []
     for t, d in enumerate(seq):

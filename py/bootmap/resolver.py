@@ -5,15 +5,19 @@ different. Concretely:
 
 1. Ground the theory once with the tableau alone and read the *features* it derives for certain.
    Features every time point shows (its view; with the metrical level, its heading) group time points
-   into *classes*: only time points of one class can share a dstate, so one dstate per class is the
-   first bound tried. If that fails, features only some time points show (what was seen after a given
-   sequence of actions) tell time points of a class apart: a set of pairwise disagreeing time points is
-   a lower bound on the dstates of that class, and the search goes on from the sum of those bounds.
-2. For a bound N on the number of dstates, from that lower bound upwards: give each class
-   as many candidate slots as the bound leaves it (core/partition.lp numbers them by first appearance)
-   and ask clingo for maps with at most N dstates. The first N that is satisfiable is the minimal
-   number of dstates: every smaller bound was proved unsatisfiable.
-3. At that bound, enumerate the minimal maps (up to ``max_models``): one means the map is unique.
+   into *classes*: only time points of one class can share a dstate. First try one dstate per class:
+   usually this settles it, by propagation alone.
+2. Otherwise, features only some time points show (what was seen after a given sequence of actions)
+   tell time points of a class apart: a set of pairwise disagreeing time points is a proved lower bound
+   on the dstates of that class. Try exactly those bounds.
+3. Otherwise find some valid map, allowing a few spare dstates per class: an upper bound.
+4. Ground once within that bound and let clingo minimise the number of dstates (core-guided, so what it
+   learns carries from one bound to the next), then enumerate the minimal maps (up to ``max_models``):
+   one means the map is unique.
+
+In every step each class gets only the candidate dstates ("slots", numbered by first appearance in
+core/partition.lp) that the bound leaves it, so the ground program stays small when the lower bound is
+tight.
 
 Example
 -------
@@ -123,52 +127,18 @@ class Resolver:
             Out of time; it carries the dstates proved necessary and, if one was found on the way,
             a valid map that is not proved minimal (``best_map``).
         """
-        start = time.perf_counter()
-        deadline = None if self.time_limit is None else start + self.time_limit
-        facts = tableau_facts(tableau, self.quantum_deg)
-        # Futures only matter once one dstate per class has failed: leave them out until then.
-        depth = 0
-        classes = self.classes(self._ground_prepass(facts, depth), len(tableau))
-        stats = {"ground_s": 0.0, "solve_s": 0.0, "bounds": [], "classes": classes.count}
-        bound, best = classes.count, None
-        while bound <= len(tableau):
-            outcome = self._solve(facts, classes.facts(bound), deadline, stats, depth)
-            stats["bounds"].append({"bound": bound, "result": outcome.result})
-            stats["lower_bound"] = max(classes.lower_bound, bound if outcome.result == "sat" else bound + 1)
-            if outcome.result == "timeout":
-                raise self._timed_out(bound, best)
-            if outcome.models:
-                stats["total_s"] = time.perf_counter() - start
-                return build_map(tableau, outcome.models, outcome.exhausted, self.theory, stats)
-            if bound == classes.count:
-                # One dstate per class did not do: bound each class from below before trying more.
-                depth = self.future_depth
-                classes.lower = self.lower_bounds(self._ground_prepass(facts, depth), classes)
-            elif best is None:
-                # The search will take a while: find some valid map to fall back on if time runs out.
-                best = self._some_map(tableau, facts, classes, deadline, stats, depth)
-            bound = max(bound + 1, classes.lower_bound)
-        raise InconsistentTableau(
-            "no map satisfies the axioms: no partition of the time points into dstates explains this "
-            f"experience (levels: {', '.join(self.theory.levels)})")
+        search = _Search(self, tableau)
+        found = search.bounded(search.classes.count)
+        if found:
+            return found
+        search.bound_classes_from_below()
+        if search.classes.lower_bound > search.classes.count:
+            found = search.bounded(search.classes.lower_bound)
+            if found:
+                return found
+        return search.optimise(search.some_map())
 
-    def _some_map(self, tableau, facts, classes, deadline, stats, depth) -> CognitiveMap | None:
-        """A valid map with at most one dstate more per class than its lower bound, if one is found
-        within a quarter of the remaining time. Not minimal: a fall-back for time-outs only."""
-        quick = None if deadline is None else time.perf_counter() + (deadline - time.perf_counter()) / 4
-        outcome = self._solve(facts, classes.facts(len(tableau), spare=1), quick, stats, depth, models=1)
-        stats["bounds"].append({"bound": None, "result": f"fallback {outcome.result}"})
-        if not outcome.models:
-            return None
-        return build_map(tableau, outcome.models, False, self.theory, dict(stats), minimal=False)
-
-    def _timed_out(self, bound: int, best: CognitiveMap | None) -> SolveTimeout:
-        found = (f"; best map so far: {best.n_dstates} dstates, not proved minimal" if best
-                 else "; no map found yet")
-        return SolveTimeout(f"time limit of {self.time_limit} s reached while trying {bound} dstates "
-                            f"({bound - 1} or fewer was proved impossible){found}", lower_bound=bound, best_map=best)
-
-    def _ground_prepass(self, facts: list[Symbol], depth: int) -> clingo.Control:
+    def ground_prepass(self, facts: list[Symbol], depth: int) -> clingo.Control:
         """The theory grounded with the tableau alone: what it derives for certain, before any search."""
         ctl = clingo.Control(["--warn=none", "-c", f"future_depth={int(depth)}"])
         self.theory.load_into(ctl)
@@ -212,26 +182,108 @@ class Resolver:
             members[c].append(t)
         return [_apart_clique(ts, partial) for ts in members]
 
-    def _solve(self, facts, layout, deadline, stats, depth, models: int | None = None) -> "_Outcome":
-        wanted = self.max_models + 1 if models is None else models
-        ctl = clingo.Control(["--warn=none", "-c", f"future_depth={int(depth)}", str(wanted)])
-        self.theory.load_into(ctl)
-        add_facts(ctl, facts + layout)
+
+
+class _Search:
+    """One resolution: the tableau as facts, its classes, the clock, the figures, the best map so far."""
+
+    def __init__(self, resolver: Resolver, tableau: Tableau):
+        self.resolver, self.tableau = resolver, tableau
+        self.start = time.perf_counter()
+        self.deadline = None if resolver.time_limit is None else self.start + resolver.time_limit
+        self.facts = tableau_facts(tableau, resolver.quantum_deg)
+        self.depth = 0  # futures only matter once one dstate per class has failed
+        self.classes = resolver.classes(resolver.ground_prepass(self.facts, self.depth), len(tableau))
+        self.proved = self.classes.count  # dstates proved necessary so far
+        self.best: CognitiveMap | None = None
+        self.stats: dict = {"ground_s": 0.0, "solve_s": 0.0, "bounds": [], "classes": self.classes.count}
+
+    def bounded(self, bound: int) -> CognitiveMap | None:
+        """The minimal maps if at most ``bound`` dstates will do, else None (and the bound is proved)."""
+        outcome = self._solve(self.classes.facts(bound), f"at most {bound}")
+        if outcome.models:
+            return self._finish(outcome.models, outcome.exhausted)
+        self.proved = max(self.proved, bound + 1)
+        return None
+
+    def bound_classes_from_below(self) -> None:
+        self.depth = self.resolver.future_depth
+        prepass = self.resolver.ground_prepass(self.facts, self.depth)
+        self.classes.lower = self.resolver.lower_bounds(prepass, self.classes)
+        self.proved = max(self.proved, self.classes.lower_bound)
+
+    def some_map(self) -> CognitiveMap:
+        """A valid map with few spare dstates per class (doubling the spare until one is found)."""
+        widest = max(size - low for size, low in zip(self.classes.sizes, self.classes.lower))
+        spare = 1
+        while True:
+            layout = self.classes.facts(len(self.tableau), spare=spare)
+            outcome = self._solve(layout, f"any, {spare} spare per class", models=1)
+            if outcome.models:
+                self.best = build_map(self.tableau, outcome.models, False, self.resolver.theory,
+                                      dict(self.stats), minimal=False)
+                return self.best
+            if spare >= widest:
+                raise InconsistentTableau(
+                    "no map satisfies the axioms: no partition of the time points into dstates explains "
+                    f"this experience (levels: {', '.join(self.resolver.theory.levels)})")
+            spare = min(widest, 2 * spare)
+
+    def optimise(self, upper: CognitiveMap) -> CognitiveMap:
+        """The minimal maps within the upper map's number of dstates, by clingo's optimisation."""
+        layout = self.classes.facts(upper.n_dstates) + [Function("minimise_dstates")]
+        outcome = self._solve(layout, f"fewest, at most {upper.n_dstates}", optimise=True)
+        cmap = self._finish(outcome.models, outcome.exhausted)
+        self.stats["lower_bound"] = cmap.n_dstates  # the optimiser proved it
+        return cmap
+
+    def _finish(self, models, exhausted) -> CognitiveMap:
+        self.stats["lower_bound"] = self.proved
+        self.stats["total_s"] = time.perf_counter() - self.start
+        return build_map(self.tableau, models, exhausted, self.resolver.theory, self.stats)
+
+    def _solve(self, layout, what: str, models: int | None = None, optimise: bool = False) -> "_Outcome":
+        """Ground and solve; on time-out raise SolveTimeout with the best map known."""
+        r = self.resolver
+        args = ["--warn=none", "-c", f"future_depth={int(self.depth)}", str(r.max_models + 1 if models is None else models)]
+        if optimise:
+            args += ["--opt-mode=optN", "--opt-strategy=usc"]
+        ctl = clingo.Control(args)
+        r.theory.load_into(ctl)
+        add_facts(ctl, self.facts + layout)
         t0 = time.perf_counter()
         ctl.ground([("base", [])])
         t1 = time.perf_counter()
-        stats["ground_s"] += t1 - t0
-        found: list[list[Symbol]] = []
-        remaining = None if deadline is None else max(0.0, deadline - t1)
-        with ctl.solve(on_model=lambda m: found.append(m.symbols(shown=True)), async_=True) as handle:
+        optimal: list[list[Symbol]] = []
+        improving: list[list[Symbol]] = []
+
+        def on_model(m: clingo.Model) -> None:
+            (optimal if not optimise or m.optimality_proven else improving).append(m.symbols(shown=True))
+
+        remaining = None if self.deadline is None else max(0.0, self.deadline - t1)
+        with ctl.solve(on_model=on_model, async_=True) as handle:
             finished = handle.wait(remaining)
             if not finished:
                 handle.cancel()
             result = handle.get()
-        stats["solve_s"] += time.perf_counter() - t1
+        self.stats["ground_s"] += t1 - t0
+        self.stats["solve_s"] += time.perf_counter() - t1
+        verdict = "timeout" if not finished else ("sat" if result.satisfiable else "unsat")
+        self.stats["bounds"].append({"dstates": what, "result": verdict})
         if not finished:
-            return _Outcome("timeout", found, False)
-        return _Outcome("sat" if result.satisfiable else "unsat", found, bool(result.exhausted))
+            raise self._timed_out(what, improving)
+        return _Outcome(verdict, optimal, bool(result.exhausted))
+
+    def _timed_out(self, what: str, improving: list) -> SolveTimeout:
+        if improving:  # the optimiser's last (smallest) model so far
+            self.best = build_map(self.tableau, improving[-1:], False, self.resolver.theory, dict(self.stats),
+                                  minimal=False)
+        found = (f"best map so far: {self.best.n_dstates} dstates, not proved minimal" if self.best
+                 else "no map found yet")
+        return SolveTimeout(f"time limit of {self.resolver.time_limit} s reached while looking for {what} "
+                            f"dstates; at least {self.proved} dstates are proved necessary; {found}",
+                            lower_bound=self.proved, best_map=self.best)
+
 
 def _apart(a: dict, b: dict) -> bool:
     """Two time points disagree on a feature both show, so they cannot share a dstate."""
