@@ -19,8 +19,12 @@ from bootmap import examples
 from bootmap.facts import quantise
 from bootmap.gridworld import random_world, walk
 from bootmap.metrics import dstate_accuracy
+from bootmap.errors import SolveTimeout
 from bootmap.resolver import Resolver
 from bootmap.tableau import Tableau, Turn
+
+
+NO_METRICAL = ["causal", "topological"]
 
 
 def headings(tableau: Tableau, quantum: float = 15.0) -> list[int]:
@@ -52,6 +56,7 @@ def rpni(tableau: Tableau, with_heading: bool) -> tuple[list, float]:
 
 def cases(quick: bool):
     yield "paper notched rectangle", examples.notched_rectangle(circuits=50)
+    yield "paper, no metrical level", examples.notched_rectangle(circuits=50), NO_METRICAL
     sizes = (1_000,) if quick else (1_000, 5_000, 10_000)
     for n in sizes:
         rng = np.random.default_rng(7)
@@ -59,8 +64,31 @@ def cases(quick: bool):
         yield f"5x5 grid, landmarks, {n} steps", walk(world, n, rng, policy="explore")
     rng = np.random.default_rng(3)
     world = random_world(rng, 4, 4, extra_edges=2, landmarks=0.0)
-    yield f"4x4 grid, no landmarks, {2_000 if not quick else 500} steps", walk(world, 2_000 if not quick else 500, rng,
-                                                                              policy="explore")
+    n = 500 if quick else 2_000
+    yield f"4x4 grid, no landmarks, {n} steps", walk(world, n, rng, policy="explore")
+
+
+def aliased_walks(count: int):
+    """Short walks on small grids without landmarks: heavy aliasing, and no headings to help."""
+    for seed in range(count):
+        rng = np.random.default_rng(seed)
+        world = random_world(rng, 3 + seed % 2, 3 + (seed // 2) % 2, extra_edges=seed % 4, landmarks=0.0)
+        yield walk(world, 30, rng, policy="random" if seed % 3 else "explore")
+
+
+def aliasing_sweep(count: int) -> None:
+    resolver = Resolver(levels=NO_METRICAL, time_limit=10)
+    times, timeouts = [], 0
+    for tableau in aliased_walks(count):
+        t0 = time.perf_counter()
+        try:
+            resolver.resolve(tableau)
+        except SolveTimeout:
+            timeouts += 1
+        times.append(time.perf_counter() - t0)
+    q = np.percentile(times, [50, 90, 100])
+    print(f"\n{count} aliased 30-step walks on 3x3/4x4 grids, no landmarks, levels causal+topological: "
+          f"median {q[0]:.2f} s, p90 {q[1]:.2f} s, max {q[2]:.2f} s, time-outs (10 s) {timeouts}")
 
 
 def main(argv=None) -> int:
@@ -68,12 +96,12 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true", help="small tableaux only")
     ap.add_argument("--repeat", type=int, default=3, help="resolves per tableau; the median is printed")
     args = ap.parse_args(argv)
-    resolver = Resolver(time_limit=120)
     head = (f"{'tableau':34} {'steps':>6} {'true':>5} | {'ours':>5} {'acc':>6} {'ground':>7} {'solve':>7} {'total':>7}"
             f" {'uniq':>5} | {'rpni(v)':>7} {'acc':>6} {'time':>7} | {'rpni(v+h)':>9} {'acc':>6} {'time':>7}")
     print(head)
     print("-" * len(head))
-    for name, tableau in cases(args.quick):
+    for name, tableau, *levels in cases(args.quick):
+        resolver = Resolver(levels=levels[0] if levels else None, time_limit=120)
         truth = [s.truth for s in tableau.steps]
         runs = []
         for _ in range(args.repeat):
@@ -89,6 +117,7 @@ def main(argv=None) -> int:
               f"{len(set(v_states)):>7} {dstate_accuracy(truth, v_states):>6.1%} {v_time:>7.3f} | "
               f"{len(set(h_states)):>9} {dstate_accuracy(truth, h_states):>6.1%} {h_time:>7.3f}")
         sys.stdout.flush()
+    aliasing_sweep(10 if args.quick else 40)
     print("\ntimes in seconds; accuracy = time points in their true dstate under the best one-to-one renaming;"
           "\n'true' = distinct true dstates visited; ours: median of", args.repeat, "resolves, proved minimal and"
           " (uniq) unique")
