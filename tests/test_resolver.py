@@ -210,3 +210,54 @@ def test_several_minimal_maps_are_counted_and_listed():
     assert m.n_dstates == 4 and m.n_models == 2 and not m.unique and not m.models_capped
     assert len(m.alternatives) == 1
     assert {m.dstate_of[4], m.alternatives[0][4]} == {m.dstate_of[0], m.dstate_of[2]}
+
+
+# --- Hand-made grid worlds (views from local geometry; truth = node and heading) -----------------------
+
+def _script(ascii_world, start, actions):
+    from bootmap.gridworld import World, scripted
+
+    return scripted(World.from_ascii(ascii_world), start, actions)
+
+
+T_JUNCTION = """
++-+-+
+  |
+  +
+"""
+
+
+def test_t_junction_explored_from_the_stem_gives_the_true_map():
+    # From the south end up the stem; at the junction turn to each arm in turn, out to its dead end and back.
+    t = _script(T_JUNCTION, ((1, 0), 90), [
+        "travel", "right", "travel", "around", "travel", "left", "travel", "around", "travel", "left",
+        "travel", "around", "travel", "right", "travel", "around", "travel"])
+    for levels in (ALL, NO_METRICAL, NO_TOPOLOGICAL):
+        m = Resolver(levels=levels).resolve(t)
+        assert m.n_dstates == 10 and m.unique and truth_accuracy(t, m)
+    m = Resolver().resolve(t)
+    assert (m.n_places, m.n_paths) == (4, 2)
+    junction = m.place_of[m.dstate_of[1]]
+    assert len(m.places[junction]) == 4  # facing each of the four ways at the junction
+    stem, bar = m.path_of[m.dstate_of[0]][0], m.path_of[m.dstate_of[2]][0]
+    assert len(m.paths[stem]) == 2 and len(m.paths[bar]) == 3
+
+
+SQUARE_LOOP = """
++-+
+| |
++-+
+"""
+
+
+def test_loop_taken_in_both_directions():
+    # Twice round counter-clockwise, turn around in a corner, twice round clockwise. The four corners
+    # look alike, so without headings the loop folds; with them every dstate is found.
+    t = _script(SQUARE_LOOP, ((0, 0), 0), (["travel", "left"] * 8)[:-1] + ["around"] + (["travel", "right"] * 8)[:-1])
+    m = Resolver().resolve(t)
+    assert m.n_dstates == 16 and m.unique and truth_accuracy(t, m)
+    assert Resolver(levels=NO_METRICAL).resolve(t).n_dstates < 16
+    # Places are dstates linked by turns: the robot turned left at each corner one way round and right the
+    # other, so the two turns at a corner are linked only where it turned around: 4 + 3 places, and each
+    # side is a path per direction except the side it turned around on.
+    assert (m.n_places, m.n_paths) == (7, 7)

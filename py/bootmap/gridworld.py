@@ -337,6 +337,20 @@ def walk(world: World, n_steps: int, rng: np.random.Generator, policy: str = "ra
     return _tableau(world, states, actions, policy)
 
 
+def scripted(world: World, start: State, actions: Sequence[str]) -> Tableau:
+    """The tableau of a given sequence of actions (``"travel"``, ``"left"``, ``"right"``, ``"around"``)
+    from ``start`` = (node, heading): hand-made tableaux with known answers.
+
+    >>> corridor = World.from_ascii("+-+")
+    >>> [s.view for s in scripted(corridor, ((0, 0), 0), ["travel", "around"]).steps]
+    ['.F..', '...B', '.F..']
+    """
+    states = [start]
+    for action in actions:
+        states.append(world.step(states[-1], action))
+    return _tableau(world, states, list(actions), "scripted")
+
+
 def _random_start(world: World, rng: np.random.Generator) -> State:
     starts = sorted((n, h) for n in world.nodes for h in world.open_headings(n))
     if not starts:
