@@ -48,7 +48,8 @@ def test_paper_tableau_without_metrical_level_still_8_by_the_boundary_rules(pape
     m = Resolver(levels=NO_METRICAL).resolve(paper_tableau)
     assert (m.n_dstates, m.n_places, m.n_paths) == (8, 4, 4) and m.unique
     assert not m.same(4, 0) and m.same(8, 0)
-    assert m.stats["bounds"][0] == {"dstates": "at most 4", "result": "unsat"}  # one per view fails
+    assert m.stats["bounds"][0] == {"dstates": "one dstate per class", "result": "unsat"}  # one per view fails
+    assert m.stats["classes"] == 4
     assert m.stats["lower_bound"] == 8  # and the optimiser proved fewer than 8 impossible
 
 
@@ -187,10 +188,10 @@ def test_time_out_hands_back_a_valid_map_found_on_the_way(paper_tableau, monkeyp
 
     real_solve = resolver_module._Search._solve
 
-    def run_out_of_time_when_optimising(self, layout, what, models=None, optimise=False):
+    def run_out_of_time_when_optimising(self, layout, what, models=None, optimise=False, keep=False):
         if optimise:  # pretend the optimiser's proof runs out of time before its first model
             raise self._timed_out(what, [])
-        return real_solve(self, layout, what, models, optimise)
+        return real_solve(self, layout, what, models, optimise, keep)
 
     monkeypatch.setattr(resolver_module._Search, "_solve", run_out_of_time_when_optimising)
     with pytest.raises(SolveTimeout) as e:

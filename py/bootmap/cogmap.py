@@ -131,88 +131,76 @@ def action_text(action) -> str:
     return f"travel {action.distance_m:g} m{bend}"
 
 
-def _first_appearance(keys_in_time_order) -> dict:
-    names: dict = {}
-    for k in keys_in_time_order:
-        if k not in names:
-            names[k] = len(names)
-    return names
-
-
-def _args(sym: Symbol) -> list[Symbol]:
-    return list(sym.arguments)
-
-
 def _by_name(symbols: list[Symbol]) -> dict[str, list[list[Symbol]]]:
     out: dict[str, list[list[Symbol]]] = {}
     for s in symbols:
-        out.setdefault(s.name, []).append(_args(s))
+        out.setdefault(s.name, []).append(list(s.arguments))
     return out
 
 
-def dstate_sequence(symbols: list[Symbol], n: int) -> tuple[list[Symbol], dict[Symbol, str]]:
-    """The dstate term of each time point, and the S-names by first appearance."""
-    seq: list[Symbol] = [None] * n  # type: ignore[list-item]
-    for s in symbols:
-        if s.name == "is" and len(s.arguments) == 2:
-            seq[s.arguments[0].number] = s.arguments[1]
-    order = _first_appearance(seq)
-    return seq, {d: f"S{i}" for d, i in order.items()}
+def _number_dstates(is_atoms: list[list[Symbol]], n: int) -> tuple[dict[Symbol, int], list[int]]:
+    """Dstate terms numbered by first appearance (S0, S1, ...), and the number of each time point's.
+    Clingo symbols are hashed once here: comparing them costs a C call each, so the rest uses ints."""
+    term: list[Symbol] = [None] * n  # type: ignore[list-item]
+    for t, d in is_atoms:
+        term[t.number] = d
+    ids: dict[Symbol, int] = {}
+    return ids, [ids.setdefault(d, len(ids)) for d in term]
 
 
 def build_map(tableau: Tableau, models: list[list[Symbol]], exhausted: bool, theory, stats: dict,
               minimal: bool = True) -> CognitiveMap:
     n = len(tableau)
-    seq, sname = dstate_sequence(models[0], n)
     atoms = _by_name(models[0])
-    views = {sname[d]: v.string for d, v in atoms.get("view_of", [])}
-    headings = {sname[d]: h.number for d, h in atoms.get("heading_of", [])}
-    place_term = {d: p for d, p in atoms.get("place_of", [])}
-    pname = {p: f"P{i}" for p, i in _first_appearance(place_term[d] for d in seq if d in place_term).items()}
-    path_term = {d: (pa, dr.name) for d, pa, dr in atoms.get("path_of", [])}
-    paname = {pa: f"Pa{i}" for pa, i in _first_appearance(path_term[d][0] for d in seq if d in path_term).items()}
-    # pos is the direction the robot first faced along a path.
-    flip = {}
-    for d in seq:
-        if d in path_term and path_term[d][0] not in flip:
-            flip[path_term[d][0]] = path_term[d][1] == "neg"
+    ids, seq = _number_dstates(atoms["is"], n)
+    S = [f"S{i}" for i in range(len(ids))]
+    views = {S[ids[d]]: v.string for d, v in atoms.get("view_of", [])}
+    headings = {S[ids[d]]: h.number for d, h in atoms.get("heading_of", [])}
+    place_rep = {ids[d]: ids[p] for d, p in atoms.get("place_of", [])}
+    path_rep = {ids[d]: (ids[pa], dr.name) for d, pa, dr in atoms.get("path_of", [])}
+    # Places and paths are named in order of first appearance; pos is the way the robot first faced.
+    pname: dict[int, str] = {}
+    paname: dict[int, str] = {}
+    flip: dict[int, bool] = {}
+    for i in seq:
+        if i in place_rep and place_rep[i] not in pname:
+            pname[place_rep[i]] = f"P{len(pname)}"
+        if i in path_rep and path_rep[i][0] not in paname:
+            paname[path_rep[i][0]] = f"Pa{len(paname)}"
+            flip[path_rep[i][0]] = path_rep[i][1] == "neg"
     other = {"pos": "neg", "neg": "pos"}
-
-    def direction(pa, dr):
-        return other[dr] if flip.get(pa) else dr
-
-    place_of = {sname[d]: pname[p] for d, p in place_term.items()}
-    path_of = {sname[d]: (paname[pa], direction(pa, dr)) for d, (pa, dr) in path_term.items()}
-    places: dict[str, list[str]] = {p: [] for p in sorted(pname.values(), key=lambda x: int(x[1:]))}
-    for d in sorted(place_of, key=lambda x: int(x[1:])):
+    place_of = {S[i]: pname[p] for i, p in place_rep.items()}
+    path_of = {S[i]: (paname[pa], other[dr] if flip[pa] else dr) for i, (pa, dr) in path_rep.items()}
+    places: dict[str, list[str]] = {p: [] for p in sorted(pname.values(), key=_natural1)}
+    for d in sorted(place_of, key=_natural1):
         places[place_of[d]].append(d)
     # The theory derives, per dstate D, the places ahead of it and on either side of the path it faces;
     # here they are named by place and path, and sides are taken facing pos.
     on = sorted({(place_of[d], path_of[d][0]) for d in place_of if d in path_of}, key=_natural)
     order = set()
     for d, p in atoms.get("ahead", []):
-        pa, dr = path_of[sname[d]]
-        here, there = place_of[sname[d]], pname[p]
+        pa, dr = path_of[S[ids[d]]]
+        here, there = place_of[S[ids[d]]], pname[ids[p]]
         order.add((pa, here, there) if dr == "pos" else (pa, there, here))
     sides: dict[str, set] = {"right": set(), "left": set()}
     for side, mirror in (("right", "left"), ("left", "right")):
         for d, p in atoms.get(side, []):
-            pa, dr = path_of[sname[d]]
-            sides[side if dr == "pos" else mirror].add((pname[p], pa))
+            pa, dr = path_of[S[ids[d]]]
+            sides[side if dr == "pos" else mirror].add((pname[ids[p]], pa))
     order = sorted(order, key=_natural)
-    paths = {pa: _ordered_places(pa, on, order) for pa in sorted(set(paname.values()), key=_natural)}
+    paths = {pa: _ordered_places(pa, on, order) for pa in sorted(set(paname.values()), key=_natural1)}
     steps = []
-    for t, d in enumerate(seq):
-        s = sname[d]
+    for t, i in enumerate(seq):
+        s = S[i]
         pa, dr = path_of.get(s, (None, None))
         steps.append({"t": t, "view": tableau.steps[t].view, "dstate": s, "place": place_of.get(s),
                       "path": pa, "dir": dr, "action": action_text(tableau.steps[t].action)})
     alternatives = []
     for m in models[1:]:
-        alt_seq, alt_names = dstate_sequence(m, n)
-        alternatives.append([alt_names[d] for d in alt_seq])
+        _, alt = _number_dstates([list(s.arguments) for s in m if s.name == "is"], n)
+        alternatives.append([f"S{i}" for i in alt])
     return CognitiveMap(
-        steps=steps, dstate_of=[sname[d] for d in seq], views=dict(sorted(views.items(), key=_natural1)),
+        steps=steps, dstate_of=[S[i] for i in seq], views=dict(sorted(views.items(), key=_natural1)),
         headings=headings, place_of=place_of, path_of=path_of, places=places, paths=paths, on=on,
         order=order, right_of=sorted(sides["right"], key=_natural), left_of=sorted(sides["left"], key=_natural),
         n_models=len(models) if minimal else 0, unique=minimal and len(models) == 1 and exhausted,
@@ -225,7 +213,8 @@ def _natural(t: tuple) -> tuple:
 
 
 def _natural1(item) -> tuple:
-    return _natural((item[0],))
+    """Natural order of a name, or of a (name, value) item: S2 before S10."""
+    return _natural((item if isinstance(item, str) else item[0],))
 
 
 def _ordered_places(pa: str, on: list, order: list) -> list[str]:

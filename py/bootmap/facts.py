@@ -5,7 +5,7 @@ added through the backend, so a view label such as ``a). #script (python)`` is j
 text ever becomes program text. Angles are rounded to a quantum here, so that sensor noise on turns
 does not make the same action look like many actions, nor accumulate in headings.
 
-Facts (see docs/asp.md): ``time(T)``, ``view(T, "label")``, ``turn(T, A)``, ``travel(T, C)``, with
+Facts (see docs/asp.md): ``view(T, "label")``, ``turn(T, A)``, ``travel(T, C)``, with
 ``A``, ``C`` integer degrees in (-180, 180]; ``turn(T, 180)`` is a turn-around.
 """
 
@@ -31,7 +31,6 @@ def tableau_facts(tableau: Tableau, quantum_deg: float = 15.0) -> list[Symbol]:
     tableau.require_views()
     out: list[Symbol] = []
     for t, step in enumerate(tableau.steps):
-        out.append(Function("time", [Number(t)]))
         out.append(Function("view", [Number(t), String(step.view)]))  # type: ignore[arg-type]
         a = step.action
         if isinstance(a, Turn):

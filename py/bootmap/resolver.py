@@ -3,10 +3,10 @@
 The search, in the paper's terms: dstates with the same view are equal unless the axioms prove them
 different. Concretely:
 
-1. Ground the theory once with the tableau alone and read the *features* it derives for certain.
-   Features every time point shows (its view; with the metrical level, its heading) group time points
-   into *classes*: only time points of one class can share a dstate. First try one dstate per class:
-   usually this settles it, by propagation alone.
+1. Features every time point shows (its view; with the metrical level, its heading) group time points
+   into *classes*, named by a key term the theory folds from them (core/partition.lp): only time points
+   of one class can share a dstate. The first try, in a single grounding, is one dstate per class;
+   usually that settles it, by propagation alone.
 2. Otherwise, features only some time points show (what was seen after a given sequence of actions)
    tell time points of a class apart: a set of pairwise disagreeing time points is a proved lower bound
    on the dstates of that class. Try exactly those bounds.
@@ -50,12 +50,14 @@ from .tableau import Tableau
 class Classes:
     """Time points grouped by the features every time point shows (view; heading with the metrical level).
 
-    ``lower[c]`` is a proved lower bound on the dstates of class c: the size of a set of its time points
-    that pairwise disagree on some feature (e.g. what they saw after the same actions), so that no two of
-    them can share a dstate.
+    A class is named by the key term the theory folds from those features (``class_key/2`` in
+    core/partition.lp). ``lower[c]`` is a proved lower bound on the dstates of class c: the size of a set
+    of its time points that pairwise disagree on some feature (e.g. what they saw after the same
+    actions), so that no two of them can share a dstate.
     """
 
-    of_time: list[int]                      # class id of each time point, numbered by first appearance
+    keys: list[Symbol]                      # the key term of each class, by first appearance
+    of_time: list[int]                      # class of each time point
     sizes: list[int]                        # time points per class
     prev: list[int | None]                  # previous time point of the same class
     lower: list[int]                        # dstates each class needs at least
@@ -74,12 +76,11 @@ class Classes:
         if spare is None:
             spare = bound - self.lower_bound
         out = [Function("dstate_bound", [Number(bound)])]
-        for c, size in enumerate(self.sizes):
-            out.append(Function("slots", [Number(c), Number(min(size, self.lower[c] + spare))]))
-        for t, c in enumerate(self.of_time):
-            out.append(Function("class", [Number(t), Number(c)]))
-            if self.prev[t] is not None:
-                out.append(Function("prev_in_class", [Number(self.prev[t]), Number(t)]))  # type: ignore[list-item]
+        for key, size, low in zip(self.keys, self.sizes, self.lower):
+            out.append(Function("slots", [key, Number(min(size, low + spare))]))
+        for t, p in enumerate(self.prev):
+            if p is not None:
+                out.append(Function("prev_in_class", [Number(p), Number(t)]))
         return out
 
 
@@ -128,7 +129,7 @@ class Resolver:
             a valid map that is not proved minimal (``best_map``).
         """
         search = _Search(self, tableau)
-        found = search.bounded(search.classes.count)
+        found = search.one_per_class()
         if found:
             return found
         search.bound_classes_from_below()
@@ -146,26 +147,25 @@ class Resolver:
         ctl.ground([("base", [])])
         return ctl
 
-    def classes(self, prepass: clingo.Control, n: int) -> Classes:
-        """Group time points by the features every time point shows (``group_by/3`` facts)."""
-        interned: dict[Symbol, int] = {}  # small ints: comparing clingo symbols costs a C call each
-        keys: list[list[tuple[int, int]]] = [[] for _ in range(n)]
-        for sa in prepass.symbolic_atoms.by_signature("group_by", 3):
+    def classes(self, grounded: clingo.Control, n: int) -> Classes:
+        """Group time points by the class key the theory derived for each (``class_key/2``)."""
+        key_of: list[Symbol | None] = [None] * n
+        for sa in grounded.symbolic_atoms.by_signature("class_key", 2):
             if sa.is_fact:
-                t, key, value = sa.symbol.arguments
-                keys[t.number].append((interned.setdefault(key, len(interned)),
-                                       interned.setdefault(value, len(interned))))
-        ids: dict[tuple, int] = {}
-        of_time, sizes, prev, last = [], [], [], {}
-        for t in range(n):
-            c = ids.setdefault(tuple(sorted(keys[t])), len(ids))
+                t, key = sa.symbol.arguments
+                key_of[t.number] = key
+        ids: dict[Symbol, int] = {}
+        keys, of_time, sizes, prev, last = [], [], [], [], {}
+        for t, key in enumerate(key_of):
+            c = ids.setdefault(key, len(ids))  # type: ignore[arg-type]
             if c == len(sizes):
+                keys.append(key)
                 sizes.append(0)
             sizes[c] += 1
             of_time.append(c)
             prev.append(last.get(c))
             last[c] = t
-        return Classes(of_time, sizes, prev, [1] * len(sizes))
+        return Classes(keys, of_time, sizes, prev, [1] * len(sizes))
 
     def lower_bounds(self, prepass: clingo.Control, classes: Classes) -> list[int]:
         """Per class, a set of time points that pairwise disagree on a feature only some of them show
@@ -193,14 +193,26 @@ class _Search:
         self.deadline = None if resolver.time_limit is None else self.start + resolver.time_limit
         self.facts = tableau_facts(tableau, resolver.quantum_deg)
         self.depth = 0  # futures only matter once one dstate per class has failed
-        self.classes = resolver.classes(resolver.ground_prepass(self.facts, self.depth), len(tableau))
-        self.proved = self.classes.count  # dstates proved necessary so far
+        self.classes: Classes = None  # type: ignore[assignment]  # known after the first try
+        self.proved = 1  # dstates proved necessary so far
         self.best: CognitiveMap | None = None
-        self.stats: dict = {"ground_s": 0.0, "solve_s": 0.0, "bounds": [], "classes": self.classes.count}
+        self.stats: dict = {"ground_s": 0.0, "solve_s": 0.0, "bounds": []}
+
+    def one_per_class(self) -> CognitiveMap | None:
+        """The first try, in one grounding: one dstate per class. If it fails, learn the classes from it."""
+        outcome = self._solve([Function("one_per_class")], "one dstate per class", keep=True)
+        if outcome.models:  # every class holds its one dstate: as many classes as dstates
+            cmap = self._finish(outcome.models, outcome.exhausted)
+            self.stats["classes"] = self.stats["lower_bound"] = cmap.n_dstates
+            return cmap
+        self.classes = self.resolver.classes(outcome.control, len(self.tableau))
+        self.stats["classes"] = self.classes.count
+        self.proved = self.classes.count + 1
+        return None
 
     def bounded(self, bound: int) -> CognitiveMap | None:
         """The minimal maps if at most ``bound`` dstates will do, else None (and the bound is proved)."""
-        outcome = self._solve(self.classes.facts(bound), f"at most {bound}")
+        outcome = self._solve(self.classes.facts(bound), f"at most {bound} dstates")
         if outcome.models:
             return self._finish(outcome.models, outcome.exhausted)
         self.proved = max(self.proved, bound + 1)
@@ -218,7 +230,7 @@ class _Search:
         spare = 1
         while True:
             layout = self.classes.facts(len(self.tableau), spare=spare)
-            outcome = self._solve(layout, f"any, {spare} spare per class", models=1)
+            outcome = self._solve(layout, f"any map with {spare} spare dstate(s) per class", models=1)
             if outcome.models:
                 self.best = build_map(self.tableau, outcome.models, False, self.resolver.theory,
                                       dict(self.stats), minimal=False)
@@ -232,7 +244,7 @@ class _Search:
     def optimise(self, upper: CognitiveMap) -> CognitiveMap:
         """The minimal maps within the upper map's number of dstates, by clingo's optimisation."""
         layout = self.classes.facts(upper.n_dstates) + [Function("minimise_dstates")]
-        outcome = self._solve(layout, f"fewest, at most {upper.n_dstates}", optimise=True)
+        outcome = self._solve(layout, f"the fewest dstates, at most {upper.n_dstates}", optimise=True)
         cmap = self._finish(outcome.models, outcome.exhausted)
         self.stats["lower_bound"] = cmap.n_dstates  # the optimiser proved it
         return cmap
@@ -242,7 +254,8 @@ class _Search:
         self.stats["total_s"] = time.perf_counter() - self.start
         return build_map(self.tableau, models, exhausted, self.resolver.theory, self.stats)
 
-    def _solve(self, layout, what: str, models: int | None = None, optimise: bool = False) -> "_Outcome":
+    def _solve(self, layout, what: str, models: int | None = None, optimise: bool = False,
+               keep: bool = False) -> "_Outcome":
         """Ground and solve; on time-out raise SolveTimeout with the best map known."""
         r = self.resolver
         args = ["--warn=none", "-c", f"future_depth={int(self.depth)}", str(r.max_models + 1 if models is None else models)]
@@ -271,8 +284,11 @@ class _Search:
         verdict = "timeout" if not finished else ("sat" if result.satisfiable else "unsat")
         self.stats["bounds"].append({"dstates": what, "result": verdict})
         if not finished:
+            if self.classes is None:  # timed out in the first try: the classes still bound the answer
+                self.classes = self.resolver.classes(ctl, len(self.tableau))
+                self.proved = self.classes.count
             raise self._timed_out(what, improving)
-        return _Outcome(verdict, optimal, bool(result.exhausted))
+        return _Outcome(verdict, optimal, bool(result.exhausted), ctl if keep else None)
 
     def _timed_out(self, what: str, improving: list) -> SolveTimeout:
         if improving:  # the optimiser's last (smallest) model so far
@@ -280,8 +296,8 @@ class _Search:
                                   minimal=False)
         found = (f"best map so far: {self.best.n_dstates} dstates, not proved minimal" if self.best
                  else "no map found yet")
-        return SolveTimeout(f"time limit of {self.resolver.time_limit} s reached while looking for {what} "
-                            f"dstates; at least {self.proved} dstates are proved necessary; {found}",
+        return SolveTimeout(f"time limit of {self.resolver.time_limit} s reached while looking for {what}; "
+                            f"at least {self.proved} dstates are proved necessary; {found}",
                             lower_bound=self.proved, best_map=self.best)
 
 
@@ -308,3 +324,4 @@ class _Outcome:
     result: str
     models: list[list[Symbol]]
     exhausted: bool
+    control: clingo.Control | None = None
