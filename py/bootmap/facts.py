@@ -29,14 +29,19 @@ def quantise(angle_deg: float, quantum_deg: float) -> int:
 def tableau_facts(tableau: Tableau, quantum_deg: float = 15.0) -> list[Symbol]:
     """The tableau as ground facts (symbols). Requires every step to have a view label."""
     tableau.require_views()
+    # Views and angles repeat: build each symbol once (every constructor is a call into clingo).
+    strings: dict[str, Symbol] = {}
+    numbers: dict[int, Symbol] = {}
     out: list[Symbol] = []
     for t, step in enumerate(tableau.steps):
-        out.append(Function("view", [Number(t), String(step.view)]))  # type: ignore[arg-type]
+        time = Number(t)
+        view = strings.get(step.view) or strings.setdefault(step.view, String(step.view))  # type: ignore[arg-type]
+        out.append(Function("view", [time, view]))
         a = step.action
-        if isinstance(a, Turn):
-            out.append(Function("turn", [Number(t), Number(quantise(a.angle_deg, quantum_deg))]))
-        elif a is not None:
-            out.append(Function("travel", [Number(t), Number(quantise(a.heading_change_deg, quantum_deg))]))
+        if a is not None:
+            angle = quantise(a.angle_deg if isinstance(a, Turn) else a.heading_change_deg, quantum_deg)
+            number = numbers.get(angle) or numbers.setdefault(angle, Number(angle))
+            out.append(Function("turn" if isinstance(a, Turn) else "travel", [time, number]))
     return out
 
 
