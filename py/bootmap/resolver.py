@@ -97,8 +97,8 @@ class Resolver:
     quantum_deg : float
         Turn angles and heading changes are rounded to this many degrees.
     time_limit : float or None
-        Seconds for the whole search; on time-out :class:`SolveTimeout` is raised, saying how many
-        dstates were proved necessary so far.
+        Seconds for the whole search; on time-out :class:`SolveTimeout` is raised with the number of
+        dstates proved necessary so far and, if one was found, a valid map not proved minimal.
     max_models : int
         Minimal maps to enumerate before calling the count capped.
     future_depth : int
@@ -181,7 +181,6 @@ class Resolver:
         for t, c in enumerate(classes.of_time):
             members[c].append(t)
         return [_apart_clique(ts, partial) for ts in members]
-
 
 
 class _Search:
