@@ -98,6 +98,10 @@ class ControlSpec:
     wall_distance: float
     stop_distance: float
     open_range: float
+    # How precisely the hill-climbing settles at a dstate: where the robot comes to rest varies within
+    # these, and that (with sensor noise) is the image variability the views must absorb.
+    stop_tolerance: float = 0.008
+    align_tolerance_deg: float = 0.6
 
 
 @dataclass(frozen=True)
@@ -395,7 +399,9 @@ def _build(data: Any, source: str) -> World:
     control = _section(top, "control", lambda r: ControlSpec(
         r.get("wall_distance", _number(0, lo_open=True), 0.5),
         r.get("stop_distance", _number(0, lo_open=True), 0.5),
-        r.get("open_range", _number(0, lo_open=True), 3.0)), optional=True)
+        r.get("open_range", _number(0, lo_open=True), 3.0),
+        r.get("stop_tolerance", _number(0, 0.5, lo_open=True), 0.008),
+        r.get("align_tolerance_deg", _number(0, 20, lo_open=True), 0.6)), optional=True)
     places = tuple(_place(r) for r in _array_of_tables(top, "places"))
     paths = tuple(_path(r) for r in _array_of_tables(top, "paths"))
     truth_dstates = _section(top, "truth", lambda r: r.get("dstates", _integer(1), None), optional=True)

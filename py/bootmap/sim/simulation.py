@@ -97,7 +97,9 @@ class Simulation:
         self.world = world
         self.dt = 1.0 / control_hz
         self.substeps = substeps
-        self.limits = limits or Limits(v_max=world.robot.max_speed, w_max=world.robot.max_turn_rate)
+        self.limits = limits or Limits(v_max=world.robot.max_speed, w_max=world.robot.max_turn_rate,
+                                       stop_tolerance=world.control.stop_tolerance,
+                                       align_tolerance=math.radians(world.control.align_tolerance_deg))
         self.laser = Laser(world.laser)
         self.perception = Perception(world.laser, world.control.open_range)
 

@@ -1,0 +1,213 @@
+"""Recognition of dstates from images: the online curve, shuffled CV curves, comparisons, the paper's ~90%."""
+
+import numpy as np
+import pytest
+from sklearn.neighbors import KNeighborsClassifier
+
+from bootmap.recognise import (Recogniser, compare_clusterers, compare_learners, learning_curve_cv,
+                               online_curve, online_hits)
+
+
+def blobs(n_per=30, n_states=8, dim=180, spread=1.0, seed=0, order="circuits"):
+    """Gaussian blobs in R^dim, one per dstate; pairs (0,1), (2,3), ... are close together.
+
+    order="circuits" records dstate 0, 1, ..., n_states-1, 0, 1, ... (as the robot does);
+    order="sorted" records all images of dstate 0, then all of dstate 1, ...
+    """
+    rng = np.random.default_rng(seed)
+    centres = rng.normal(scale=3.0, size=(n_states, dim))
+    centres[1::2] = centres[0::2] + rng.normal(scale=1.0, size=(n_states // 2, dim))  # close pairs
+    if order == "circuits":
+        y = np.tile(np.arange(n_states), n_per)
+    else:
+        y = np.repeat(np.arange(n_states), n_per)
+    X = centres[y] + rng.normal(scale=spread, size=(len(y), dim))
+    drop = rng.random(X.shape) < 0.002  # laser drop-outs at max range
+    X[drop] = 8.0
+    return X, y
+
+
+def brute_online_hits(X, y):
+    hits = [False]
+    for i in range(1, len(X)):
+        d = np.linalg.norm(X[:i] - X[i], axis=1)
+        hits.append(y[np.argmin(d)] == y[i])
+    return np.array(hits)
+
+
+# -- online curve ------------------------------------------------------------------------------------
+
+def test_online_1nn_equals_brute_force_reference():
+    X, y = blobs(n_per=8, dim=20, spread=3.0, seed=3)
+    np.testing.assert_array_equal(online_hits(X, y), brute_online_hits(X, y))
+
+
+def test_online_1nn_fast_path_equals_refitted_sklearn():
+    X, y = blobs(n_per=6, dim=30, spread=3.0, seed=4)
+    fast = online_hits(X, y)
+    slow = online_hits(X, y, make_learner=lambda: KNeighborsClassifier(1), stride=1)
+    np.testing.assert_array_equal(fast, slow)
+
+
+def test_online_1nn_blocked_distance_matrix_spans_blocks(monkeypatch):
+    import bootmap.recognise as rec
+
+    X, y = blobs(n_per=5, dim=10, spread=3.0, seed=5)
+    monkeypatch.setattr(rec, "_BLOCK", 7)
+    np.testing.assert_array_equal(online_hits(X, y), brute_online_hits(X, y))
+
+
+def test_online_curve_first_image_is_a_miss_and_curve_rises():
+    X, y = blobs(n_per=40, spread=1.0)
+    curve = online_curve(X, y)
+    assert curve[0] == 0.0
+    assert curve.shape == (len(y),)
+    assert curve[20] < curve[-1]
+    assert curve[-1] > 0.9  # only the first image of each dstate must be missed
+    windowed = online_curve(X, y, window=50)
+    assert windowed[-1] == pytest.approx(1.0)
+
+
+def test_online_curve_window_is_trailing_mean_of_hits():
+    X, y = blobs(n_per=10, dim=20, spread=4.0, seed=6)
+    hits = online_hits(X, y).astype(float)
+    w = online_curve(X, y, window=5)
+    expected = [hits[max(0, i - 4):i + 1].mean() for i in range(len(hits))]
+    np.testing.assert_allclose(w, expected)
+
+
+def test_online_general_learner_with_stride_never_sees_the_future():
+    X, y = blobs(n_per=10, seed=7)
+    hits = online_hits(X, y, make_learner=lambda: KNeighborsClassifier(1), stride=16)
+    assert not hits[:8].any()  # images 1..7 predicted from image 0 alone (only dstate 0 seen)
+    assert hits[-40:].mean() > 0.9
+
+
+def test_online_rejects_nan_and_reads_inf_as_dropout():
+    X, y = blobs(n_per=4, dim=10)
+    X[3, 2] = np.inf
+    assert online_hits(X, y).shape == (len(y),)
+    X[3, 2] = np.nan
+    with pytest.raises(ValueError, match="nan"):
+        online_hits(X, y)
+
+
+# -- cross-validated curves --------------------------------------------------------------------------
+
+def test_cv_curve_rises_and_is_deterministic():
+    X, y = blobs(n_per=25, spread=2.0)
+    a = learning_curve_cv(X, y, sizes=(10, 30, 90), random_state=1)
+    b = learning_curve_cv(X, y, sizes=(10, 30, 90), random_state=1)
+    np.testing.assert_array_equal(a.scores, b.scores)
+    assert a.sizes.tolist() == [10, 30, 90]
+    assert a.scores.shape == (3, 10)
+    assert a.at(10) < a.at(90)
+    assert a.at(90) > 0.9
+
+
+def test_cv_shuffling_matters_on_data_recorded_dstate_by_dstate():
+    """Sorted by dstate, the first 30 images are all dstate 0 and 1: unshuffled prefixes would score
+    about 2/8; the shuffled curve sees every dstate."""
+    from sklearn.model_selection import KFold, learning_curve
+
+    X, y = blobs(n_per=25, spread=1.0, order="sorted")
+    shuffled = learning_curve_cv(X, y, sizes=(30,), random_state=0).at(30)
+    _, _, test_scores = learning_curve(KNeighborsClassifier(1), X, y, train_sizes=[30],
+                                       cv=KFold(10, shuffle=True, random_state=0), shuffle=False)
+    prefix = test_scores.mean()
+    assert shuffled > 0.9
+    assert prefix < 0.5
+
+
+def test_cv_sizes_beyond_training_folds_are_dropped():
+    X, y = blobs(n_per=5)  # 40 images: training folds of 36
+    curve = learning_curve_cv(X, y, sizes=(10, 36, 90))
+    assert curve.sizes.tolist() == [10, 36]
+
+
+# -- comparisons -------------------------------------------------------------------------------------
+
+def test_compare_learners_returns_every_learner_with_accuracies_in_unit_interval():
+    X, y = blobs(n_per=15, dim=40, spread=2.0)
+    rows = compare_learners(X, y, at=(30, 60, 90))
+    assert [r["learner"] for r in rows] == ["1-NN", "3-NN", "logistic", "linear SVM", "RBF SVM", "MLP (32)"]
+    for r in rows:
+        assert {"learner", "sizes", "accuracy", "accuracy_std", "fit_time",
+                "acc@30", "acc@60", "acc@90"} <= r.keys()
+        assert r["sizes"] == [30, 60, 90]
+        assert all(0.0 <= a <= 1.0 for a in r["accuracy"])
+        assert all(t >= 0 for t in r["fit_time"])
+    again = compare_learners(X, y, at=(30, 60, 90))
+    assert [r["accuracy"] for r in rows] == [r["accuracy"] for r in again]
+
+
+def test_compare_clusterers_scores_views_against_dstates():
+    X, y = blobs(n_per=15, dim=40, spread=0.5)
+    rows = compare_clusterers(X, y, k=4, random_state=0)
+    assert [r["clusterer"] for r in rows] == ["k-means", "Gaussian mixture (diag)", "agglomerative (ward)"]
+    for r in rows:
+        assert {"clusterer", "k", "U", "ari", "fit_time"} <= r.keys()
+        assert r["U"] == pytest.approx(1.0)  # close pairs merge: each dstate in one view
+        assert 0.0 < r["ari"] < 1.0  # 4 views for 8 dstates
+    def strip(rs):
+        return [{k: v for k, v in r.items() if k != "fit_time"} for r in rs]
+
+    assert strip(rows) == strip(compare_clusterers(X, y, k=4, random_state=0))
+
+
+# -- the estimator -----------------------------------------------------------------------------------
+
+def test_recogniser_predicts_dstates_and_distance_to_nearest_image():
+    X, y = blobs(n_per=10, dim=20, spread=0.5)
+    r = Recogniser().fit(X, y)
+    labels, dist = r.predict_with_distance(X[:5])
+    np.testing.assert_array_equal(labels, y[:5])
+    np.testing.assert_allclose(dist, 0.0, atol=1e-5)
+    far = X[:1] + 100.0
+    _, d = r.predict_with_distance(far)
+    assert d[0] > 100
+    assert r.score(X, y) == 1.0
+
+
+def test_recogniser_unfitted_raises():
+    from sklearn.exceptions import NotFittedError
+
+    with pytest.raises(NotFittedError):
+        Recogniser().predict(np.zeros((1, 3)))
+
+
+# -- the paper's result, on the simulator ------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def notched_15():
+    sim = pytest.importorskip("bootmap.sim")
+    t = sim.simulate("notched_rectangle", policy="circuits", circuits=15, seed=1)
+    X = np.array([s.image for s in t.steps])
+    y = np.array([s.truth for s in t.steps])
+    return X, y
+
+
+def test_notched_rectangle_online_1nn_about_90_percent_after_90_images(notched_15):
+    # The paper's online protocol: predict each image's dstate from all earlier ones, then store it.
+    # Once 90 images are stored, the next ones are recognised about 90% of the time. (The cumulative
+    # curve at 90 is lower: it counts the unavoidable miss at the first sight of every dstate.)
+    X, y = notched_15
+    hits = online_hits(X, y)
+    assert len(y) >= 120
+    assert hits[90:120].mean() >= 0.85
+
+
+def test_notched_rectangle_cv_curve_at_90_images(notched_15):
+    # The paper's Figure 4: 10-fold cross-validated learning curve, about 90% at 90 images.
+    X, y = notched_15
+    curve = learning_curve_cv(X, y, sizes=(10, 30, 90), random_state=0)
+    assert curve.at(90) >= 0.85
+
+
+def test_notched_rectangle_recognition_beats_views_alone_and_learns(notched_15):
+    """Whatever the notch, images tell the 4 views apart (1/2 of dstates), and more images help."""
+    X, y = notched_15
+    assert online_curve(X, y)[89] > 0.5
+    curve = learning_curve_cv(X, y, sizes=(10, 30, 90), random_state=0)
+    assert curve.at(10) < curve.at(90)
+    assert curve.at(90) > 0.5
