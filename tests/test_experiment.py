@@ -1,0 +1,56 @@
+"""The paper's experiment end to end, from simulation: views, map, recognition, report."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from bootmap.experiment import run_experiment
+
+PAPER_VIEWS = {(0.5, 0.5, 4.5), (0.5, 4.5, 2.5), (0.5, 0.5, 2.5), (0.5, 2.5, 4.5)}  # left, front, right
+
+
+@pytest.fixture(scope="module")
+def notched(tmp_path_factory):
+    out = tmp_path_factory.mktemp("notched")
+    return run_experiment("notched_rectangle", circuits=15, seed=1, out_dir=out), out
+
+
+def test_notched_rectangle_reproduces_the_paper(notched):
+    r, _ = notched
+    assert r["views"]["k"] == 4 and r["views"]["largest_k_with_U_1"] == 4
+    table = {(round(row["left"] * 2) / 2, round(row["front"] * 2) / 2, round(row["right"] * 2) / 2)
+             for row in r["views"]["table"]}
+    assert table == PAPER_VIEWS
+    for row in r["views"]["table"]:
+        nearest = min(PAPER_VIEWS, key=lambda p: abs(p[0] - row["left"]) + abs(p[1] - row["front"]) + abs(p[2] - row["right"]))
+        assert max(abs(a - b) for a, b in zip(nearest, (row["left"], row["front"], row["right"]))) < 0.25
+    m = r["map"]
+    assert (m["dstates"], m["places"], m["paths"]) == (8, 4, 4) and m["unique"] and m["proved_minimal"]
+    assert m["dstate_accuracy"] == 1.0 and not m["merged_true_dstates"]
+    assert r["recognition"]["cv_at_90"] >= 0.85  # the paper: about 90% after about 90 images
+
+
+def test_report_and_figures_are_written(notched):
+    r, out = notched
+    assert json.loads((out / "results.json").read_text())["map"]["dstates"] == 8
+    report = (out / "report.md").read_text()
+    assert "k chosen by M: **4**" in report and "8 dstates, 4 places, 4 paths" in report
+    for name in ("views_M_U.png", "learning_curves.png", "world_map.png"):
+        assert (out / name).stat().st_size > 10_000
+
+
+def test_a_map_that_is_not_proved_minimal_is_reported_as_such(tmp_path):
+    # Taylor Hall, short run: the clustering finds too few views for the resolver to finish in 2 s.
+    r = run_experiment("taylor_hall", steps=40, seed=1, out_dir=tmp_path, time_limit=2.0)
+    m = r["map"]
+    assert "error" in m or not m["proved_minimal"]
+    assert "not proved minimal" in (tmp_path / "report.md").read_text() or "No map" in (tmp_path / "report.md").read_text()
+
+
+def test_experiment_command_exits_0_and_names_the_report(tmp_path):
+    out = subprocess.run([sys.executable, "-m", "bootmap.cli", "experiment", "notched_rectangle", "--circuits", "12",
+                          "--seed", "2", "-o", str(tmp_path)], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    assert "views: k = 4 by M" in out.stdout and f"report: {tmp_path}/report.md" in out.stdout
