@@ -54,3 +54,27 @@ def test_experiment_command_exits_0_and_names_the_report(tmp_path):
                           "--seed", "2", "-o", str(tmp_path)], capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr
     assert "views: k = 4 by M" in out.stdout and f"report: {tmp_path}/report.md" in out.stdout
+
+
+def test_seeds_report_mean_and_spread(tmp_path):
+    from bootmap.experiment import run_seeds
+
+    out = run_seeds("notched_rectangle", [1, 2], out_dir=tmp_path, circuits=15)
+    s = out["summary"]
+    assert s["k by M"]["values"] == [4, 4] and s["dstates"]["mean"] == 8 and s["dstates"]["std"] == 0
+    assert 0.85 <= s["1-NN at 90 images (CV)"]["min"] <= s["1-NN at 90 images (CV)"]["max"] <= 1
+    assert (tmp_path / "seed_1" / "report.md").exists() and (tmp_path / "seed_2" / "report.md").exists()
+    assert "| k by M | 4, 4 | 4 | 4 - 4 |" in (tmp_path / "summary.md").read_text()
+
+
+@pytest.mark.parametrize("text,seeds", [("1,2,3", [1, 2, 3]), ("1-5", [1, 2, 3, 4, 5]), ("7", [7])])
+def test_seed_lists(text, seeds):
+    from bootmap.cli import _seeds
+
+    assert _seeds(text) == seeds
+
+
+def test_bad_seed_list_exits_2():
+    out = subprocess.run([sys.executable, "-m", "bootmap.cli", "experiment", "notched_rectangle", "--seeds", "a-b"],
+                         capture_output=True, text=True, timeout=60)
+    assert out.returncode == 2 and "expected seeds like 1,2,3 or 1-5" in out.stderr

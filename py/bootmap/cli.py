@@ -21,6 +21,17 @@ def _levels(text: str) -> list[str]:
     return [x.strip() for x in text.split(",") if x.strip()]
 
 
+def _seeds(text: str) -> list[int]:
+    """'1,2,3' or '1-5' -> a list of seeds."""
+    try:
+        if "-" in text and "," not in text:
+            lo, hi = (int(x) for x in text.split("-", 1))
+            return list(range(lo, hi + 1))
+        return [int(x) for x in text.split(",") if x.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected seeds like 1,2,3 or 1-5, got {text!r}") from None
+
+
 def _add_theory_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--axioms", metavar="DIR",
                    help="axiom directory (default: $BOOTMAP_AXIOMS, else the shipped asp/)")
@@ -79,8 +90,16 @@ def cmd_schema(args: argparse.Namespace) -> int:
 
 
 def cmd_experiment(args: argparse.Namespace) -> int:
-    from .experiment import run_experiment
+    from .experiment import run_experiment, run_seeds
 
+    if args.seeds:
+        out = run_seeds(args.world, args.seeds, out_dir=args.output, circuits=args.circuits, steps=args.steps,
+                        k_max=args.k_max, time_limit=args.time_limit)
+        for r in out["runs"]:
+            _print_summary(r)
+        print(f"summary over seeds: {args.output}/summary.md")
+        return EXIT_OK if all("error" not in r["map"] and r["map"]["proved_minimal"] for r in out["runs"]) \
+            else EXIT_FAILURE
     r = run_experiment(args.world, circuits=args.circuits, steps=args.steps, seed=args.seed, out_dir=args.output,
                        k_max=args.k_max, progress=True, time_limit=args.time_limit)
     _print_summary(r)
@@ -162,6 +181,8 @@ def build_parser() -> argparse.ArgumentParser:
     runs.add_argument("--circuits", type=int, metavar="N", help="circuits of a room (circuits policy; default 50)")
     runs.add_argument("--steps", type=int, metavar="N", help="dstates to record")
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seeds", type=_seeds, metavar="S1,S2,...",
+                   help="repeat over these seeds (e.g. 1,2,3,4,5 or 1-5) and report mean and spread")
     p.add_argument("--k-max", type=int, default=12, metavar="K", help="largest number of views tried (default 12)")
     p.add_argument("--time-limit", type=float, default=60.0, metavar="S", help="seconds for the map (default 60)")
     p.add_argument("-o", "--output", default="out", metavar="DIR", help="output directory (default out/)")

@@ -195,3 +195,52 @@ def _report_text(r: dict) -> str:
                   f"{rec['online_after_90']:.1%}.", "", "![learning curves](learning_curves.png)", ""]
     lines += ["![the run](world_map.png)", "", f"Timings (s): {r['timings']}", ""]
     return "\n".join(lines)
+
+
+def run_seeds(world: str | World, seeds: list[int], out_dir: str | Path | None = None, **kwargs) -> dict:
+    """The experiment once per seed (each in ``out_dir/seed_N``), and the mean and spread over seeds.
+
+    Returns ``{"world", "seeds", "runs": [results...], "summary": {figure: {"mean", "std", "min", "max"}}}``
+    and writes ``summary.json`` and ``summary.md`` when ``out_dir`` is given.
+    """
+    world = world if isinstance(world, World) else load_world(world)
+    runs = [run_experiment(world, seed=s, out_dir=None if out_dir is None else Path(out_dir) / f"seed_{s}", **kwargs)
+            for s in seeds]
+    summary = {name: _spread([f(r) for r in runs]) for name, f in _FIGURES.items()}
+    out = {"world": world.name, "seeds": list(seeds), "runs": runs, "summary": summary}
+    if out_dir is not None:
+        Path(out_dir).mkdir(parents=True, exist_ok=True)
+        (Path(out_dir) / "summary.json").write_text(json.dumps(out, indent=1))
+        (Path(out_dir) / "summary.md").write_text(_summary_text(out))
+    return out
+
+
+# The figures compared across seeds; None where a run has no map.
+_FIGURES = {
+    "k by M": lambda r: r["views"]["k"],
+    "largest k with U = 1": lambda r: r["views"]["largest_k_with_U_1"],
+    "dstates": lambda r: r["map"].get("dstates"),
+    "places": lambda r: r["map"].get("places"),
+    "paths": lambda r: r["map"].get("paths"),
+    "dstate accuracy": lambda r: r["map"].get("dstate_accuracy"),
+    "1-NN at 90 images (CV)": lambda r: (r["recognition"] or {}).get("cv_at_90"),
+}
+
+
+def _spread(values: list) -> dict:
+    known = [float(v) for v in values if v is not None]
+    if not known:
+        return {"values": values, "mean": None, "std": None, "min": None, "max": None}
+    return {"values": values, "mean": float(np.mean(known)), "std": float(np.std(known)),
+            "min": min(known), "max": max(known)}
+
+
+def _summary_text(out: dict) -> str:
+    lines = [f"# {out['world']}: seeds {', '.join(map(str, out['seeds']))}", "",
+             "| figure | per seed | mean | spread (min - max) |", "|---|---|---|---|"]
+    for name, s in out["summary"].items():
+        per_seed = ", ".join("-" if v is None else f"{v:.3g}" for v in s["values"])
+        mean = "-" if s["mean"] is None else f"{s['mean']:.3g}"
+        spread = "-" if s["min"] is None else f"{s['min']:.3g} - {s['max']:.3g}"
+        lines.append(f"| {name} | {per_seed} | {mean} | {spread} |")
+    return "\n".join(lines) + "\n"
