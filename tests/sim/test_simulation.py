@@ -110,8 +110,8 @@ def test_taylor_hall_explored_systematically_visits_all_20_dstates(taylor_run):
 
 
 def test_taylor_hall_steps_parameter_keeps_wandering_after_exploring():
-    t = simulate("taylor_hall", policy="explore", steps=30, seed=2)
-    assert len(t) == 30
+    t = simulate("taylor_hall", policy="explore", steps=60, seed=2)  # exploring takes 44
+    assert len(t) == 60
     assert len({s.truth for s in t.steps}) == 20
 
 
@@ -158,3 +158,13 @@ def test_a_simulation_can_be_reset_and_rerun_identically():
 def test_circuits_rejects_an_unknown_direction():
     with pytest.raises(ValueError, match="direction"):
         Circuits("sideways")
+
+
+def test_taylor_hall_exploration_gives_the_map_its_true_topology(taylor_run):
+    # With perfect views (the true dstates), the experience alone must let the map find the true
+    # places and paths: every place joined by turns, every path's two ways joined by a turn-around.
+    from bootmap.resolver import Resolver
+
+    t = taylor_run.tableau
+    m = Resolver().resolve(t.with_views([str(s.truth) for s in t.steps]))
+    assert (m.n_dstates, m.n_places, m.n_paths) == (20, 7, 4)

@@ -83,10 +83,30 @@ class _Place:
     exits: set[int] = field(default_factory=set)  # absolute quarter-turn directions with an open path
     edges: dict[int, int] = field(default_factory=dict)  # direction -> place reached that way
     tried: set[int] = field(default_factory=set)  # directions the robot has set out in from here
+    # Headings joined by turns made here (union-find over quarter turns). The SSH's places are dstates
+    # linked by turns, so a place is only known as one place once a turn links every exit's heading.
+    linked: dict[int, int] = field(default_factory=lambda: {d: d for d in range(4)})
 
     @property
     def untried(self) -> set[int]:
         return self.exits - self.tried
+
+    def find(self, d: int) -> int:
+        while self.linked[d] != d:
+            d = self.linked[d]
+        return d
+
+    def link(self, a: int, b: int) -> None:
+        self.linked[self.find(a)] = self.find(b)
+
+    @property
+    def unlinked(self) -> bool:
+        """Some exits' headings are not yet joined by turns made here."""
+        return len({self.find(d) for d in self.exits}) > 1
+
+    @property
+    def unfinished(self) -> bool:
+        return bool(self.untried) or self.unlinked
 
 
 class Explore:
@@ -106,7 +126,8 @@ class Explore:
         The places found, with their exits and the edges travelled, in the explorer's own frame.
     explored_ : bool
         The robot has set out along every exit of every known place, so every path segment has been
-        travelled both ways (and every dead end turned around at).
+        travelled both ways (and every dead end turned around at), and at every place turns have
+        joined the headings of all its exits (so the map can tell it is one place).
     """
 
     junctions = True
@@ -141,7 +162,9 @@ class Explore:
     def _update(self, obs: Observation) -> None:
         arrived_from = None
         if isinstance(obs.action, TurnAction):
+            before = self._heading
             self._heading = (self._heading + round(obs.action.angle_deg / 90.0)) % 4
+            self.places_[self._here].link(before, self._heading)
         else:  # a travel (or the first dstate, reached by travelling from the start pose)
             if isinstance(obs.action, TravelAction):
                 self._position = self._position + obs.action.distance_m * HEADINGS[self._heading]
@@ -158,7 +181,7 @@ class Explore:
             self.places_[arrived_from].edges[h] = self._here
             self.places_[arrived_from].tried.add(h)
             place.edges[(h + 2) % 4] = arrived_from  # known, but not yet travelled this way
-        self.explored_ = not any(pl.untried for pl in self.places_)
+        self.explored_ = not any(pl.unfinished for pl in self.places_)
 
     def _locate(self) -> int:
         for i, pl in enumerate(self.places_):
@@ -173,6 +196,11 @@ class Explore:
         untried = [d for d in (h, (h + 1) % 4, (h - 1) % 4, (h + 2) % 4) if d in here.untried]
         if untried:
             return untried[0]
+        if here.unlinked:
+            # Turn towards an exit no turn here has joined to this heading yet; turning around first,
+            # since only a turn-around tells the map that both ways along a path are one path.
+            return next(d for d in ((h + 2) % 4, (h + 1) % 4, (h - 1) % 4)
+                        if d in here.exits and here.find(d) != here.find(h))
         step = self._first_step_to_untried()
         if step is not None:
             return step
@@ -189,7 +217,7 @@ class Explore:
         while queue:
             i = queue.popleft()
             pl = self.places_[i]
-            if i != start and pl.untried:
+            if i != start and pl.unfinished:
                 return first[i]
             for d, j in sorted(pl.edges.items()):
                 if j not in first:
