@@ -3,7 +3,6 @@
 import argparse
 import json
 
-import pytest
 
 from bootmap.sim.commands import register
 from bootmap.tableau import load

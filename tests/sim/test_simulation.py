@@ -1,7 +1,6 @@
 """The simulated robot: the paper's runs, physical honesty (free space, no bumps, no getting stuck),
 determinism, and exploration of every world."""
 
-import math
 from collections import defaultdict
 
 import numpy as np
