@@ -45,7 +45,7 @@ def cmd_map(args: argparse.Namespace) -> int:
     from .resolver import Resolver
     from .tableau import load
 
-    tableau = load(args.tableau)
+    tableau = _with_views(load(args.tableau))
     resolver = Resolver(axioms=args.axioms, levels=args.levels, quantum_deg=args.quantum,
                         time_limit=args.time_limit, max_models=args.max_models)
     try:
@@ -57,6 +57,22 @@ def cmd_map(args: argparse.Namespace) -> int:
         _print_map(e.best_map, args)
         return EXIT_FAILURE
     return _print_map(cmap, args)
+
+
+def _with_views(tableau):
+    """A tableau of images only (e.g. from `bootmap simulate`) gets its views as the paper does: k-means,
+    with k chosen by the internal measure M."""
+    if all(s.view is not None for s in tableau.steps) or any(s.image is None for s in tableau.steps):
+        return tableau  # labelled already, or mixed: require_views will say which step lacks what
+    import numpy as np
+
+    from .views import ViewClusterer, view_labels
+
+    # A laser's drop-outs read its maximum range; a run that says what that is lets them be repaired.
+    range_max = (tableau.meta.get("laser") or {}).get("range_max")
+    clusterer = ViewClusterer(random_state=0, max_range=range_max).fit(np.array([s.image for s in tableau.steps]))
+    print(f"bootmap: clustered {len(tableau)} images into {clusterer.k_} views (k chosen by M)", file=sys.stderr)
+    return tableau.with_views(view_labels(clusterer.labels_))
 
 
 def _print_map(cmap, args: argparse.Namespace) -> int:

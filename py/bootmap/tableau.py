@@ -105,8 +105,8 @@ class Tableau:
         """Raise unless every step has a view label (the resolver works on views, not raw images)."""
         for i, s in enumerate(self.steps):
             if s.view is None:
-                raise TableauError("has an image but no view; cluster the images into views first "
-                                   "(bootmap views) or give view labels", f"{source}: steps[{i}].view")
+                raise TableauError("has no view: give every step a view label, or every step an image "
+                                   "(then bootmap map clusters the images into views)", f"{source}: steps[{i}].view")
 
     def with_views(self, views: list[str]) -> "Tableau":
         """A copy with the given view labels (one per step), e.g. after clustering images."""
