@@ -16,6 +16,7 @@ import time
 import numpy as np
 
 from bootmap import examples
+from bootmap.check import tableau_headings
 from bootmap.facts import quantise
 from bootmap.gridworld import random_world, walk
 from bootmap.metrics import dstate_accuracy
@@ -27,15 +28,6 @@ from bootmap.tableau import Tableau, Turn
 NO_METRICAL = ["causal", "topological"]
 
 
-def headings(tableau: Tableau, quantum: float = 15.0) -> list[int]:
-    """Heading at each time point from the quantised turns, as the metrical level computes it."""
-    h, out = 0, [0]
-    for a in tableau.actions:
-        h = (h + quantise(a.angle_deg if isinstance(a, Turn) else a.heading_change_deg, quantum)) % 360
-        out.append(h)
-    return out
-
-
 def rpni(tableau: Tableau, with_heading: bool) -> tuple[list, float]:
     """AALpy GSM (RPNI) on the tableau as one Moore trace; the state it puts each time point in.
 
@@ -44,7 +36,7 @@ def rpni(tableau: Tableau, with_heading: bool) -> tuple[list, float]:
     from aalpy.learning_algs import run_GSM
 
     t0 = time.perf_counter()
-    outs = list(zip(tableau.views, headings(tableau))) if with_heading else tableau.views
+    outs = list(zip(tableau.views, tableau_headings(tableau))) if with_heading else tableau.views
     ins = [f"turn{quantise(a.angle_deg, 15.0)}" if isinstance(a, Turn) else "travel" for a in tableau.actions]
     trace = [outs[0]] + list(zip(ins, outs[1:]))
     model = run_GSM([trace], output_behavior="moore", data_format="io_traces")

@@ -20,7 +20,7 @@ import numpy as np
 from hypothesis import HealthCheck, event, given, note, reject, settings
 from hypothesis import strategies as st
 
-from bootmap.check import Experience, check_map, headings, true_partition
+from bootmap.check import check_map, tableau_headings, true_partition
 from bootmap.errors import SolveTimeout
 from bootmap.gridworld import random_world, walk
 from bootmap.resolver import Resolver
@@ -48,8 +48,7 @@ def grid_walks(draw, max_steps=80, landmarks=(0.0, 0.2, 0.5)):
 
 
 def view_heading_pairs(tableau) -> int:
-    exp = Experience.build(tableau, true_partition(tableau), 15.0)
-    return len(set(zip(tableau.views, headings(exp))))
+    return len(set(zip(tableau.views, tableau_headings(tableau))))
 
 
 def check_resolution(level_set: str, world, tableau) -> None:

@@ -93,15 +93,9 @@ class Experience:
 
     @classmethod
     def build(cls, tableau: Tableau, dstate_of: list[str], quantum_deg: float) -> "Experience":
-        actions, changes = [], []
-        for a in tableau.actions:
-            if isinstance(a, Turn):
-                angle = quantise(a.angle_deg, quantum_deg)
-                actions.append(angle)
-                changes.append(angle)
-            else:
-                actions.append(TRAVEL)
-                changes.append(quantise(a.heading_change_deg, quantum_deg))
+        changes = [_heading_change(a, quantum_deg) for a in tableau.actions]
+        # A turn is named by its quantised angle (which is also its heading change), a travel by "travel".
+        actions = [c if isinstance(a, Turn) else TRAVEL for a, c in zip(tableau.actions, changes)]
         exp = cls(dstate_of, list(tableau.views), actions, changes)   # type: ignore[arg-type]
         for t, a in enumerate(actions):
             # Remember the first time each transition was made, to cite it.
@@ -143,8 +137,23 @@ def _one_view(exp: Experience) -> list[str]:
 
 def headings(exp: Experience) -> list[int]:
     """heading_origin, heading_after_turn, heading_after_travel: the heading of every time point."""
+    return _accumulate(exp.changes)
+
+
+def tableau_headings(tableau: Tableau, quantum_deg: float = 15.0) -> list[int]:
+    """The heading of every time point as the metrical level derives it (0 at time 0)."""
+    return _accumulate(_heading_change(a, quantum_deg) for a in tableau.actions)
+
+
+def _heading_change(action: object, quantum_deg: float) -> int:
+    """A turn's quantised angle, or a travel's quantised net heading change."""
+    return quantise(action.angle_deg if isinstance(action, Turn) else action.heading_change_deg,  # type: ignore[attr-defined]
+                    quantum_deg)
+
+
+def _accumulate(changes: Iterable[int]) -> list[int]:
     out = [0]
-    for c in exp.changes:
+    for c in changes:
         out.append((out[-1] + c) % 360)
     return out
 

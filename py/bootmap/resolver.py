@@ -141,10 +141,15 @@ class Resolver:
 
     def ground_prepass(self, facts: list[Symbol], depth: int) -> clingo.Control:
         """The theory grounded with the tableau alone: what it derives for certain, before any search."""
-        ctl = clingo.Control(["--warn=none", "-c", f"future_depth={int(depth)}"])
+        ctl = self._control(facts, depth)
+        ctl.ground([("base", [])])
+        return ctl
+
+    def _control(self, facts: list[Symbol], depth: int, *options: str) -> clingo.Control:
+        """A clingo control holding the theory and these facts, looking ``depth`` actions ahead."""
+        ctl = clingo.Control(["--warn=none", "-c", f"future_depth={int(depth)}", *options])
         self.theory.load_into(ctl)
         add_facts(ctl, facts)
-        ctl.ground([("base", [])])
         return ctl
 
     def classes(self, grounded: clingo.Control, n: int) -> Classes:
@@ -257,12 +262,10 @@ class _Search:
                keep: bool = False) -> "_Outcome":
         """Ground and solve; on time-out raise SolveTimeout with the best map known."""
         r = self.resolver
-        args = ["--warn=none", "-c", f"future_depth={int(self.depth)}", str(r.max_models + 1 if models is None else models)]
+        options = [str(r.max_models + 1 if models is None else models)]
         if optimise:
-            args += ["--opt-mode=optN", "--opt-strategy=usc"]
-        ctl = clingo.Control(args)
-        r.theory.load_into(ctl)
-        add_facts(ctl, self.facts + layout)
+            options += ["--opt-mode=optN", "--opt-strategy=usc"]
+        ctl = r._control(self.facts + layout, self.depth, *options)
         t0 = time.perf_counter()
         ctl.ground([("base", [])])
         t1 = time.perf_counter()
