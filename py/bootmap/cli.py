@@ -12,7 +12,7 @@ import sys
 from typing import Callable, Sequence
 
 from . import __version__
-from .errors import AxiomError, BootmapError, InconsistentTableau, SolveTimeout, TableauError
+from .errors import AxiomError, BootmapError, ExplainError, InconsistentTableau, SolveTimeout, TableauError
 
 EXIT_OK, EXIT_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
 
@@ -95,6 +95,18 @@ def cmd_axioms(args: argparse.Namespace) -> int:
     print(f"axiom directory: {theory.directory}")
     for rule in theory.rules():
         print(f"{rule.level:12} {rule.name:36} {rule.file}:{rule.line}")
+    return EXIT_OK
+
+
+def cmd_why(args: argparse.Namespace) -> int:
+    from .explain import Explainer
+    from .tableau import load
+
+    tableau = _with_views(load(args.tableau))
+    explainer = Explainer(axioms=args.axioms, levels=args.levels, quantum_deg=args.quantum,
+                          time_limit=args.time_limit)
+    explanation = explainer.explain(tableau, args.a, args.b)
+    print(json.dumps(explanation.to_dict(), indent=1) if args.format == "json" else explanation.to_text())
     return EXIT_OK
 
 
@@ -185,6 +197,20 @@ def build_parser() -> argparse.ArgumentParser:
     _add_theory_options(p)
     p.set_defaults(handler=cmd_axioms)
 
+    p = sub.add_parser("why", help="explain why two time points (or dstates) are different, or the same",
+                       description="Explain whether two time points (t4, or 4) or two dstates of the minimal map (S4) "
+                                   "are one dstate. If they differ: the smallest set of tableau steps that forces them "
+                                   "apart, the axioms the contradiction needs, and the chain of rule instances (named "
+                                   "by their '%%! name' label, with file and line) from those steps to the axiom that "
+                                   "fails. If they are the same: why (minimality) and what experience would test it.")
+    p.add_argument("tableau", help="tableau JSON file")
+    p.add_argument("a", help="a time point (t0 or 0) or a dstate name (S0)")
+    p.add_argument("b", help="a time point or a dstate name")
+    p.add_argument("--format", choices=["text", "json"], default="text")
+    p.add_argument("--time-limit", type=float, default=60.0, metavar="S", help="seconds for the map (default 60)")
+    _add_theory_options(p)
+    p.set_defaults(handler=cmd_why)
+
     p = sub.add_parser("schema", help="print the JSON Schema of the tableau format")
     p.set_defaults(handler=cmd_schema)
 
@@ -228,7 +254,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     handler: Callable[[argparse.Namespace], int] = args.handler
     try:
         return handler(args)
-    except (TableauError, AxiomError) as e:
+    except (TableauError, AxiomError, ExplainError) as e:
         print(f"bootmap: error: {e}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except (InconsistentTableau, SolveTimeout) as e:

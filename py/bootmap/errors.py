@@ -42,3 +42,7 @@ class WorldError(BootmapError, ValueError):
         self.where = where
         self.reason = message
         super().__init__(f"{where}: {message}" if where else message)
+
+
+class ExplainError(BootmapError, ValueError):
+    """A question the explainer cannot take, e.g. a time point or dstate the map does not have."""
