@@ -218,3 +218,10 @@ def test_every_verdict_agrees_with_the_map_and_every_proof_rechecks(case):
         assert all(m[a] != m[b] for m in maps)
         if e.evidence:
             recheck(ex, tableau, e, TOPO)
+
+
+def test_cli_why_out_of_time_exits_1(tmp_path, capsys):
+    path = tmp_path / "paper.json"
+    path.write_text(notched_rectangle(50).dumps())
+    assert main(["why", str(path), "S0", "S4", "--levels", "causal,topological", "--time-limit", "1e-6"]) == 1
+    assert "time limit" in capsys.readouterr().err

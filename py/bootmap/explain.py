@@ -40,7 +40,7 @@ import clingo
 from clingo import Function, Number, Symbol
 
 from .cogmap import CognitiveMap, action_text
-from .errors import ExplainError
+from .errors import ExplainError, SolveTimeout
 from .facts import add_facts, excerpt_facts, quantise
 from .resolver import Resolver
 from .tableau import Tableau, Turn
@@ -180,6 +180,7 @@ class Explainer:
     time_limit: float | None = 60.0
     max_window: int = 64
     resolver: Resolver = field(init=False, repr=False)
+    _deadline: float | None = field(default=None, init=False, repr=False)
 
     def __post_init__(self) -> None:
         self.resolver = Resolver(self.axioms, self.levels, self.quantum_deg, self.time_limit)
@@ -188,6 +189,7 @@ class Explainer:
         """Explain whether ``a`` and ``b`` (time points, ``"t4"``, or dstate names such as ``"S4"``) are
         one dstate. Raises :class:`ExplainError` for names the map does not have."""
         start = time.perf_counter()
+        self._deadline = None if self.time_limit is None else start + self.time_limit
         cmap = self.resolver.resolve(tableau)
         a, b = _time_points(cmap, a, b)
         maps = [cmap.dstate_of] + cmap.alternatives
@@ -253,7 +255,7 @@ class Explainer:
         ctl, _ = self._asked(tableau, a, b, keep, traced=False)
         if ctl is None:
             return False
-        return bool(ctl.solve().satisfiable)
+        return bool(_solve_within(ctl, self._deadline, []).satisfiable)
 
     def _asked(self, tableau: Tableau, a: int, b: int, keep: list[int], traced: bool):
         """A grounded control supposing a and b are one dstate on the kept steps, every partition of
@@ -302,10 +304,10 @@ class Explainer:
         if asked is None:
             return self._feature_failure(tableau, cmap, a, b, evidence)
         ctl, inst = asked
-        needed = _needed_constraints(ctl, inst)
+        needed = _needed_constraints(ctl, inst, self._deadline)
         failures = []
         for r in needed:
-            model = _finest_model(ctl, inst, [x for x in needed if x != r])
+            model = _finest_model(ctl, inst, [x for x in needed if x != r], self._deadline)
             if model is None:
                 continue
             derivations = Derivations.of(model)
@@ -359,10 +361,14 @@ class Explainer:
 # Solving on the instrumented theory
 # -------------------------------------------------------------------------------------------------
 
-def _solve(ctl: clingo.Control, inst: Instrumented, on: Sequence[int]) -> bool:
-    """Is there a map at all with only the constraints ``on`` switched on? (No optimising.)"""
-    ctl.configuration.solve.opt_mode = "ignore"
-    return bool(ctl.solve(assumptions=_switches(inst, on)).satisfiable)
+def _solve_within(ctl: clingo.Control, deadline: float | None, assumptions, on_model=None) -> clingo.SolveResult:
+    """Solve, giving up at the deadline with SolveTimeout (grounding, done before, cannot be cut short)."""
+    remaining = None if deadline is None else max(0.0, deadline - time.perf_counter())
+    with ctl.solve(assumptions=assumptions, on_model=on_model, async_=True) as handle:
+        if not handle.wait(remaining):
+            handle.cancel()
+            raise SolveTimeout("time limit reached while explaining; try a larger --time-limit or fewer levels")
+        return handle.get()
 
 
 def _switches(inst: Instrumented, on: Sequence[int]) -> list[tuple[Symbol, bool]]:
@@ -370,23 +376,25 @@ def _switches(inst: Instrumented, on: Sequence[int]) -> list[tuple[Symbol, bool]
     return [(inst.on(r), r in on_set) for r in inst.switchable]
 
 
-def _needed_constraints(ctl: clingo.Control, inst: Instrumented) -> list[int]:
+def _needed_constraints(ctl: clingo.Control, inst: Instrumented, deadline: float | None) -> list[int]:
     """A subset-minimal set of the levels' constraints that still rules the supposition out (deletion:
-    switch each off in turn and keep it off if the contradiction stands)."""
+    switch each off in turn and keep it off if the contradiction stands). No optimising here."""
+    ctl.configuration.solve.opt_mode = "ignore"
     needed = list(inst.switchable)
     for r in list(needed):
         trial = [x for x in needed if x != r]
-        if not _solve(ctl, inst, trial):
+        if not _solve_within(ctl, deadline, _switches(inst, trial)).satisfiable:
             needed = trial
     return needed
 
 
-def _finest_model(ctl: clingo.Control, inst: Instrumented, on: Sequence[int]) -> list[Symbol] | None:
+def _finest_model(ctl: clingo.Control, inst: Instrumented, on: Sequence[int],
+                  deadline: float | None) -> list[Symbol] | None:
     """The map with the most dstates that keeps the constraints ``on`` (and the supposition): only the
     merges they force. All its atoms."""
     ctl.configuration.solve.opt_mode = "opt"
     best: list[list[Symbol]] = []
-    ctl.solve(assumptions=_switches(inst, on), on_model=lambda m: best.append(m.symbols(atoms=True)))
+    _solve_within(ctl, deadline, _switches(inst, on), lambda m: best.append(m.symbols(atoms=True)))
     return best[-1] if best else None
 
 
