@@ -178,7 +178,7 @@ class Explainer:
     levels: Sequence[str] | None = None
     quantum_deg: float = 15.0
     time_limit: float | None = 60.0
-    max_window: int = 64
+    max_window: int = 32
     resolver: Resolver = field(init=False, repr=False)
     _deadline: float | None = field(default=None, init=False, repr=False)
 
