@@ -60,19 +60,15 @@ def cmd_map(args: argparse.Namespace) -> int:
 
 
 def _with_views(tableau):
-    """A tableau of images only (e.g. from `bootmap simulate`) gets its views as the paper does: k-means,
-    with k chosen by the internal measure M."""
-    if all(s.view is not None for s in tableau.steps) or any(s.image is None for s in tableau.steps):
-        return tableau  # labelled already, or mixed: require_views will say which step lacks what
-    import numpy as np
+    """A tableau of images only (e.g. from `bootmap simulate`) gets its views by k-means, k chosen by M."""
+    if all(s.view is not None for s in tableau.steps):
+        return tableau  # nothing to cluster: spare the scikit-learn import (about a second)
+    from .views import tableau_with_views
 
-    from .views import ViewClusterer, view_labels
-
-    # A laser's drop-outs read its maximum range; a run that says what that is lets them be repaired.
-    range_max = (tableau.meta.get("laser") or {}).get("range_max")
-    clusterer = ViewClusterer(random_state=0, max_range=range_max).fit(np.array([s.image for s in tableau.steps]))
-    print(f"bootmap: clustered {len(tableau)} images into {clusterer.k_} views (k chosen by M)", file=sys.stderr)
-    return tableau.with_views(view_labels(clusterer.labels_))
+    tableau, k = tableau_with_views(tableau)
+    if k is not None:
+        print(f"bootmap: clustered {len(tableau)} images into {k} views (k chosen by M)", file=sys.stderr)
+    return tableau
 
 
 def _print_map(cmap, args: argparse.Namespace) -> int:
@@ -240,12 +236,15 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _register_optional(sub) -> None:
-    """Sub-commands of parts that register themselves (the simulator)."""
-    try:
-        from .sim.commands import register
-    except ImportError:
-        return
-    register(sub)
+    """Sub-commands of parts that register themselves (the simulator, the HTTP service)."""
+    import importlib
+
+    for module in ("bootmap.sim.commands", "bootmap.service.commands"):
+        try:
+            register = importlib.import_module(module).register
+        except ImportError:
+            continue
+        register(sub)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -380,3 +380,42 @@ def view_table(images, labels: Sequence[Hashable], angle_min_deg: float = -90.0,
             row[side] = float(per_image[side][mask].mean())
         rows.append(row)
     return rows
+
+
+def tableau_with_views(tableau):
+    """A tableau of images only (e.g. from ``bootmap simulate``) with its views found as the paper finds
+    them: k-means, k chosen by the internal measure M. Returns ``(tableau, k)``.
+
+    A tableau whose steps are all labelled, or that mixes labelled and unlabelled steps, comes back as it
+    is with ``k = None``: the resolver's ``require_views`` then names the step that lacks a view.
+
+    Examples
+    --------
+    >>> from bootmap.tableau import Tableau
+    >>> steps = [{"image": [x, 1.0], "action": {"type": "turn", "angle_deg": -90}} for x in (1.0, 5.0, 1.0)]
+    >>> images_only = Tableau.from_dict({"format": "bootmap.tableau/1", "steps": steps + [{"image": [5.0, 1.0]}]})
+    >>> t, k = tableau_with_views(images_only)
+    >>> k, t.views
+    (2, ['V0', 'V1', 'V0', 'V1'])
+    """
+    if all(s.view is not None for s in tableau.steps) or any(s.image is None for s in tableau.steps):
+        return tableau, None
+    clusterer = ViewClusterer(random_state=0, max_range=_range_max(tableau.meta))
+    clusterer.fit(np.array([s.image for s in tableau.steps]))
+    return tableau.with_views(view_labels(clusterer.labels_)), clusterer.k_
+
+
+def _range_max(meta: dict) -> float | None:
+    """A laser's drop-outs read its maximum range; a run that says what that is (``meta.laser.range_max``,
+    as ``bootmap simulate`` writes it) lets them be repaired."""
+    import math
+
+    from .errors import TableauError
+
+    laser = meta.get("laser")
+    value = laser.get("range_max") if isinstance(laser, dict) else None
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not (math.isfinite(value) and value > 0):
+        raise TableauError(f"{value!r} is not a positive number of metres", "meta.laser.range_max")
+    return float(value)

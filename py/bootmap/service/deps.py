@@ -1,0 +1,75 @@
+"""What the routers depend on, injected with FastAPI's ``Depends``: one :class:`Services` per application."""
+
+from __future__ import annotations
+
+import threading
+from collections import OrderedDict
+from dataclasses import dataclass, field
+from typing import Annotated, Any, Callable
+
+from fastapi import Depends, Path, Request
+
+from ..tableau import FORMAT
+from .settings import Settings
+from .store import Store
+from .theory import LoadedTheory, Theories
+from .worker import SolveGate, SolveJob, SolverPool
+
+
+class Cache:
+    """A small thread-safe LRU cache (fitted recognisers, keyed by tableau id and revision)."""
+
+    def __init__(self, size: int = 8):
+        self.size, self._items, self._lock = size, OrderedDict(), threading.Lock()
+
+    def get(self, key: Any, make: Callable[[], Any]) -> Any:
+        with self._lock:
+            if key in self._items:
+                self._items.move_to_end(key)
+                return self._items[key]
+        value = make()  # outside the lock: fitting may take a while, and a duplicate fit is harmless
+        with self._lock:
+            self._items[key] = value
+            while len(self._items) > self.size:
+                self._items.popitem(last=False)
+        return value
+
+
+@dataclass
+class Services:
+    settings: Settings
+    store: Store
+    theories: Theories
+    pool: SolverPool
+    gate: SolveGate
+    recognisers: Cache = field(default_factory=Cache)
+
+    @classmethod
+    def start(cls, settings: Settings) -> "Services":
+        """Open the store, snapshot the theory, start and warm the solvers (blocking: a second or two)."""
+        settings.data_dir.mkdir(parents=True, exist_ok=True)
+        store = Store(settings.database_url)
+        theories = Theories(settings.axioms, settings.data_dir)
+        pool = SolverPool(settings.max_concurrent_solves, settings.solver_memory_mb, settings.solve_kill_grace_s)
+        gate = SolveGate(pool, settings.max_concurrent_solves, settings.max_queued_solves, settings.retry_after_s)
+        services = cls(settings, store, theories, pool, gate)
+        pool.warm(services.job({"format": FORMAT, "steps": [
+            {"view": "a", "action": {"type": "travel", "distance_m": 1.0}}, {"view": "b"}]})[0])
+        return services
+
+    def close(self) -> None:
+        self.pool.close()
+        self.store.close()
+
+    def job(self, document: dict) -> tuple[SolveJob, LoadedTheory]:
+        """A solve of a tableau document with the current theory, and that theory (its id goes with the map)."""
+        theory, s = self.theories.current, self.settings
+        return SolveJob(document, str(theory.snapshot), s.solve_time_limit_s, s.quantum_deg, s.max_models), theory
+
+
+def get_services(request: Request) -> Services:
+    return request.app.state.services
+
+
+ServicesDep = Annotated[Services, Depends(get_services)]
+TableauId = Annotated[int, Path(ge=1, le=2**63 - 1, description="The id the tableau was created with.")]

@@ -1,0 +1,264 @@
+"""Request and response models of the HTTP service (pydantic v2), i.e. its OpenAPI schema.
+
+The tableau's JSON Schema (``schemas/tableau-1.schema.json``, checked by :mod:`bootmap.tableau`) stays the
+single source of truth; :class:`TableauIn` describes the same documents for OpenAPI, and
+tests/service/test_models.py checks that the two accept and refuse the same documents. Request models are
+strict: no coercion (``false`` is not 0, ``"1"`` is not 1), unknown fields refused, no NaN or Infinity.
+Optional fields may be left out but not sent as ``null``, as in the JSON Schema.
+"""
+
+from __future__ import annotations
+
+from datetime import datetime
+from typing import Annotated, Any, Literal, Union
+
+from pydantic import (AfterValidator, BaseModel, ConfigDict, Field, JsonValue, StrictInt, StrictStr,
+                      WithJsonSchema, model_validator)
+
+from ..tableau import FORMAT
+
+STRICT = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
+# clingo holds strings as C strings: a label "a\u0000b" would reach the solver as "a", the same view as
+# "a\u0000c". The JSON Schema does not say so (yet); the service refuses NUL in labels.
+NO_NUL = "^[^\\x00]*$"
+
+
+def _no_default(schema: dict) -> None:
+    # An optional field that must not be null: absent is allowed, so the default (None) is not a value
+    # a client may send, and the schema should not advertise it.
+    schema.pop("default", None)
+
+
+def optional(**kw: Any) -> Any:
+    """A field that may be left out but, when present, must have its type (never null)."""
+    return Field(None, json_schema_extra=_no_default, **kw)
+
+
+def _integral(x: float) -> float:
+    if not x.is_integer():
+        raise ValueError("should be an integer")
+    return x
+
+
+# JSON Schema's "integer" is a mathematical integer: 3.0 is one. Strict pydantic would refuse it.
+IntegerValued = Annotated[Union[StrictInt, Annotated[float, AfterValidator(_integral)]],
+                          WithJsonSchema({"type": "integer"})]
+
+
+class TurnAction(BaseModel):
+    """Turn in place: negative angles turn right (clockwise), positive left; near +-180 turns around."""
+
+    model_config = STRICT
+    type: Literal["turn"]
+    angle_deg: float = Field(ge=-360, le=360, description="Degrees; negative right, positive left.")
+
+
+class TravelAction(BaseModel):
+    """Travel along a path to the next dstate, with the net heading change of a curved path."""
+
+    model_config = STRICT
+    type: Literal["travel"]
+    distance_m: float = Field(gt=0, le=100_000, description="Distance travelled, metres.")
+    heading_change_deg: float = optional(ge=-360, le=360, description="Net heading change, degrees (default 0).")
+
+
+Action = Annotated[Union[TurnAction, TravelAction], Field(discriminator="type")]
+
+
+class StepIn(BaseModel):
+    """One time point: the view (or image) at a dstate, and the action to the next one."""
+
+    model_config = ConfigDict(**STRICT, json_schema_extra={"anyOf": [{"required": ["view"]},
+                                                                      {"required": ["image"]}]})
+    view: StrictStr = optional(min_length=1, max_length=200, pattern=NO_NUL,
+                               description="The view label (a cluster of images); any text but NUL.")
+    action: Action = optional(description="The action to the next step; every step but the last has one.")
+    image: list[float] = optional(min_length=1, description="The sense vector at this dstate "
+                                                            "(e.g. 180 laser ranges in metres).")
+    truth: Union[StrictStr, IntegerValued] = optional(description="The true dstate id, for evaluation only.")
+    pose: list[float] = optional(min_length=3, max_length=3, description="[x, y, theta], for evaluation only.")
+
+    @model_validator(mode="after")
+    def _view_or_image(self) -> "StepIn":
+        if self.view is None and self.image is None:
+            raise ValueError("a step needs a view or an image")
+        return self
+
+
+class TableauIn(BaseModel):
+    """A tableau, format ``bootmap.tableau/1``: the robot's experience as steps (see /schemas/tableau)."""
+
+    model_config = STRICT
+    format: Literal["bootmap.tableau/1"] = Field(description=f"Always {FORMAT!r}.")
+    world: StrictStr = optional(description="Name of the world the run came from (informational).")
+    meta: dict[str, JsonValue] = optional(description="Free-form run information; never read by the resolver.")
+    steps: list[StepIn] = Field(min_length=1)
+
+
+class AppendIn(BaseModel):
+    """Steps to add to a stored tableau: exploration went on."""
+
+    model_config = STRICT
+    action: Action = Field(description="The action from the stored tableau's last step to the first new one.")
+    steps: list[StepIn] = Field(min_length=1, description="The new steps, as in a tableau: every step but the "
+                                                          "last has an action.")
+
+
+class RecogniseIn(BaseModel):
+    """An image to recognise."""
+
+    model_config = STRICT
+    image: list[float] = Field(min_length=1, description="As many values as the stored tableau's images.")
+
+
+# ---------------------------------------------------------------------------------------------------
+# Responses
+# ---------------------------------------------------------------------------------------------------
+
+class Out(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+class MapSummary(Out):
+    dstates: int
+    places: int
+    paths: int
+    proved_minimal: bool
+    minimal_maps: int = Field(description="Minimal maps found, up to the server's cap.")
+    unique: bool = Field(description="Exactly one minimal map explains the tableau.")
+    minimal_maps_capped: bool
+    levels: list[str]
+
+
+class StepRow(Out):
+    """One row of the annotated tableau, as in the paper's table (6)."""
+
+    t: int
+    view: str
+    dstate: str
+    place: str | None
+    path: str | None
+    dir: Literal["pos", "neg"] | None
+    action: str
+
+
+class DstateOut(Out):
+    view: str
+    heading_deg: int | None
+    place: str | None
+    path: str | None
+    dir: Literal["pos", "neg"] | None
+
+
+class MapOut(Out):
+    """The minimal map: dstates, places, paths and how they relate, and every step annotated."""
+
+    revision: int = Field(description="The tableau revision this map explains.")
+    theory: str = Field(description="Id of the axiom snapshot the map was solved with (see /axioms).")
+    views_from_images: int | None = Field(description="Views found by clustering the images (k), or null "
+                                                      "when the tableau gave view labels.")
+    summary: MapSummary
+    steps: list[StepRow]
+    dstates: dict[str, DstateOut]
+    places: dict[str, list[str]] = Field(description="Place -> its dstates.")
+    paths: dict[str, list[str]] = Field(description="Path -> its places in pos order.")
+    on: list[list[str]] = Field(description="[place, path] pairs.")
+    order: list[list[str]] = Field(description="[path, before, after] along pos.")
+    right_of: list[list[str]] = Field(description="[place, path]: the place is right of the path facing pos.")
+    left_of: list[list[str]] = Field(description="[place, path]: the place is left of the path facing pos.")
+    alternatives: list[list[str]] = Field(description="The dstate of each time point in the other minimal maps.")
+    stats: dict[str, Any] = Field(description="Solver figures (seconds, bounds tried).")
+
+
+class MinimalMap(Out):
+    dstates: int
+    dstate_of: list[str] = Field(description="The dstate of each time point.")
+
+
+class MinimalMaps(Out):
+    """Every minimal map found: more than one when the experience does not tell them apart."""
+
+    unique: bool
+    capped: bool = Field(description="The enumeration stopped at the server's cap; there may be more.")
+    maps: list[MinimalMap]
+
+
+class TableauInfo(Out):
+    id: int
+    revision: int
+    steps: int
+    created: datetime
+    updated: datetime
+    views_from_images: int | None
+
+
+class TableauCreated(TableauInfo):
+    map: MapOut
+
+
+class TableauOut(TableauInfo):
+    tableau: TableauIn
+
+
+class TableauListItem(Out):
+    id: int
+    revision: int
+    steps: int
+    dstates: int
+    places: int
+    paths: int
+    updated: datetime
+
+
+class TableauList(Out):
+    total: int
+    items: list[TableauListItem]
+
+
+class Recognition(Out):
+    dstate: str = Field(description="The dstate of the nearest stored image.")
+    distance: float = Field(description="Euclidean distance to it: large means an unfamiliar image.")
+    view: str
+    place: str | None
+
+
+class RuleOut(Out):
+    name: str
+    line: int
+    text: str
+
+
+class AxiomFile(Out):
+    level: str = Field(description="The level (file stem), or 'core' for the search layout.")
+    file: str = Field(description="Path relative to the axiom directory.")
+    rules: list[RuleOut]
+
+
+class AxiomsOut(Out):
+    theory: str = Field(description="Id of this snapshot (a hash of the files).")
+    directory: str
+    loaded: datetime
+    levels: list[str]
+    files: list[AxiomFile]
+
+
+class Health(Out):
+    status: Literal["ok"]
+    version: str
+    theory: str
+    solvers: int = Field(description="Solver processes alive.")
+    solves_running: int
+    solves_waiting: int
+
+
+class Problem(BaseModel):
+    """RFC 9457 problem details; ``errors`` lists every invalid field when there are several."""
+
+    model_config = ConfigDict(extra="allow")
+    type: str
+    title: str
+    status: int
+    detail: str
+    instance: str | None = None
+    field: str | None = Field(None, description="The field to fix, e.g. steps[3].action.angle_deg.")
+    errors: list[dict[str, Any]] | None = None

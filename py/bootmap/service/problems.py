@@ -1,0 +1,343 @@
+"""Every error as RFC 9457 problem details (``application/problem+json``), with a message a person can act on.
+
+:class:`Problem` is the one exception the routers raise; the handlers here turn it, request validation
+errors, bootmap's own exceptions and anything unexpected into a problem document. ``field`` names what
+to fix in the style of the CLI's messages (``steps[3].action.angle_deg``); ``errors`` lists every invalid
+field when there are several, each with a JSON Pointer into the request body.
+
+:class:`BodyLimit` refuses bodies over the size limit before they are read, and :class:`JSONRoute` parses
+request bodies so that malformed or hostile JSON gets a precise 400 instead of a generic one.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import re
+from typing import Any
+
+from fastapi import FastAPI, Request
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import JSONResponse
+from fastapi.routing import APIRoute
+from starlette.exceptions import HTTPException
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
+
+from ..errors import AxiomError, BootmapError, InconsistentTableau, SolveTimeout, TableauError
+from .store import Conflict, NotFound
+from .worker import SolverBusy, SolverCrashed, SolverKilled, SolverOutOfMemory
+
+PROBLEM_JSON = "application/problem+json"
+TYPE_BASE = "https://bootmap.dev/problems/"
+log = logging.getLogger("bootmap.service")
+
+
+class Problem(HTTPException):
+    """An error response: status, a short kind (the problem type), a title, and what to do about it."""
+
+    def __init__(self, status: int, kind: str, title: str, detail: str, headers: dict[str, str] | None = None,
+                 **extensions: Any):
+        super().__init__(status_code=status, detail=detail, headers=headers)
+        self.kind, self.title, self.extensions = kind, title, extensions
+
+    def document(self, instance: str | None = None) -> dict[str, Any]:
+        doc = {"type": TYPE_BASE + self.kind, "title": self.title, "status": self.status_code, "detail": self.detail}
+        if instance:
+            doc["instance"] = instance
+        doc.update({k: v for k, v in self.extensions.items() if v is not None})
+        return doc
+
+
+def problem_response(p: Problem, instance: str | None = None) -> JSONResponse:
+    return JSONResponse(p.document(instance), status_code=p.status_code, headers=p.headers,
+                        media_type=PROBLEM_JSON)
+
+
+def not_found(tableau_id: int) -> Problem:
+    return Problem(404, "not-found", "No such tableau", f"no tableau has id {tableau_id}; "
+                   "GET /tableaux lists the stored ones")
+
+
+def invalid(field: str, reason: str, kind: str = "invalid-tableau") -> Problem:
+    """A 422 naming the field to fix."""
+    title = "Invalid tableau" if kind == "invalid-tableau" else "Invalid request"
+    return Problem(422, kind, title, f"{field}: {reason}" if field else reason, field=field or None)
+
+
+# ---------------------------------------------------------------------------------------------------
+# bootmap's exceptions -> problems
+# ---------------------------------------------------------------------------------------------------
+
+# Most specific first: SolverKilled is a SolveTimeout.
+_KINDS: list[tuple[type, int, str, str]] = [
+    (Conflict, 409, "conflict", "Tableau changed"),
+    (SolverBusy, 503, "solvers-busy", "Every solver is busy"),
+    (InconsistentTableau, 422, "inconsistent-tableau", "No map satisfies the axioms"),
+    (SolveTimeout, 422, "solve-timeout", "Solve ran past its time limit"),
+    (SolverOutOfMemory, 422, "solver-memory", "Solve needed more memory than allowed"),
+    (AxiomError, 422, "axiom-error", "The axioms do not load"),
+    (SolverCrashed, 500, "solver-crashed", "The solver failed"),
+]
+
+
+def from_bootmap_error(e: BootmapError) -> Problem:
+    """The problem for one of bootmap's own exceptions (solver outcomes included)."""
+    if isinstance(e, TableauError):
+        return invalid(e.where.split(": ", 1)[-1] if e.where else "", e.reason)
+    if isinstance(e, NotFound):
+        return not_found(e.tableau_id)
+    for cls, status, kind, title in _KINDS:
+        if isinstance(e, cls):
+            headers = {"Retry-After": str(e.retry_after_s)} if isinstance(e, SolverBusy) else None
+            return Problem(status, kind, title, str(e), headers=headers, **_extensions(e))
+    return Problem(500, "internal", "Internal error", f"{type(e).__name__}: {e}")
+
+
+def _extensions(e: BootmapError) -> dict[str, Any]:
+    """What a client can use beyond the message: the failing levels, the bound proved, the best map."""
+    if isinstance(e, InconsistentTableau):
+        return {"failing_levels": getattr(e, "failing_levels", None)}
+    if isinstance(e, SolverKilled):
+        return {"time_limit_s": e.time_limit_s}
+    if isinstance(e, SolveTimeout):
+        best = e.best_map
+        return {"lower_bound": e.lower_bound, "best_map": None if best is None else {
+            "dstates": best.n_dstates, "places": best.n_places, "paths": best.n_paths, "proved_minimal": False}}
+    return {}
+
+
+# ---------------------------------------------------------------------------------------------------
+# Request validation errors (pydantic) -> one problem naming the fields
+# ---------------------------------------------------------------------------------------------------
+
+# Pydantic puts the branch of a union in an error's location ("truth", "str"); a person wants the field.
+_BRANCHES = {"str", "int", "float", "bool", "list", "dict", "none", "nullable", "turn", "travel"}
+
+
+def _is_branch(part: Any) -> bool:
+    return isinstance(part, str) and (part in _BRANCHES or "[" in part or "(" in part)
+
+
+def field_path(loc: tuple | list) -> str:
+    """("body", "steps", 3, "action", "turn", "angle_deg") -> "steps[3].action.angle_deg"."""
+    parts = [p for p in loc[1:] if not _is_branch(p)] if loc and loc[0] in ("body", "query", "path") else list(loc)
+    out = ""
+    for p in parts:
+        out += f"[{p}]" if isinstance(p, int) else (f".{p}" if out else str(p))
+    if loc and loc[0] in ("query", "path") and out:
+        out = f"{loc[0]} parameter {out}"
+    return out[:200] + ("..." if len(out) > 200 else "")
+
+
+def _pointer(loc: tuple | list) -> str:
+    parts = [p for p in loc[1:] if not _is_branch(p)]
+    return "#/" + "/".join(str(p).replace("~", "~0").replace("/", "~1") for p in parts)
+
+
+def _message(err: dict) -> str:
+    kind, ctx = err.get("type"), err.get("ctx") or {}
+    if kind == "extra_forbidden":
+        return "unknown field"
+    if kind == "missing":
+        return "missing"
+    if kind == "union_tag_invalid":
+        return f"unknown action type {ctx.get('tag')!r} (expected 'turn' or 'travel')"
+    if kind == "finite_number":
+        return "not a finite number (JSON has no NaN or Infinity)"
+    if kind == "recursion_loop" or kind == "recursion_depth_exceeded":
+        return "nested too deeply"
+    if kind == "string_pattern_mismatch" and "x00" in str(ctx.get("pattern")):
+        return "contains a NUL character (\\u0000), which the solver cannot hold in a label"
+    if kind == "literal_error" and ctx.get("expected") == repr("bootmap.tableau/1"):
+        return f"unsupported format {err.get('input')!r} (expected 'bootmap.tableau/1')"
+    return str(err.get("msg", "invalid")).removeprefix("Value error, ")
+
+
+def validation_problem(errors: list[dict]) -> Problem:
+    """One 422 for every invalid field; a union's branches that all failed are one field."""
+    seen: dict[str, dict] = {}
+    for err in errors:
+        field = field_path(err.get("loc", ()))
+        item = {"field": field, "detail": _message(err)}
+        if err.get("loc", ("",))[0] == "body":
+            item["pointer"] = _pointer(err["loc"])  # RFC 9457's suggestion: a JSON Pointer into the body
+        seen.setdefault(field, item)
+    items = list(seen.values())
+    first = items[0] if items else {"field": "", "detail": "invalid request"}
+    if first["field"] == "" and errors and errors[0].get("type") == "missing":
+        return Problem(422, "invalid-request", "Invalid request", "the request needs a JSON body")
+    if first["field"] == "" and errors and errors[0].get("type") in ("model_attributes_type", "dict_type"):
+        return Problem(415, "unsupported-media-type", "Send JSON",
+                       "the body must be a JSON object sent with Content-Type: application/json")
+    more = f" (and {len(items) - 1} more invalid field(s), see errors)" if len(items) > 1 else ""
+    detail = f"{first['field']}: {first['detail']}" if first["field"] else first["detail"]
+    return Problem(422, "invalid-request", "Invalid request", detail + more, field=first["field"] or None,
+                   errors=items[:50])
+
+
+# ---------------------------------------------------------------------------------------------------
+# Parsing the body
+# ---------------------------------------------------------------------------------------------------
+
+_SURROGATE_ESCAPE = re.compile(rb"\\u[dD][89a-fA-F]", re.ASCII)
+
+
+def parse_json(body: bytes) -> Any:
+    """JSON text -> data, or a 400 saying what is wrong and where. Numbers too long for Python, nesting
+    too deep for its parser and lone UTF-16 surrogates (which no UTF-8 text can carry) are refused here."""
+    try:
+        data = json.loads(body)
+    except json.JSONDecodeError as e:
+        raise Problem(400, "malformed-json", "Malformed JSON",
+                      f"not valid JSON: {e.msg} at line {e.lineno} column {e.colno}") from None
+    except UnicodeDecodeError as e:
+        raise Problem(400, "malformed-json", "Malformed JSON", f"not UTF-8 text: {e.reason} at byte {e.start}") \
+            from None
+    except RecursionError:
+        raise Problem(400, "malformed-json", "Malformed JSON", "JSON nested too deeply") from None
+    except ValueError as e:  # e.g. an integer of more than 4300 digits
+        raise Problem(400, "malformed-json", "Malformed JSON", f"not acceptable JSON: {e}") from None
+    if _SURROGATE_ESCAPE.search(body):
+        _check_surrogates(data, [])
+    return data
+
+
+def _check_surrogates(x: Any, path: list) -> None:
+    if isinstance(x, str):
+        try:
+            x.encode("utf-8")
+        except UnicodeEncodeError:
+            raise Problem(400, "malformed-json", "Malformed JSON",
+                          f"{field_path(['body', *path]) or 'body'}: a lone UTF-16 surrogate (\\ud800-\\udfff) "
+                          "is not a character") from None
+    elif isinstance(x, dict):
+        for k, v in x.items():
+            _check_surrogates(k, path)
+            _check_surrogates(v, path + [k])
+    elif isinstance(x, list):
+        for i, v in enumerate(x):
+            _check_surrogates(v, path + [i])
+
+
+class _JSONRequest(Request):
+    async def json(self) -> Any:
+        if not hasattr(self, "_json"):
+            self._json = parse_json(await self.body())
+        return self._json
+
+
+class JSONRoute(APIRoute):
+    """A route whose request body is parsed by :func:`parse_json`."""
+
+    def get_route_handler(self):
+        handler = super().get_route_handler()
+
+        async def route(request: Request):
+            return await handler(_JSONRequest(request.scope, request.receive))
+
+        return route
+
+
+class BodyLimit:
+    """Refuse a request body over ``max_bytes``: at once when Content-Length says so, else as soon as the
+    bytes read pass the limit. Nothing over the limit is ever held in memory."""
+
+    def __init__(self, app: ASGIApp, max_bytes: int):
+        self.app, self.max_bytes = app, max_bytes
+
+    def _too_large(self) -> Problem:
+        return Problem(413, "body-too-large", "Request body too large",
+                       f"the request body is larger than this server's limit of {self.max_bytes} bytes "
+                       "(BOOTMAP_MAX_BODY_BYTES)", limit_bytes=self.max_bytes)
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http":
+            return await self.app(scope, receive, send)
+        length = dict(scope["headers"]).get(b"content-length")
+        if length is not None and (not length.isdigit() or int(length) > self.max_bytes):
+            response = problem_response(self._too_large() if length.isdigit() else
+                                        Problem(400, "bad-request", "Bad request", "invalid Content-Length"))
+            return await response(scope, receive, send)
+        seen = 0
+
+        async def limited() -> Message:
+            nonlocal seen
+            message = await receive()
+            seen += len(message.get("body", b""))
+            if seen > self.max_bytes:
+                raise self._too_large()  # an HTTPException: FastAPI passes it to the handlers below
+            return message
+
+        await self.app(scope, limited, send)
+
+
+# ---------------------------------------------------------------------------------------------------
+# Handlers
+# ---------------------------------------------------------------------------------------------------
+
+_TITLES = {400: "Bad request", 404: "Not found", 405: "Method not allowed", 406: "Not acceptable",
+           413: "Request body too large", 415: "Unsupported media type", 422: "Invalid request",
+           500: "Internal error", 503: "Service unavailable"}
+
+
+def _allowed_methods(request: Request, fallback: str) -> str:
+    """Every method the API documents at this path. (Starlette's 405 names only the methods of the first
+    route that matched the path, not of every route there.)"""
+    methods: set[str] = set()
+    for template, operations in request.app.openapi().get("paths", {}).items():
+        pattern = re.sub(r"\\\{[^}]+\\\}", "[^/]+", re.escape(template))
+        if re.fullmatch(pattern, request.url.path):
+            methods |= {m.upper() for m in operations}
+    if "GET" in methods:
+        methods.add("HEAD")
+    return ", ".join(sorted(methods)) or fallback
+
+
+def install(app: FastAPI) -> None:
+    """Register the problem handlers on ``app``."""
+
+    async def on_problem(request: Request, exc: Problem):
+        return problem_response(exc, request.url.path)
+
+    async def on_http(request: Request, exc: HTTPException):
+        detail = exc.detail
+        if exc.status_code == 404 and detail == "Not Found":
+            detail = f"nothing at {request.url.path}; the API is listed at /docs"
+        elif exc.status_code == 405:
+            detail = f"{request.method} is not allowed on {request.url.path}"
+            exc.headers = {"Allow": _allowed_methods(request, (exc.headers or {}).get("Allow", ""))}
+        elif exc.status_code == 400 and exc.__cause__ is not None:
+            detail = f"the body could not be read: {type(exc.__cause__).__name__}"
+        p = Problem(exc.status_code, "http-" + str(exc.status_code), _TITLES.get(exc.status_code, "Error"),
+                    str(detail), headers=getattr(exc, "headers", None))
+        return problem_response(p, request.url.path)
+
+    async def on_validation(request: Request, exc: RequestValidationError):
+        return problem_response(validation_problem(list(exc.errors())), request.url.path)
+
+    async def on_bootmap(request: Request, exc: BootmapError):
+        return problem_response(from_bootmap_error(exc), request.url.path)
+
+    async def on_other(request: Request, exc: Exception):
+        log.exception("unexpected error on %s %s", request.method, request.url.path)
+        return problem_response(Problem(500, "internal", "Internal error",
+                                        "the server failed on this request; it is logged"), request.url.path)
+
+    app.add_exception_handler(Problem, on_problem)
+    app.add_exception_handler(HTTPException, on_http)
+    app.add_exception_handler(RequestValidationError, on_validation)
+    app.add_exception_handler(BootmapError, on_bootmap)
+    app.add_exception_handler(Exception, on_other)
+
+
+def openapi_responses(*statuses: int) -> dict[int | str, dict]:
+    """OpenAPI entries for error statuses, all with the problem schema."""
+    from .models import Problem as ProblemModel
+
+    return {s: {"model": ProblemModel, "description": _TITLES.get(s, "Error"),
+                "content": {PROBLEM_JSON: {"schema": {"$ref": "#/components/schemas/Problem"}}}}
+            for s in statuses}
+
+
+__all__ = ["BodyLimit", "JSONRoute", "Problem", "install", "openapi_responses", "parse_json",
+           "validation_problem"]

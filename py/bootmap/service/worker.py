@@ -1,0 +1,354 @@
+"""Solves in worker processes that can be stopped for sure: a deadline, a memory cap, a bounded number.
+
+clingo cannot interrupt grounding from inside the process, and a hostile tableau can ground for far
+longer than the resolver's time limit, or grow to gigabytes. So each solve runs in a long-lived solver
+process (spawned, not forked: the server has threads) whose address space is capped with RLIMIT_AS.
+The resolver's own time limit (SolveTimeout, with the dstates proved necessary) ends most slow solves;
+a process still busy ``kill_grace_s`` after it is killed and replaced. Images-only tableaux are
+clustered into views in the solver process too, under the same deadline.
+
+:class:`SolverPool` is the blocking pool; :class:`SolveGate` is its front for the event loop: at most
+``running`` solves at once (in threads, off the loop), at most ``waiting`` more in line, and beyond that
+:class:`SolverBusy` at once (the service answers 503 with Retry-After).
+"""
+
+from __future__ import annotations
+
+import logging
+import multiprocessing
+import os
+import queue
+import signal
+import threading
+import time
+import traceback
+from dataclasses import dataclass
+from typing import Any
+
+from ..errors import AxiomError, BootmapError, InconsistentTableau, SolveTimeout, TableauError
+from ..tableau import Tableau
+
+log = logging.getLogger("bootmap.service")
+READY_TIMEOUT_S = 60.0  # a fresh solver imports clingo and scikit-learn; generous for a loaded machine
+
+
+class SolverBusy(BootmapError):
+    """Every solver is busy and the line of waiting solves is full."""
+
+    def __init__(self, message: str, retry_after_s: int):
+        self.retry_after_s = retry_after_s
+        super().__init__(message)
+
+
+class SolverKilled(SolveTimeout):
+    """The solver was still busy (e.g. grounding, which clingo cannot interrupt) at the hard deadline."""
+
+    def __init__(self, message: str, time_limit_s: float):
+        self.time_limit_s = time_limit_s
+        super().__init__(message)
+
+
+class SolverOutOfMemory(BootmapError):
+    """The solve needed more memory than the solver's cap."""
+
+
+class SolverCrashed(BootmapError):
+    """The solver process died or failed unexpectedly (a bug: it is logged)."""
+
+
+@dataclass(frozen=True)
+class SolveJob:
+    """What a solver needs: the tableau document and the theory snapshot to solve it with. The solver
+    validates the document (bootmap.tableau, against the JSON Schema): that takes longer than many solves,
+    and is better spent in a solver process than under the server's GIL."""
+
+    document: dict
+    axioms: str
+    time_limit_s: float
+    quantum_deg: float = 15.0
+    max_models: int = 10
+
+
+@dataclass(frozen=True)
+class Solved:
+    map: dict             # CognitiveMap.to_dict()
+    text: str             # CognitiveMap.to_text(): the annotated tableau, as `bootmap map` prints it
+    views_k: int | None   # views found by clustering images, or None when the tableau had labels
+    seconds: float
+
+
+# ---------------------------------------------------------------------------------------------------
+# Inside the solver process
+# ---------------------------------------------------------------------------------------------------
+
+def _serve(conn, memory_mb: int) -> None:
+    """The solver process: cap memory, import the solver, then answer jobs until told to stop."""
+    limit = memory_mb * 2**20
+    import resource
+
+    resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+    for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ[var] = "1"  # one solve per process; BLAS thread pools would only reserve memory
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C on the server: the server stops its solvers
+    from .. import resolver  # noqa: F401  (warm: the first job should not pay for the import)
+
+    conn.send("ready")
+    cache: dict = {}
+    while True:
+        try:
+            job = conn.recv()
+        except (EOFError, OSError):
+            return
+        if job is None:
+            return
+        try:
+            conn.send(_run(job, cache))
+        except OSError:  # the server is gone (an idle solver learns it from the pipe closing, above)
+            return
+
+
+def _run(job: SolveJob, cache: dict) -> tuple:
+    """One job -> ("ok", Solved) or a tagged error tuple (exceptions with custom fields do not pickle)."""
+    try:
+        return _solve(job, cache)
+    except MemoryError:  # clingo's bad_alloc under RLIMIT_AS, in the solve or in naming the failing levels
+        return ("memory",)
+    except Exception:  # a bug: report it, keep serving
+        return "crash", traceback.format_exc()
+
+
+def _solve(job: SolveJob, cache: dict) -> tuple:
+    start = time.perf_counter()
+    deadline = start + job.time_limit_s
+    resolver = None
+    try:
+        tableau, k = _views(Tableau.from_dict(job.document, "tableau"))
+        resolver = _resolver(job, cache, None, deadline)
+        cmap = resolver.resolve(tableau)
+        return "ok", Solved(cmap.to_dict(), cmap.to_text(), k, time.perf_counter() - start)
+    except InconsistentTableau as e:
+        failing, complete = _failing_levels(tableau, job, cache, deadline)
+        return "inconsistent", _inconsistent_message(str(e), failing, complete), failing
+    except SolveTimeout as e:
+        # The resolver had what validation and clustering left of the limit; the user set the whole.
+        message = str(e).replace(f"time limit of {resolver.time_limit} s", f"time limit of {job.time_limit_s:g} s")
+        return "timeout", message, e.lower_bound, e.best_map
+    except TableauError as e:
+        return "tableau", e.reason, e.where
+    except AxiomError as e:
+        return "axioms", str(e)
+
+
+def _views(tableau: Tableau) -> tuple[Tableau, int | None]:
+    if all(s.view is not None for s in tableau.steps):
+        return tableau, None
+    from ..views import tableau_with_views  # scikit-learn: only for images-only tableaux
+
+    return tableau_with_views(tableau)
+
+
+def _resolver(job: SolveJob, cache: dict, levels: tuple[str, ...] | None, deadline: float):
+    """A resolver for the job's theory (kept: loading a theory parses every file), timed to the deadline."""
+    from ..resolver import Resolver
+
+    key = (job.axioms, levels, job.quantum_deg, job.max_models)
+    if key not in cache:
+        if len(cache) > 16:
+            cache.clear()
+        cache[key] = Resolver(axioms=job.axioms, levels=levels, quantum_deg=job.quantum_deg,
+                              max_models=job.max_models)
+    r = cache[key]
+    r.time_limit = round(max(0.01, deadline - time.perf_counter()), 2)
+    return r
+
+
+def _failing_levels(tableau: Tableau, job: SolveJob, cache: dict, deadline: float) -> tuple[list[str], bool]:
+    """Which axiom families fail: causal alone, else each other level beside causal. Returns the failing
+    levels and whether every try finished within the deadline."""
+    levels = list(_resolver(job, cache, None, deadline).theory.levels)
+    tries = [("causal",)] + [("causal", lv) for lv in levels if lv != "causal"]
+    failing, complete = [], True
+    for subset in tries:
+        if time.perf_counter() >= deadline:
+            return failing, False
+        try:
+            _resolver(job, cache, subset, deadline).resolve(tableau)
+        except InconsistentTableau:
+            failing.append(subset[-1])
+            if subset == ("causal",):
+                break  # every other try includes causal
+        except SolveTimeout:
+            complete = False
+    return failing, complete
+
+
+def _inconsistent_message(message: str, failing: list[str], complete: bool) -> str:
+    if failing == ["causal"]:
+        why = "the causal axioms alone already fail"
+    elif failing:
+        names = ", ".join(failing)
+        why = f"the {names} level{'s' if len(failing) > 1 else ''} fail{'' if len(failing) > 1 else 's'} " \
+              "even with the causal level alone beside it"
+    elif complete:
+        why = "each level is satisfiable beside the causal one; only the levels together fail"
+    else:
+        why = "the failing level could not be narrowed down within the time limit"
+    return f"{message}; {why}"
+
+
+# ---------------------------------------------------------------------------------------------------
+# In the server
+# ---------------------------------------------------------------------------------------------------
+
+class _Worker:
+    """One solver process and the pipe to it."""
+
+    def __init__(self, ctx, memory_mb: int):
+        self.conn, child = ctx.Pipe()
+        self.process = ctx.Process(target=_serve, args=(child, memory_mb), name="bootmap-solver", daemon=True)
+        self.process.start()
+        child.close()
+        self.ready = False
+
+    def alive(self) -> bool:
+        return self.process.is_alive()
+
+    def run(self, job: SolveJob, hard_deadline_s: float) -> tuple:
+        if not self.ready:
+            self._await_ready()
+        self.conn.send(job)
+        if not self.conn.poll(hard_deadline_s):
+            self.kill()
+            raise SolverKilled(f"the solver was stopped at the deadline of {hard_deadline_s:g} s (this server's time "
+                               f"limit of {job.time_limit_s:g} s plus grace), still busy: clingo cannot interrupt "
+                               "grounding, and this tableau grounds for longer than that", job.time_limit_s)
+        try:
+            return self.conn.recv()
+        except (EOFError, OSError):
+            self.kill()
+            raise SolverCrashed("the solver process died during the solve (see the server log)") from None
+
+    def _await_ready(self) -> None:
+        if not self.conn.poll(READY_TIMEOUT_S) or self.conn.recv() != "ready":
+            self.kill()
+            raise SolverCrashed("a solver process did not start")
+        self.ready = True
+
+    def kill(self) -> None:
+        self.process.kill()
+        self.process.join(5)
+        self.conn.close()
+
+    def stop(self) -> None:
+        try:
+            self.conn.send(None)
+        except OSError:
+            pass
+        self.process.join(2)
+        if self.process.is_alive():
+            self.kill()
+
+
+class SolverPool:
+    """``size`` solver processes, each capped at ``memory_mb`` MiB. :meth:`solve` blocks until one is free."""
+
+    def __init__(self, size: int, memory_mb: int, kill_grace_s: float = 2.0):
+        self._ctx = multiprocessing.get_context("spawn")  # fork would copy the server's threads and locks
+        self.size, self.memory_mb, self.kill_grace_s = size, memory_mb, kill_grace_s
+        self._idle: queue.Queue[_Worker] = queue.Queue()
+        self._workers: list[_Worker] = []
+        self._lock = threading.Lock()
+        self.busy = 0
+        self.closed = False
+        for _ in range(size):
+            self._idle.put(self._spawn())
+
+    def _spawn(self) -> _Worker:
+        w = _Worker(self._ctx, self.memory_mb)
+        with self._lock:
+            self._workers = [x for x in self._workers if x.alive()] + [w]
+        return w
+
+    def alive(self) -> int:
+        with self._lock:
+            return sum(w.alive() for w in self._workers)
+
+    def solve(self, job: SolveJob) -> Solved:
+        """Solve in a free solver; raises bootmap's exceptions (see :func:`_outcome`)."""
+        worker = self._idle.get()
+        with self._lock:
+            self.busy += 1
+        try:
+            reply = worker.run(job, job.time_limit_s + self.kill_grace_s)
+        finally:
+            with self._lock:
+                self.busy -= 1
+            if not self.closed:  # no new solver after shutdown
+                self._idle.put(worker if worker.alive() else self._spawn())
+        return _outcome(reply, self.memory_mb)
+
+    def warm(self, job: SolveJob) -> None:
+        """Run ``job`` once in every solver, so that the first real solve pays no start-up."""
+        workers = [self._idle.get() for _ in range(self.size)]
+        try:
+            for w in workers:
+                _outcome(w.run(job, READY_TIMEOUT_S + job.time_limit_s), self.memory_mb)
+        finally:
+            for w in workers:
+                self._idle.put(w if w.alive() else self._spawn())
+
+    def close(self) -> None:
+        with self._lock:
+            self.closed = True
+            workers, self._workers = self._workers, []
+        for w in workers:
+            w.stop()
+
+
+def _outcome(reply: tuple, memory_mb: int) -> Solved:
+    kind, *rest = reply
+    if kind == "ok":
+        return rest[0]
+    if kind == "inconsistent":
+        e = InconsistentTableau(rest[0])
+        e.failing_levels = rest[1]  # type: ignore[attr-defined]
+        raise e
+    if kind == "timeout":
+        raise SolveTimeout(rest[0], lower_bound=rest[1], best_map=rest[2])
+    if kind == "tableau":
+        raise TableauError(rest[0], rest[1])
+    if kind == "axioms":
+        raise AxiomError(rest[0])
+    if kind == "memory":
+        raise SolverOutOfMemory(f"the solve needed more than this server's solver memory of {memory_mb} MiB "
+                                "(BOOTMAP_SOLVER_MEMORY_MB)")
+    log.error("solver failed:\n%s", rest[0])
+    raise SolverCrashed("the solver failed on this tableau (the server log has the details)")
+
+
+class SolveGate:
+    """The event loop's door to the pool: solves run in threads, at most ``running`` at once, at most
+    ``waiting`` more queued; beyond that :class:`SolverBusy` is raised at once."""
+
+    def __init__(self, pool: SolverPool, running: int, waiting: int, retry_after_s: int):
+        self.pool, self.running, self.capacity, self.retry_after_s = pool, running, running + waiting, retry_after_s
+        self.admitted = 0  # touched only from the event loop thread: no lock needed
+        self._limiter: Any = None
+
+    @property
+    def waiting(self) -> int:
+        return max(0, self.admitted - self.pool.busy)
+
+    async def solve(self, job: SolveJob) -> Solved:
+        import anyio
+
+        if self.admitted >= self.capacity:
+            raise SolverBusy(f"all {self.running} solvers are busy and {self.capacity - self.running} solves are "
+                             f"waiting; retry in {self.retry_after_s} s", self.retry_after_s)
+        if self._limiter is None:  # created in the loop that uses it
+            self._limiter = anyio.CapacityLimiter(self.running)
+        self.admitted += 1
+        try:
+            return await anyio.to_thread.run_sync(self.pool.solve, job, limiter=self._limiter)
+        finally:
+            self.admitted -= 1

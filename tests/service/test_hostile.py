@@ -1,0 +1,174 @@
+"""Hostile input: each gets a clear 4xx (problem details naming what to fix) and stored data stays intact.
+
+The session server's limits: 4 MiB bodies, 10,000 steps, 512 values per image, 3 s solves.
+"""
+
+import json
+import socket
+from urllib.parse import urlsplit
+
+import pytest
+
+from bootmap.tableau import FORMAT
+
+PROBLEM = "application/problem+json"
+TURN = {"type": "turn", "angle_deg": -90}
+
+
+@pytest.fixture(autouse=True)
+def stored_data_intact(client, paper_id):
+    """Around every test here: the paper's tableau and map are exactly as stored, before and after."""
+    before = client.get(f"/tableaux/{paper_id}").text, client.get(f"/tableaux/{paper_id}/map").text
+    yield
+    assert (client.get(f"/tableaux/{paper_id}").text, client.get(f"/tableaux/{paper_id}/map").text) == before
+
+
+def refused(client, status: int, *args, **kw) -> dict:
+    """Send a request that must be refused with ``status``, store nothing, and say why as problem details."""
+    total = client.get("/tableaux").json()["total"]
+    r = client.request(*args, **kw)
+    assert r.status_code == status, r.text
+    assert r.headers["content-type"] == PROBLEM
+    problem = r.json()
+    assert problem["status"] == status and problem["detail"] and problem["type"].startswith("https://")
+    assert client.get("/tableaux").json()["total"] == total
+    return problem
+
+
+def tableau(*steps, **extra) -> dict:
+    return {"format": FORMAT, "steps": list(steps), **extra}
+
+
+def post_raw(client, body: bytes, **kw) -> dict:
+    return refused(client, kw.pop("status", 400), "POST", "/tableaux", content=body,
+                   headers={"content-type": "application/json"})
+
+
+# --- Client data never becomes program text --------------------------------------------------------
+
+def test_asp_syntax_in_labels_is_only_ever_a_label(client, tmp_path):
+    marker = tmp_path / "pwned"
+    labels = [f'a"). #script (python) import os; os.system("touch {marker}") #end. b("',
+              '#include "/etc/passwd".', "x :- not x.", "#program base.", "%* comment", "V0\n:- view(_, _)."]
+    steps = [{"view": v, "action": TURN} for v in labels] + [{"view": labels[0]}]
+    r = client.post("/tableaux", json=tableau(*steps))
+    assert r.status_code == 201, r.text
+    m = r.json()["map"]
+    assert [row["view"] for row in m["steps"]] == labels + [labels[0]]
+    assert {d["view"] for d in m["dstates"].values()} == set(labels)
+    assert not marker.exists()
+
+
+def test_nul_in_a_label_is_refused_not_cut_short(client):
+    """clingo holds C strings: "a\\u0000b" and "a\\u0000c" would both reach it as "a"."""
+    problem = refused(client, 422, "POST", "/tableaux", json=tableau({"view": "a\x00b", "action": TURN},
+                                                                      {"view": "a\x00c"}))
+    assert problem["field"] == "steps[0].view" and "NUL" in problem["detail"]
+
+
+@pytest.mark.parametrize("field", ["axioms", "levels", "script", "program"])
+def test_no_field_can_name_axioms_a_program_or_a_file(client, field):
+    problem = refused(client, 422, "POST", "/tableaux", json=tableau({"view": "a"}, **{field: "/etc/passwd"}))
+    assert problem["field"] == field and "unknown field" in problem["detail"]
+
+
+# --- Size -------------------------------------------------------------------------------------------
+
+def test_a_100_mb_body_is_refused_before_it_is_read(server, client):
+    """Content-Length says 100 MB: the 413 comes back while the client has sent only the first 64 KiB."""
+    url = urlsplit(server.url)
+    with socket.create_connection((url.hostname, url.port), timeout=10) as s:
+        s.sendall(b"POST /tableaux HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
+                  b"Content-Length: %d\r\n\r\n" % (100 * 2**20) + b"[" * 65536)
+        reply = b""
+        while not reply.endswith(b"}"):  # the headers and the problem document may come in two packets
+            chunk = s.recv(65536)
+            assert chunk, f"connection closed after {reply!r}"
+            reply += chunk
+    reply = reply.decode()
+    assert reply.startswith("HTTP/1.1 413") and PROBLEM in reply
+    assert "larger than this server's limit of 4194304 bytes" in reply
+
+
+def test_a_streamed_100_mb_body_is_cut_off_at_the_limit(client):
+    chunks = (b"x" * 2**20 for _ in range(100))  # chunked: no Content-Length to check beforehand
+    problem = refused(client, 413, "POST", "/tableaux", content=chunks, headers={"content-type": "application/json"})
+    assert problem["limit_bytes"] == 4 * 2**20
+
+
+def test_a_million_steps_are_refused(client):
+    body = json.dumps(tableau(*[{"view": "A", "action": TURN}] * 999_999, {"view": "A"})).encode()
+    assert len(body) > 4 * 2**20
+    post_raw(client, body, status=413)
+
+
+def test_more_steps_than_the_limit_are_refused_by_count(client):
+    problem = refused(client, 422, "POST", "/tableaux", json=tableau(*[{"view": "A", "action": TURN}] * 10_000,
+                                                                      {"view": "A"}))
+    assert problem["field"] == "steps" and "10001 steps" in problem["detail"] and "10000" in problem["detail"]
+
+
+def test_an_image_longer_than_the_limit_is_refused(client):
+    problem = refused(client, 422, "POST", "/tableaux", json=tableau({"image": [1.0] * 513}))
+    assert problem["field"] == "steps[0].image" and "512" in problem["detail"]
+
+
+# --- Malformed JSON ---------------------------------------------------------------------------------
+
+def test_deeply_nested_json_is_refused(client):
+    assert "nested too deeply" in post_raw(client, b"[" * 100_000 + b"]" * 100_000)["detail"]
+    meta = json.dumps(tableau({"view": "a"}, meta={"a": json.loads("[" * 400 + "]" * 400)}))
+    problem = refused(client, 422, "POST", "/tableaux", content=meta, headers={"content-type": "application/json"})
+    assert problem["field"].startswith("meta.a") and "nested too deeply" in problem["detail"]
+
+
+def test_malformed_json_says_where(client):
+    assert post_raw(client, b'{"format": "bootmap.tableau/1", "steps": [}')["detail"] == \
+        "not valid JSON: Expecting value at line 1 column 43"
+    assert "not UTF-8" in post_raw(client, b'{"format": "\xff"}')["detail"]
+    assert "4300 digits" in post_raw(client, b'{"format": ' + b"9" * 5000 + b"}")["detail"]
+    lone = post_raw(client, b'{"format": "bootmap.tableau/1", "steps": [{"view": "\\ud800"}]}')
+    assert lone["detail"].startswith("steps[0].view: a lone UTF-16 surrogate")
+
+
+def test_json_that_is_not_sent_as_json_is_refused(client):
+    problem = refused(client, 415, "POST", "/tableaux", content=json.dumps(tableau({"view": "a"})),
+                      headers={"content-type": "text/plain"})
+    assert "Content-Type: application/json" in problem["detail"]
+
+
+# --- Numbers ----------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("literal", ["NaN", "Infinity", "-Infinity", "1e400"])
+def test_non_finite_numbers_are_refused_with_the_field(client, literal):
+    body = '{"format": "bootmap.tableau/1", "steps": [{"view": "a", "action": {"type": "turn", "angle_deg": %s}}, ' \
+           '{"view": "b"}]}' % literal
+    problem = post_raw(client, body.encode(), status=422)
+    assert problem["field"] == "steps[0].action.angle_deg" and "not a finite number" in problem["detail"]
+
+
+@pytest.mark.parametrize("action, field, words", [
+    ({"type": "travel", "distance_m": -3}, "steps[0].action.distance_m", "greater than 0"),
+    ({"type": "travel", "distance_m": 0}, "steps[0].action.distance_m", "greater than 0"),
+    ({"type": "travel", "distance_m": 1e300}, "steps[0].action.distance_m", "less than or equal to 100000"),
+    ({"type": "turn", "angle_deg": 1e9}, "steps[0].action.angle_deg", "less than or equal to 360"),
+    ({"type": "turn", "angle_deg": False}, "steps[0].action.angle_deg", "valid number"),
+    ({"type": "turn", "angle_deg": "90"}, "steps[0].action.angle_deg", "valid number"),
+    ({"type": "travel", "distance_m": 2, "heading_change_deg": -720}, "steps[0].action.heading_change_deg", "-360"),
+    ({"type": "fly", "distance_m": 2}, "steps[0].action", "unknown action type 'fly'"),
+])
+def test_absurd_numbers_and_types_are_refused_with_the_field(client, action, field, words):
+    problem = refused(client, 422, "POST", "/tableaux", json=tableau({"view": "a", "action": action}, {"view": "b"}))
+    assert problem["field"] == field and words in problem["detail"]
+
+
+def test_an_absurd_laser_range_in_meta_is_refused(client):
+    steps = [{"image": [1.0, 2.0], "action": TURN}, {"image": [2.0, 1.0]}]
+    problem = refused(client, 422, "POST", "/tableaux", json=tableau(*steps, meta={"laser": {"range_max": -1}}))
+    assert problem["field"] == "meta.laser.range_max"
+
+
+@pytest.mark.parametrize("path, status", [("/tableaux/0", 422), ("/tableaux/-1", 422), (f"/tableaux/{2**63}", 422),
+                                          ("/tableaux/1e3", 422), ("/tableaux/999999", 404)])
+def test_absurd_ids_are_refused(client, path, status):
+    refused(client, status, "GET", path)

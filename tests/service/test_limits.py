@@ -1,0 +1,62 @@
+"""Hard solves end cleanly and never stall the server; over the bound of solves, a 503 with Retry-After.
+
+The session server has one solver, one waiting place and a 3 s time limit (kill at 4 s). A tableau of
+one view repeated 5,000 times (all travels) is a hard solve: it ends by the time limit, not by a map.
+"""
+
+import threading
+import time
+
+from bootmap.tableau import FORMAT
+
+ONE_VIEW = {"format": FORMAT, "steps": [{"view": "V", "action": {"type": "travel", "distance_m": 1.0}}] * 4999
+            + [{"view": "V"}]}
+
+
+def test_hard_solves_time_out_cleanly_without_stalling_the_server(client, server, paper_doc, paper_id):
+    outcomes: list = []
+
+    def post_hard():
+        with server.client() as c:
+            t0 = time.monotonic()
+            r = c.post("/tableaux", json=ONE_VIEW)
+            outcomes.append((r, time.monotonic() - t0))
+
+    total = client.get("/tableaux").json()["total"]
+    posters = [threading.Thread(target=post_hard) for _ in range(2)]
+    for p in posters:
+        p.start()
+    _wait_for(lambda: _solves(client) == (1, 1))
+
+    # One solving, one waiting: the line is full. A third solve is refused at once, saying when to retry.
+    t0 = time.monotonic()
+    busy = client.post("/tableaux", json=paper_doc)
+    assert busy.status_code == 503 and time.monotonic() - t0 < 1
+    assert busy.headers["retry-after"] == "3" and busy.headers["content-type"] == "application/problem+json"
+    assert busy.json()["type"].endswith("/solvers-busy")
+
+    # Meanwhile every other request is answered at once: solves run off the event loop.
+    while any(p.is_alive() for p in posters):
+        t0 = time.monotonic()
+        assert client.get(f"/tableaux/{paper_id}/map").status_code == 200
+        assert client.get("/health").status_code == 200
+        assert time.monotonic() - t0 < 0.5
+        time.sleep(0.1)
+
+    for r, seconds in outcomes:
+        assert r.status_code == 422 and r.json()["type"].endswith("/solve-timeout"), r.text
+        assert "time limit" in r.json()["detail"] and seconds < 2 * (3 + 1) + 3  # its own solve and the one before
+    assert client.get("/tableaux").json()["total"] == total
+    assert client.post("/tableaux", json=paper_doc).status_code == 201  # the solver is back
+
+
+def _solves(client) -> tuple[int, int]:
+    h = client.get("/health").json()
+    return h["solves_running"], h["solves_waiting"]
+
+
+def _wait_for(condition, timeout: float = 10) -> None:
+    deadline = time.monotonic() + timeout
+    while not condition():
+        assert time.monotonic() < deadline, "timed out waiting"
+        time.sleep(0.02)
