@@ -17,10 +17,10 @@ from .. import __version__
 from . import problems
 from .deps import Services
 from .models import Problem as ProblemModel
-from .routers import axioms, health, maps, recognise, tableaux
+from .routers import axioms, explanations, health, maps, recognise, tableaux
 from .settings import Settings
 
-ROUTERS = (tableaux.router, maps.router, recognise.router, axioms.router, health.router)
+ROUTERS = (tableaux.router, maps.router, explanations.router, recognise.router, axioms.router, health.router)
 
 DESCRIPTION = """\
 Post a robot's experience (a tableau: views or images at distinctive states, and the actions between

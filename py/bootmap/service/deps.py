@@ -13,7 +13,7 @@ from ..tableau import FORMAT
 from .settings import Settings
 from .store import Store
 from .theory import LoadedTheory, Theories
-from .worker import SolveGate, SolveJob, SolverPool
+from .worker import ExplainJob, SolveGate, SolveJob, SolverPool
 
 
 class Cache:
@@ -65,6 +65,12 @@ class Services:
         """A solve of a tableau document with the current theory, and that theory (its id goes with the map)."""
         theory, s = self.theories.current, self.settings
         return SolveJob(document, str(theory.snapshot), s.solve_time_limit_s, s.quantum_deg, s.max_models), theory
+
+
+    def explain_job(self, document: dict, a: str, b: str, levels: tuple[str, ...] | None) -> ExplainJob:
+        """A question about a tableau document, with the current theory."""
+        theory, s = self.theories.current, self.settings
+        return ExplainJob(document, str(theory.snapshot), s.solve_time_limit_s, a, b, levels, s.quantum_deg)
 
 
 def get_services(request: Request) -> Services:

@@ -222,6 +222,64 @@ class Recognition(Out):
     place: str | None
 
 
+class RuleCited(Out):
+    """A rule of the theory as a proof cites it."""
+
+    name: str = Field(description="Its '%! name' label ('unnamed' without one).")
+    level: str = Field(description="Its level (file stem), or 'core'.")
+    file: str
+    line: int
+
+
+class ProofNodeOut(Out):
+    """An atom of a proof and how it holds: derived by ``rule`` from ``premises``, observed at tableau
+    ``step``, or neither (the supposition, or which dstate a time point is at)."""
+
+    atom: str
+    text: str = Field(description="The atom in words.")
+    rule: RuleCited | None = None
+    step: int | None = None
+    premises: list["ProofNodeOut"] = Field(default_factory=list)
+
+
+ProofNodeOut.model_rebuild()
+
+
+class FailureOut(Out):
+    """An axiom the supposition breaks, and why its premises hold."""
+
+    rule: RuleCited
+    premises: list[ProofNodeOut]
+    merged: list[list[int]] = Field(description="Time points the supposition puts together.")
+
+
+class AlternativeOut(Out):
+    map: int
+    a: str
+    b: str
+    apart: bool
+
+
+class ExplanationOut(Out):
+    """Are time points a and b one dstate, and why (as `bootmap why` explains it)."""
+
+    a: int = Field(description="The time point a stands for.")
+    b: int
+    dstates: list[str] = Field(description="Their dstates in the minimal map with these levels.")
+    verdict: Literal["different", "same", "undecided"]
+    sentence: str
+    evidence: list[int] = Field(description="A subset-minimal set of steps that alone forces them apart.")
+    axioms: list[RuleCited] = Field(description="The constraints the contradiction needs.")
+    failures: list[FailureOut]
+    rules_cited: list[str]
+    agree_steps: int
+    suggestion: list[str] = Field(description="Experience that would test a 'same' verdict.")
+    alternatives: list[AlternativeOut]
+    levels: list[str]
+    stats: dict[str, Any]
+    text: str = Field(description="The whole explanation as text.")
+
+
 class RuleOut(Out):
     name: str
     line: int

@@ -23,7 +23,7 @@ from fastapi.routing import APIRoute
 from starlette.exceptions import HTTPException
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from ..errors import AxiomError, BootmapError, InconsistentTableau, SolveTimeout, TableauError
+from ..errors import AxiomError, BootmapError, ExplainError, InconsistentTableau, SolveTimeout, TableauError
 from .store import Conflict, NotFound
 from .worker import SolverBusy, SolverCrashed, SolverKilled, SolverOutOfMemory
 
@@ -86,6 +86,8 @@ def from_bootmap_error(e: BootmapError) -> Problem:
         return invalid(e.where.split(": ", 1)[-1] if e.where else "", e.reason)
     if isinstance(e, NotFound):
         return not_found(e.tableau_id)
+    if isinstance(e, ExplainError):
+        return Problem(422, "invalid-question", "Invalid question", str(e))
     for cls, status, kind, title in _KINDS:
         if isinstance(e, cls):
             headers = {"Retry-After": str(e.retry_after_s)} if isinstance(e, SolverBusy) else None

@@ -25,7 +25,7 @@ import traceback
 from dataclasses import dataclass
 from typing import Any
 
-from ..errors import AxiomError, BootmapError, InconsistentTableau, SolveTimeout, TableauError
+from ..errors import AxiomError, BootmapError, ExplainError, InconsistentTableau, SolveTimeout, TableauError
 from ..tableau import Tableau
 
 log = logging.getLogger("bootmap.service")
@@ -70,6 +70,27 @@ class SolveJob:
 
 
 @dataclass(frozen=True)
+class ExplainJob:
+    """A question about a stored tableau: are time points (or dstates) ``a`` and ``b`` one dstate, and
+    why? Solved like a map, in a solver process under the same deadline and memory cap."""
+
+    document: dict
+    axioms: str
+    time_limit_s: float
+    a: str
+    b: str
+    levels: tuple[str, ...] | None = None
+    quantum_deg: float = 15.0
+
+
+@dataclass(frozen=True)
+class Explained:
+    explanation: dict     # Explanation.to_dict()
+    text: str             # Explanation.to_text(), as `bootmap why` prints it
+    seconds: float
+
+
+@dataclass(frozen=True)
 class Solved:
     map: dict             # CognitiveMap.to_dict()
     text: str             # CognitiveMap.to_text(): the annotated tableau, as `bootmap map` prints it
@@ -107,10 +128,11 @@ def _serve(conn, memory_mb: int) -> None:
             return
 
 
-def _run(job: SolveJob, cache: dict) -> tuple:
-    """One job -> ("ok", Solved) or a tagged error tuple (exceptions with custom fields do not pickle)."""
+def _run(job: SolveJob | ExplainJob, cache: dict) -> tuple:
+    """One job -> ("ok", Solved | Explained) or a tagged error tuple (exceptions with custom fields do not
+    pickle)."""
     try:
-        return _solve(job, cache)
+        return _explain(job, cache) if isinstance(job, ExplainJob) else _solve(job, cache)
     except MemoryError:  # clingo's bad_alloc under RLIMIT_AS, in the solve or in naming the failing levels
         return ("memory",)
     except Exception:  # a bug: report it, keep serving
@@ -133,6 +155,31 @@ def _solve(job: SolveJob, cache: dict) -> tuple:
         # The resolver had what validation and clustering left of the limit; the user set the whole.
         message = str(e).replace(f"time limit of {resolver.time_limit} s", f"time limit of {job.time_limit_s:g} s")
         return "timeout", message, e.lower_bound, e.best_map
+    except TableauError as e:
+        return "tableau", e.reason, e.where
+    except AxiomError as e:
+        return "axioms", str(e)
+
+
+def _explain(job: ExplainJob, cache: dict) -> tuple:
+    from ..explain import Explainer
+
+    start = time.perf_counter()
+    try:
+        tableau, _ = _views(Tableau.from_dict(job.document, "tableau"))
+        key = ("explain", job.axioms, job.levels, job.quantum_deg)
+        if key not in cache:
+            cache[key] = Explainer(axioms=job.axioms, levels=job.levels, quantum_deg=job.quantum_deg)
+        explainer = cache[key]
+        explainer.time_limit = explainer.resolver.time_limit = max(0.01, job.time_limit_s - (time.perf_counter() - start))
+        e = explainer.explain(tableau, job.a, job.b)
+        return "ok", Explained(e.to_dict(), e.to_text(), time.perf_counter() - start)
+    except ExplainError as e:
+        return "question", str(e)
+    except InconsistentTableau as e:
+        return "inconsistent", str(e), []
+    except SolveTimeout as e:
+        return "timeout", str(e), e.lower_bound, None
     except TableauError as e:
         return "tableau", e.reason, e.where
     except AxiomError as e:
@@ -273,8 +320,8 @@ class SolverPool:
         with self._lock:
             return sum(w.alive() for w in self._workers)
 
-    def solve(self, job: SolveJob) -> Solved:
-        """Solve in a free solver; raises bootmap's exceptions (see :func:`_outcome`)."""
+    def solve(self, job: SolveJob | ExplainJob) -> Solved | Explained:
+        """Solve (or explain) in a free solver; raises bootmap's exceptions (see :func:`_outcome`)."""
         worker = self._idle.get()
         with self._lock:
             self.busy += 1
@@ -305,7 +352,7 @@ class SolverPool:
             w.stop()
 
 
-def _outcome(reply: tuple, memory_mb: int) -> Solved:
+def _outcome(reply: tuple, memory_mb: int) -> Solved | Explained:
     kind, *rest = reply
     if kind == "ok":
         return rest[0]
@@ -319,6 +366,8 @@ def _outcome(reply: tuple, memory_mb: int) -> Solved:
         raise TableauError(rest[0], rest[1])
     if kind == "axioms":
         raise AxiomError(rest[0])
+    if kind == "question":
+        raise ExplainError(rest[0])
     if kind == "memory":
         raise SolverOutOfMemory(f"the solve needed more than this server's solver memory of {memory_mb} MiB "
                                 "(BOOTMAP_SOLVER_MEMORY_MB)")
@@ -339,7 +388,7 @@ class SolveGate:
     def waiting(self) -> int:
         return max(0, self.admitted - self.pool.busy)
 
-    async def solve(self, job: SolveJob) -> Solved:
+    async def solve(self, job: SolveJob | ExplainJob) -> Solved | Explained:
         import anyio
 
         if self.admitted >= self.capacity:

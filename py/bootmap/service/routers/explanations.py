@@ -1,0 +1,53 @@
+"""Explanations: why two dstates of a stored tableau differ, or why they are the same (`bootmap why`)."""
+
+from __future__ import annotations
+
+import json
+from typing import Annotated
+
+from fastapi import APIRouter, Query
+from fastapi.concurrency import run_in_threadpool
+
+from ..deps import ServicesDep, TableauId
+from ..models import ExplanationOut
+from ..problems import JSONRoute, invalid, openapi_responses
+
+router = APIRouter(prefix="/tableaux/{tableau_id}", tags=["explanations"], route_class=JSONRoute)
+
+# A time point (t4 or 4) or a dstate name of the map (S4).
+POINT = r"^(t?[0-9]{1,9}|S[0-9]{1,9})$"
+Point = Annotated[str, Query(pattern=POINT, description="A time point (t4 or 4) or a dstate (S4).")]
+
+
+@router.get("/why", response_model=ExplanationOut, responses=openapi_responses(404, 422, 500, 503),
+            summary="Why two dstates differ, or why they are the same")
+async def why(tableau_id: TableauId, a: Point, b: Point, services: ServicesDep,
+              levels: Annotated[str | None, Query(pattern=r"^[a-z][a-z0-9_]*(,[a-z][a-z0-9_]*)*$",
+                                                  description="Levels to use, e.g. causal,topological "
+                                                              "(default: all); a pair may have a proof at "
+                                                              "each.")] = None) -> ExplanationOut:
+    """If every minimal map keeps a and b apart: a subset-minimal set of steps that alone forces them
+    apart, the axioms the contradiction needs, and the chain of rule instances (each citing its
+    '%! name', file and line) from those steps to the failing axiom. If they are the same: why
+    (minimality) and what experience would test it. If minimal maps disagree: which of them keep a and b
+    apart. Dstate names (S4) are those of the minimal map with the chosen levels."""
+    chosen = _levels(levels, services)
+    record = await run_in_threadpool(services.store.get, tableau_id)
+    job = services.explain_job(json.loads(record.document), a, b, chosen)
+    explained = await services.gate.solve(job)
+    return ExplanationOut.model_validate({**explained.explanation, "text": explained.text})
+
+
+def _levels(levels: str | None, services) -> tuple[str, ...] | None:
+    if levels is None:
+        return None
+    chosen = tuple(levels.split(","))
+    known = list(services.theories.current.theory.levels)
+    unknown = [lv for lv in chosen if lv not in known]
+    if unknown:
+        raise invalid("levels", f"unknown level(s) {', '.join(unknown)}; the theory has: {', '.join(known)}",
+                      kind="invalid-request")
+    if "causal" not in chosen:
+        raise invalid("levels", "the causal level cannot be switched off: it defines what a dstate is",
+                      kind="invalid-request")
+    return chosen
