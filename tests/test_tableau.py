@@ -112,3 +112,17 @@ def test_any_well_formed_tableau_round_trips(rows, last):
     t = Tableau.from_dict(doc(steps))
     assert len(t) == len(steps)
     assert Tableau.loads(json.dumps(t.to_dict())) == t
+
+
+def test_an_integer_beyond_any_float_is_refused_by_name():
+    text = '{"format": "bootmap.tableau/1", "steps": [{"image": [1' + "0" * 400 + "]}]}"
+    with pytest.raises(TableauError, match=r"steps\[0\]\.image\[0\]: a number of 401 digits is too large"):
+        Tableau.loads(text)
+
+
+def test_a_nul_in_a_view_label_is_refused():
+    # clingo holds strings as C strings: "a\0b" and "a\0c" would be one view.
+    doc = {"format": "bootmap.tableau/1", "steps": [{"view": "a\u0000b"}]}
+    with pytest.raises(TableauError, match=r"steps\[0\]\.view: .*NUL"):
+        Tableau.from_dict(doc)
+    assert Tableau.from_dict({"format": "bootmap.tableau/1", "steps": [{"view": "a). #script (python)"}]})

@@ -202,6 +202,8 @@ def _check_schema(data: Any, source: str) -> None:
         msg = f"unknown action type {err.instance!r} (expected 'turn' or 'travel')"
     elif err.validator == "const" and list(err.absolute_path) == ["format"]:
         msg = f"unsupported format {err.instance!r} (expected {FORMAT!r})"
+    elif err.validator == "pattern" and list(err.absolute_path)[-1:] == ["view"]:
+        msg = "a view label cannot contain the NUL character (clingo would cut the label there)"
     elif err.validator == "minItems" and list(err.absolute_path) == ["steps"]:
         msg = "a tableau needs at least one step"
     else:
@@ -210,9 +212,15 @@ def _check_schema(data: Any, source: str) -> None:
 
 
 def _finite(x: float, where: str) -> float:
-    if isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x):
+    if isinstance(x, bool) or not isinstance(x, (int, float)):
+        raise TableauError(f"{x!r} is not a number", where)
+    try:
+        value = float(x)
+    except OverflowError:  # an integer literal beyond any float
+        raise TableauError(f"a number of {len(str(abs(x)))} digits is too large", where) from None
+    if not math.isfinite(value):
         raise TableauError(f"{x!r} is not a finite number", where)
-    return float(x)
+    return value
 
 
 def _step(d: dict, i: int, last: bool, source: str) -> Step:

@@ -19,7 +19,7 @@ from ..tableau import FORMAT
 
 STRICT = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
 # clingo holds strings as C strings: a label "a\u0000b" would reach the solver as "a", the same view as
-# "a\u0000c". The JSON Schema does not say so (yet); the service refuses NUL in labels.
+# "a\u0000c". The JSON Schema refuses NUL in labels, and so does this model.
 NO_NUL = "^[^\\x00]*$"
 
 
