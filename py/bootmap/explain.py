@@ -529,13 +529,6 @@ def _sentence(e: Explanation, tableau: Tableau) -> str:
     return f"{head}: if they were, {because} - which {f.rule.name} forbids. The experience that shows it: {told}."
 
 
-def _steps(node: ProofNode) -> list[int]:
-    out = [node.step] if node.step is not None else []
-    for p in node.premises:
-        out += _steps(p)
-    return out
-
-
 def _step_text(tableau: Tableau, t: int, last: bool) -> str:
     """A step of the evidence: its view and, unless the next step is not evidence, its action."""
     act = "" if last else action_text(tableau.steps[t].action)
