@@ -223,6 +223,7 @@ class _Search:
         return None
 
     def bound_classes_from_below(self) -> None:
+        self._check_clock("the lower bounds")
         self.depth = self.resolver.future_depth
         prepass = self.resolver.ground_prepass(self.facts, self.depth)
         self.classes.lower = self.resolver.lower_bounds(prepass, self.classes)
@@ -261,6 +262,8 @@ class _Search:
     def _solve(self, layout, what: str, models: int | None = None, optimise: bool = False,
                keep: bool = False) -> "_Outcome":
         """Ground and solve; on time-out raise SolveTimeout with the best map known."""
+        if self.classes is not None:  # the first try always runs: its classes bound the answer
+            self._check_clock(what)
         r = self.resolver
         options = [str(r.max_models + 1 if models is None else models)]
         if optimise:
@@ -291,6 +294,11 @@ class _Search:
                 self.proved = self.classes.count
             raise self._timed_out(what, improving)
         return _Outcome(verdict, optimal, bool(result.exhausted), ctl if keep else None)
+
+    def _check_clock(self, what: str) -> None:
+        """Out of time before a grounding starts: stop here (clingo cannot interrupt a grounding)."""
+        if self.deadline is not None and time.perf_counter() >= self.deadline:
+            raise self._timed_out(what, [])
 
     def _timed_out(self, what: str, improving: list) -> SolveTimeout:
         if improving:  # the optimiser's last (smallest) model so far
