@@ -88,9 +88,9 @@ def test_schema_prints_the_json_schema():
 
 def test_map_of_a_simulated_run_clusters_its_images_first(tmp_path):
     run = tmp_path / "run.json"
-    sim = bootmap("simulate", "notched_rectangle", "--policy", "circuits", "--circuits", "3", "--seed", "1", "-o", run)
+    sim = bootmap("simulate", "notched_rectangle", "--policy", "circuits", "--circuits", "10", "--seed", "1", "-o", run)
     assert sim.returncode == 0, sim.stderr
     out = bootmap("map", run)
     assert out.returncode == 0, out.stderr
-    assert "clustered 24 images into 4 views" in out.stderr
+    assert "clustered 80 images into 4 views" in out.stderr
     assert out.stdout.startswith("8 dstates, 4 places, 4 paths")

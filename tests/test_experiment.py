@@ -28,8 +28,9 @@ def test_notched_rectangle_reproduces_the_paper(notched):
         assert max(abs(a - b) for a, b in zip(nearest, (row["left"], row["front"], row["right"]))) < 0.25
     m = r["map"]
     assert (m["dstates"], m["places"], m["paths"]) == (8, 4, 4) and m["unique"] and m["proved_minimal"]
-    assert m["dstate_accuracy"] == 1.0 and not m["merged_true_dstates"]
+    assert m["dstate_accuracy"] == 1.0 and not m["merged_true_dstates"] and not m["split_true_dstates"]
     assert r["recognition"]["cv_at_90"] >= 0.85  # the paper: about 90% after about 90 images
+    assert all(r["checks"].values())
 
 
 def test_report_and_figures_are_written(notched):
@@ -37,16 +38,45 @@ def test_report_and_figures_are_written(notched):
     assert json.loads((out / "results.json").read_text())["map"]["dstates"] == 8
     report = (out / "report.md").read_text()
     assert "k chosen by M: **4**" in report and "8 dstates, 4 places, 4 paths" in report
+    assert "- k by M is the largest k with U = 1: yes" in report and "All of it holds." in report
     for name in ("views_M_U.png", "learning_curves.png", "world_map.png"):
         assert (out / name).stat().st_size > 10_000
 
 
 def test_a_map_that_is_not_proved_minimal_is_reported_as_such(tmp_path):
-    # Taylor Hall, short run: the clustering finds too few views for the resolver to finish in 2 s.
-    r = run_experiment("taylor_hall", steps=40, seed=1, out_dir=tmp_path, time_limit=2.0)
+    # Taylor Hall with every image in one view (k at most 1): too little for the resolver to finish in 2 s.
+    r = run_experiment("taylor_hall", steps=40, seed=1, out_dir=tmp_path, time_limit=2.0, k_max=1)
     m = r["map"]
     assert "error" in m or not m["proved_minimal"]
-    assert "not proved minimal" in (tmp_path / "report.md").read_text() or "No map" in (tmp_path / "report.md").read_text()
+    report = (tmp_path / "report.md").read_text()
+    assert "not proved minimal" in report or "No map" in report
+    assert not r["checks"]["map is the true topology"] and "**Not everything holds**" in report
+
+
+def test_true_dstates_the_map_merges_or_splits_are_named_not_claimed_a_success():
+    # A map that put the paper's S0 and S4 (diagonally opposite corners, the same view) on one dstate,
+    # and took P1:E for two: the results and the report say so, and the checks fail.
+    from types import SimpleNamespace
+
+    from bootmap.experiment import _map_section, _report_text, checks
+    from bootmap.world import load_world
+
+    truth = ["P0:N", "P0:E", "P1:E", "P1:S", "P2:S", "P2:W", "P3:W", "P3:N", "P0:N", "P1:E"]
+    found = ["S0", "S1", "S2", "S3", "S0", "S5", "S6", "S7", "S0", "S8"]
+    cmap = SimpleNamespace(dstate_of=found, n_dstates=8, n_places=4, n_paths=4, unique=True, minimal=True,
+                           stats={"total_s": 0.01})
+    m = {**_map_section(cmap, truth, load_world("notched_rectangle")), "proved_minimal": True, "note": None}
+    assert m["merged_true_dstates"] == {"S0": ["P0:N", "P2:S"]}
+    assert m["split_true_dstates"] == {"P1:E": ["S2", "S8"]}
+    r = {"world": "notched_rectangle", "seed": 1, "images": len(truth), "map": m, "recognition": None,
+         "timings": {}, "views": {"k": 4, "largest_k_with_U_1": 4, "table": []}}
+    r["checks"] = checks(r)
+    assert (m["dstates"], m["places"], m["paths"]) == (8, 4, 4)  # the counts alone would look right
+    assert not r["checks"]["every image on its dstate"]
+    report = _report_text(r)
+    assert "**The map could not tell these true dstates apart** (map dstate: true dstates): S0: P0:N, P2:S" in report
+    assert "**The map took these true dstates for several** (true dstate: map dstates): P1:E: S2, S8" in report
+    assert "- every image on its dstate: **no**" in report and "**Not everything holds**" in report
 
 
 def test_experiment_command_exits_0_and_names_the_report(tmp_path):
@@ -66,7 +96,8 @@ def test_seeds_report_mean_and_spread(tmp_path):
     assert nn["min"] == min(nn["values"]) and nn["max"] == max(nn["values"])
     assert nn["mean"] == pytest.approx(sum(nn["values"]) / 2)
     assert (tmp_path / "seed_1" / "report.md").exists() and (tmp_path / "seed_2" / "report.md").exists()
-    assert "| k by M | 4, 4 | 4 | 4 - 4 |" in (tmp_path / "summary.md").read_text()
+    summary = (tmp_path / "summary.md").read_text()
+    assert "| k by M | 4 | 4, 4 | 4 | 4 - 4 |" in summary  # the paper's figure, then ours
 
 
 @pytest.mark.parametrize("text,seeds", [("1,2,3", [1, 2, 3]), ("1-5", [1, 2, 3, 4, 5]), ("7", [7])])

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from sklearn.neighbors import KNeighborsClassifier
 
-from bootmap.recognise import (Recogniser, compare_clusterers, compare_learners, learning_curve_cv,
-                               online_curve, online_hits)
+from bootmap.recognise import (Recogniser, compare_clusterers, compare_learners, default_learners,
+                               learning_curve_cv, online_curve, online_hits)
 
 
 def blobs(n_per=30, n_states=8, dim=180, spread=1.0, seed=0, order="circuits"):
@@ -137,8 +137,24 @@ def test_compare_learners_returns_every_learner_with_accuracies_in_unit_interval
         assert r["sizes"] == [30, 60, 90]
         assert all(0.0 <= a <= 1.0 for a in r["accuracy"])
         assert all(t >= 0 for t in r["fit_time"])
-    again = compare_learners(X, y, at=(30, 60, 90))
-    assert [r["accuracy"] for r in rows] == [r["accuracy"] for r in again]
+    # Seeded throughout, grid searches included: the same answer again (checked on two of them, at one
+    # size, to keep the test quick).
+    again = compare_learners(X, y, at=(30,), learners={k: v for k, v in default_learners().items()
+                                                         if k in ("1-NN", "RBF SVM")})
+    assert [r["accuracy"][0] for r in rows if r["learner"] in ("1-NN", "RBF SVM")] == pytest.approx(
+        [r["accuracy"][0] for r in again])
+
+
+@pytest.mark.filterwarnings("ignore::sklearn.exceptions.ConvergenceWarning")
+def test_rbf_svm_and_mlp_choose_their_settings_by_grid_search_inside_the_fit():
+    from sklearn.model_selection import GridSearchCV
+
+    learners = default_learners()
+    X, y = blobs(n_per=10, dim=20, spread=1.0)
+    for name in ("RBF SVM", "MLP (32)"):
+        assert isinstance(learners[name], GridSearchCV)
+        fitted = learners[name].fit(X[:60], y[:60])
+        assert fitted.best_params_ and fitted.score(X[60:], y[60:]) > 0.5
 
 
 def test_compare_clusterers_scores_views_against_dstates():
@@ -187,14 +203,17 @@ def notched_15():
     return X, y
 
 
-def test_notched_rectangle_online_1nn_about_90_percent_after_90_images(notched_15):
+def test_notched_rectangle_online_1nn_about_90_percent_after_90_images():
     # The paper's online protocol: predict each image's dstate from all earlier ones, then store it.
     # Once 90 images are stored, the next ones are recognised about 90% of the time. (The cumulative
-    # curve at 90 is lower: it counts the unavoidable miss at the first sight of every dstate.)
-    X, y = notched_15
+    # curve at 90 is lower: it counts the unavoidable miss at the first sight of every dstate.) Scored
+    # over the 110 images after the 90th: over 30 images, one seed's rate swings by +-0.1 by luck.
+    sim = pytest.importorskip("bootmap.sim")
+    t = sim.simulate("notched_rectangle", policy="circuits", circuits=25, seed=1)
+    X, y = np.array([s.image for s in t.steps]), np.array([s.truth for s in t.steps])
     hits = online_hits(X, y)
-    assert len(y) >= 120
-    assert hits[90:120].mean() >= 0.85
+    assert len(y) == 200
+    assert hits[90:].mean() >= 0.85
 
 
 def test_notched_rectangle_cv_curve_at_90_images(notched_15):

@@ -134,6 +134,22 @@ def test_drop_outs_do_not_change_the_chosen_k(blobs):
     assert model.largest_k_with_u1_ == 4
 
 
+def test_a_few_beams_that_swing_by_metres_make_m_choose_one_view():
+    # Why Taylor Hall's first images gave k = 1: 8 tight views, but in each a few beams (grazing a far
+    # wall, passing the edge of an opening) swing by metres between visits. M, a mean of squared
+    # distances, is ruled by those beams; U still finds the 8 views.
+    rng = np.random.default_rng(0)
+    views = np.repeat(np.arange(8), 12)
+    clean = np.repeat(rng.uniform(0.5, 8.0, (8, 180)), 12, axis=0) + rng.normal(0, 0.01, (96, 180))
+    assert ViewClusterer(k_max=12).fit(clean, views).k_ == 8
+    swinging = clean.copy()
+    for v in range(8):
+        rows, beams = np.flatnonzero(views == v), rng.choice(180, 4, replace=False)
+        swinging[np.ix_(rows, beams)] += rng.normal(0, 2.0, (len(rows), 4))
+    model = ViewClusterer(k_max=12).fit(swinging, views)
+    assert model.k_ == 1 and model.largest_k_with_u1_ == 8
+
+
 def test_repair_keeps_open_directions_and_fills_single_drop_outs():
     scan = np.array([[9.5, 9.0, 8.5, 1.0, 8.0, 1.2, 2.0, 8.0]])
     assert repair_dropouts(scan, MAX_RANGE).tolist() == [[8.0, 8.0, 8.0, 1.0, 1.1, 1.2, 2.0, 2.0]]

@@ -135,14 +135,21 @@ def _print_summary(r: dict) -> None:
     v, m, rec = r["views"], r["map"], r["recognition"]
     print(f"{r['world']} (seed {r['seed']}): {r['images']} images; views: k = {v['k']} by M, "
           f"largest k with U = 1: {v['largest_k_with_U_1']}")
+    failed = [name for name, ok in r.get("checks", {}).items() if not ok]
+    verdict = "the paper's figures: all hold" if not failed else f"the paper's figures: NOT ({'; '.join(failed)})"
     if "error" in m:
         print(f"  map: none ({m['error']})")
+        print(f"  {verdict}")
         return
     print(f"  map: {m['dstates']} dstates, {m['places']} places, {m['paths']} paths "
           f"(truth {m['true_dstates']}, {m['true_places']}, {m['true_paths']}); "
           f"{m['dstate_accuracy']:.1%} of images on the right dstate")
+    if m.get("merged_true_dstates"):
+        print("  the map could not tell apart: " +
+              "; ".join(", ".join(ts) for ts in m["merged_true_dstates"].values()))
     if rec and rec["cv_at_90"] is not None:
         print(f"  recognition: nearest neighbour {rec['cv_at_90']:.1%} at 90 images (10-fold CV)")
+    print(f"  {verdict}")
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
@@ -150,10 +157,15 @@ def cmd_demo(args: argparse.Namespace) -> int:
     from .experiment import run_experiment
     from .resolver import Resolver
 
-    print("The paper's experiment, from simulation: notched rectangle, 50 clockwise circuits.\n")
-    r = run_experiment("notched_rectangle", circuits=50, seed=1, out_dir="out/notched_rectangle", progress=True)
-    _print_summary(r)
-    print("  report: out/notched_rectangle/report.md\n")
+    runs = [("notched_rectangle", "notched rectangle, 50 clockwise circuits (the paper's Figure 2)", {"circuits": 50}),
+            ("taylor_hall", "Taylor Hall, 100 dstates of exploration (the paper's Figure 5)", {"steps": 100})]
+    reports = []
+    for world, title, kw in runs:
+        print(f"The paper's experiment, from simulation: {title}.\n")
+        r = run_experiment(world, seed=1, out_dir=f"out/{world}", progress=True, **kw)
+        _print_summary(r)
+        reports.append(f"out/{world}/report.md")
+        print(f"  report: {reports[-1]}\n")
     tableau = examples.notched_rectangle(circuits=50)
     print("The paper's tableau itself: 401 time points, 4 views.\n")
     cmap = Resolver().resolve(tableau)
@@ -162,6 +174,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
         m = Resolver(levels=levels).resolve(tableau)
         print(f"\nwith levels {','.join(levels)}: {m.n_dstates} dstates, {m.n_places} places, "
               f"{m.n_paths} paths ({m.stats['total_s']:.3f} s)")
+    print("\nreports: " + ", ".join(reports))
     return EXIT_OK
 
 
@@ -217,7 +230,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("world", help="world file, or the name of one in worlds/")
     runs = p.add_mutually_exclusive_group()
     runs.add_argument("--circuits", type=int, metavar="N", help="circuits of a room (circuits policy; default 50)")
-    runs.add_argument("--steps", type=int, metavar="N", help="dstates to record")
+    runs.add_argument("--steps", type=int, metavar="N",
+                      help="dstates to record (explore policy; default 100, the paper's Taylor Hall run)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--seeds", type=_seeds, metavar="S1,S2,...",
                    help="repeat over these seeds (e.g. 1,2,3,4,5 or 1-5) and report mean and spread")
@@ -226,9 +240,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", default="out", metavar="DIR", help="output directory (default out/)")
     p.set_defaults(handler=cmd_experiment)
 
-    p = sub.add_parser("demo", help="run the main job: the paper's experiment on the notched rectangle",
-                       description="Run the experiment on the notched rectangle (report in out/), then resolve the "
-                                   "paper's 401-step tableau with every level and with each level switched off.")
+    p = sub.add_parser("demo", help="run the main job: the paper's experiment on both of its worlds",
+                       description="Run the experiment on the notched rectangle and on Taylor Hall (reports in "
+                                   "out/notched_rectangle and out/taylor_hall), then resolve the paper's 401-step "
+                                   "tableau with every level and with each level switched off.")
     p.set_defaults(handler=cmd_demo)
 
     _register_optional(sub)

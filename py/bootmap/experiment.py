@@ -9,7 +9,9 @@
    curve and 10-fold cross-validated learning curves.
 
 ``run_experiment`` returns the results as a dict and, given ``out_dir``, writes ``results.json``,
-``report.md`` and figures there.
+``report.md`` and figures there. The results include :func:`checks`, what the paper's experiment must
+show, each True or False; the report says which hold, and names the true dstates a map merged or split
+rather than claim success. ``run_seeds`` repeats it over seeds with the paper's figures alongside.
 """
 
 from __future__ import annotations
@@ -30,17 +32,25 @@ from .views import ViewClusterer, view_labels, view_table
 from .world import World, load_world
 
 CURVE_SIZES = (10, 20, 30, 40, 50, 60, 70, 80, 90)
+PAPER_CIRCUITS = 50  # the paper's notched-rectangle run: 50 circuits, 400 images
+PAPER_EXPLORE_STEPS = 100  # the paper's Taylor Hall run: 100 images
+NN_TARGET = 0.85  # nearest neighbour after 90 images: the paper reports about 90% and 88%
 
 
 def run_experiment(world: str | World, circuits: int | None = None, steps: int | None = None, seed: int = 0,
                    out_dir: str | Path | None = None, k_max: int = 12, progress: bool = False,
-                   time_limit: float = 60.0) -> dict:
+                   time_limit: float = 60.0, levels: list[str] | None = None) -> dict:
     """Run the experiment on one world; see the module docstring.
 
+    The run length defaults to the paper's: 50 circuits of a room (``circuits`` policy), 100 dstates of
+    an explored hallway (``explore`` policy). ``levels`` restricts the map's axioms (default: all).
     A map that is not proved minimal in ``time_limit`` seconds is reported as such (with the best map
     found, if any) rather than raised: the report says what was and was not achieved.
     """
     world = world if isinstance(world, World) else load_world(world)
+    policy = world.policy or "circuits"
+    if steps is None and circuits is None and policy == "explore":
+        steps = PAPER_EXPLORE_STEPS
     clock, timings = time.perf_counter(), {}
 
     def lap(name: str) -> None:
@@ -49,7 +59,7 @@ def run_experiment(world: str | World, circuits: int | None = None, steps: int |
         timings[name] = round(now - clock, 3)
         clock = now
 
-    tableau = simulate(world, policy=world.policy or "circuits", circuits=circuits or 50, steps=steps, seed=seed,
+    tableau = simulate(world, policy=policy, circuits=circuits or PAPER_CIRCUITS, steps=steps, seed=seed,
                        progress=progress)
     lap("simulate_s")
     images = np.array([s.image for s in tableau.steps], dtype=float)
@@ -58,14 +68,15 @@ def run_experiment(world: str | World, circuits: int | None = None, steps: int |
     views = view_labels(clusterer.labels_)
     lap("views_s")
     try:
-        cmap, map_note = Resolver(time_limit=time_limit).resolve(tableau.with_views(views)), None
+        cmap, map_note = Resolver(time_limit=time_limit, levels=levels).resolve(tableau.with_views(views)), None
     except SolveTimeout as e:
         cmap, map_note = e.best_map, str(e)
     lap("map_s")
     if cmap is None:
         results = {"world": world.name, "seed": seed, "images": len(images),
-                   "views": _views_section(clusterer, images, views), "map": {"error": map_note},
+                   "views": _views_section(clusterer, images, views, truth), "map": {"error": map_note},
                    "recognition": None, "timings": timings}
+        results["checks"] = checks(results)
         if out_dir is not None:
             write_report(results, Path(out_dir), world, tableau, None)
         return results
@@ -73,12 +84,12 @@ def run_experiment(world: str | World, circuits: int | None = None, steps: int |
     labels = cmap.dstate_of
     online = online_curve(images, labels)
     hits = online_hits(images, labels)
-    cv = learning_curve_cv(images, labels, sizes=[n for n in CURVE_SIZES if n < 0.9 * len(images)],
-                           random_state=seed)
+    n_train = len(images) - -(-len(images) // 10)  # the smallest training set of 10-fold CV: 90 of 100
+    cv = learning_curve_cv(images, labels, sizes=[n for n in CURVE_SIZES if n <= n_train], random_state=seed)
     lap("recognise_s")
     results = {
         "world": world.name, "seed": seed, "images": len(images),
-        "views": _views_section(clusterer, images, views),
+        "views": _views_section(clusterer, images, views, truth),
         "map": {**_map_section(cmap, truth, world), "proved_minimal": cmap.minimal, "note": map_note},
         "recognition": {
             "online_accuracy": [float(x) for x in np.asarray(online)],
@@ -88,28 +99,54 @@ def run_experiment(world: str | World, circuits: int | None = None, steps: int |
             "cv_at_90": cv.at(90) if 90 in cv.sizes else None},
         "timings": timings,
     }
+    results["checks"] = checks(results)
     if out_dir is not None:
         write_report(results, Path(out_dir), world, tableau, cmap)
     return results
 
 
-def _views_section(clusterer, images, views) -> dict:
+def checks(r: dict) -> dict:
+    """What the paper's experiment must show, checked on one run's results (each True or False).
+
+    - ``k by M is the largest k with U = 1``: the internal measure picks the views that remove all image
+      variability and no more (U is computed against the true dstates);
+    - ``map is the true topology``: as many dstates, places and paths as the world's truth;
+    - ``every image on its dstate``: 100% of images on the right dstate, up to renaming (so no true
+      dstates merged, none split);
+    - ``nearest neighbour at 90 images >= 85%``: 10-fold cross-validated, images labelled by the map.
+    """
+    v, m, rec = r["views"], r["map"], r["recognition"] or {}
+    nn = rec.get("cv_at_90")
+    return {
+        "k by M is the largest k with U = 1": v["largest_k_with_U_1"] is not None and v["k"] == v["largest_k_with_U_1"],
+        "map is the true topology": "error" not in m and bool(m.get("proved_minimal")) and
+        (m["dstates"], m["places"], m["paths"]) == (m["true_dstates"], m["true_places"], m["true_paths"]),
+        "every image on its dstate": "error" not in m and m.get("dstate_accuracy") == 1.0,
+        f"nearest neighbour at 90 images >= {NN_TARGET:.0%}": nn is not None and nn >= NN_TARGET,
+    }
+
+
+def _views_section(clusterer, images, views, truth) -> dict:
     return {"k": int(clusterer.k_), "ks": [int(k) for k in clusterer.ks_],
             "M": [float(x) for x in clusterer.internal_],
             "U": None if getattr(clusterer, "uncertainty_", None) is None else [float(x) for x in clusterer.uncertainty_],
             "largest_k_with_U_1": clusterer.largest_k_with_u1_,
-            "table": _jsonable(view_table(images, views)), "labels": views}
+            "table": _jsonable(view_table(images, views)), "labels": views,
+            "truth": list(truth)}  # the true dstate of every image (evaluation only)
 
 
 def _map_section(cmap, truth, world) -> dict:
-    merged = defaultdict(set)
+    merged, split = defaultdict(set), defaultdict(set)
     for t, d in zip(truth, cmap.dstate_of):
         merged[d].add(t)
+        split[t].add(d)
     return {"dstates": cmap.n_dstates, "places": cmap.n_places, "paths": cmap.n_paths, "unique": cmap.unique,
             "true_dstates": len(set(truth)), "true_places": len(world.places), "true_paths": len(world.paths),
             "dstate_accuracy": dstate_accuracy(truth, cmap.dstate_of),
             # Say which true dstates the map could not tell apart, rather than claim success.
             "merged_true_dstates": {d: sorted(ts) for d, ts in merged.items() if len(ts) > 1},
+            # ... and which true dstates it took for several.
+            "split_true_dstates": {t: sorted(ds) for t, ds in split.items() if len(ds) > 1},
             "solve_s": cmap.stats.get("total_s")}
 
 
@@ -187,14 +224,35 @@ def _report_text(r: dict) -> str:
                   f"(truth: {m['true_dstates']}, {m['true_places']}, {m['true_paths']}); "
                   f"dstate accuracy {m['dstate_accuracy']:.1%} up to renaming; unique: {m['unique']}.", ""]
         if m["merged_true_dstates"]:
-            lines += ["The map could not tell these true dstates apart: " +
+            lines += ["**The map could not tell these true dstates apart** (map dstate: true dstates): " +
                       "; ".join(f"{d}: {', '.join(ts)}" for d, ts in m["merged_true_dstates"].items()), ""]
+        if m.get("split_true_dstates"):
+            lines += ["**The map took these true dstates for several** (true dstate: map dstates): " +
+                      "; ".join(f"{t}: {', '.join(ds)}" for t, ds in m["split_true_dstates"].items()), ""]
     if rec is not None and rec["cv_at_90"] is not None:
         lines += [f"Nearest neighbour, images labelled by the resolved dstates: {rec['cv_at_90']:.1%} at 90 "
                   f"images (10-fold cross-validation); online, once 90 images are stored: "
                   f"{rec['online_after_90']:.1%}.", "", "![learning curves](learning_curves.png)", ""]
+    lines += _checks_text([r])
     lines += ["![the run](world_map.png)", "", f"Timings (s): {r['timings']}", ""]
     return "\n".join(lines)
+
+
+def _checks_text(runs: list[dict]) -> list[str]:
+    """The paper's must-show figures, checked: what holds on every run, and where what does not."""
+    names = list(runs[0]["checks"])
+    lines = ["## What the paper's experiment must show", ""]
+    for name in names:
+        failed = [r["seed"] for r in runs if not r["checks"][name]]
+        if not failed:
+            where = "yes" if len(runs) == 1 else f"yes, on every seed ({len(runs)})"
+        else:
+            where = "**no**" if len(runs) == 1 else f"**no** on seed(s) {', '.join(map(str, failed))}"
+        lines.append(f"- {name}: {where}")
+    ok = all(all(r["checks"].values()) for r in runs)
+    lines += ["", "All of it holds." if ok and len(runs) == 1 else
+              "All of it holds on every seed." if ok else "**Not everything holds** (above).", ""]
+    return lines
 
 
 def run_seeds(world: str | World, seeds: list[int], out_dir: str | Path | None = None, **kwargs) -> dict:
@@ -227,6 +285,17 @@ _FIGURES = {
 }
 
 
+# What the paper reports for its two environments, by figure ("-" where it gives no number).
+PAPER_FIGURES = {
+    "notched_rectangle": {"images": "400 (50 circuits)", "k by M": "4", "largest k with U = 1": "4",
+                          "dstates": "8", "places": "4", "paths": "4", "dstate accuracy": "-",
+                          "1-NN at 90 images (CV)": "about 0.9"},
+    "taylor_hall": {"images": "100", "k by M": "8", "largest k with U = 1": "8", "dstates": "20",
+                    "places": "7", "paths": "4", "dstate accuracy": "1 (all 20 dstates told apart)",
+                    "1-NN at 90 images (CV)": "0.88"},
+}
+
+
 def _spread(values: list) -> dict:
     known = [float(v) for v in values if v is not None]
     if not known:
@@ -236,11 +305,14 @@ def _spread(values: list) -> dict:
 
 
 def _summary_text(out: dict) -> str:
+    paper = PAPER_FIGURES.get(out["world"], {})
     lines = [f"# {out['world']}: seeds {', '.join(map(str, out['seeds']))}", "",
-             "| figure | per seed | mean | spread (min - max) |", "|---|---|---|---|"]
+             "| figure | paper | per seed | mean | spread (min - max) |", "|---|---|---|---|---|",
+             f"| images | {paper.get('images', '-')} | {', '.join(str(r['images']) for r in out['runs'])} | | |"]
     for name, s in out["summary"].items():
         per_seed = ", ".join("-" if v is None else f"{v:.3g}" for v in s["values"])
         mean = "-" if s["mean"] is None else f"{s['mean']:.3g}"
         spread = "-" if s["min"] is None else f"{s['min']:.3g} - {s['max']:.3g}"
-        lines.append(f"| {name} | {per_seed} | {mean} | {spread} |")
+        lines.append(f"| {name} | {paper.get(name, '-')} | {per_seed} | {mean} | {spread} |")
+    lines += [""] + _checks_text(out["runs"])
     return "\n".join(lines) + "\n"

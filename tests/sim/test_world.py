@@ -41,7 +41,7 @@ def test_taylor_hall_truth_is_the_papers_topology():
     w = load_world("taylor_hall")
     assert (len(w.places), len(w.paths), w.truth_dstates) == (7, 4, 20)
     xs = w.boundary[:, 0]
-    assert xs.max() - xs.min() == pytest.approx(80)
+    assert xs.max() - xs.min() == pytest.approx(80, abs=0.05)  # 80 m, and a door recessed in the east end
 
 
 def test_a_world_can_be_named_or_given_as_a_path():

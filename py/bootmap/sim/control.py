@@ -7,9 +7,11 @@ then reports the tableau action it performed, measured by odometry.
 
 ``Travel`` follows a wall on one side at a set distance (the paper's room circuits) or the middle of a
 corridor (hallways), then hill-climbs: to ``stop_distance`` from the wall ahead, or, at a side opening,
-to where the opening is symmetric about the robot (the near edge by odometry, where the side beams
-opened; the far edge in the scan). ``Turn`` rotates by odometry and then hill-climbs to alignment with
-the walls of the new path.
+to where the opening is symmetric about the robot: the near edge is seen in the scan before the robot
+reaches it and carried by odometry, the far edge is seen in the scan; once the opening's width is known
+the stop is where the far edge is half of it ahead. ``Turn`` rotates by odometry and then hill-climbs
+to alignment with the walls of the new path. Travel distances are odometry's signed progress: backing
+up onto a fixed point the robot overshot counts back.
 """
 
 from __future__ import annotations
@@ -22,6 +24,11 @@ import numpy as np
 from ..tableau import Action, Travel as TravelAction, Turn as TurnAction
 from .perception import Percept, Perception
 from .physics import Odometry
+
+
+NEAR_EDGE_WATCH = 1.0  # m: the end of the wall beside the robot is watched for this far ahead
+NEAR_EDGE_SLACK = 0.3  # m: a sighting of the edge further than this from where the side opened is stale
+MIN_FAR_EDGE = 0.5  # m: an opening's far edge is first measured when at least this far ahead
 
 
 @dataclass(frozen=True)
@@ -94,13 +101,15 @@ class Travel(ControlLaw):
         self.wall_distance, self.stop_distance, self.junctions = wall_distance, stop_distance, junctions
         self._armed = {+1: False, -1: False}
         self._opened_at: dict[int, float] = {}
+        self._edge_ahead: dict[int, float] = {}  # odometry distance where the wall on a side is seen to end
+        self._width: dict[int, float] = {}  # width of an opening, from its near edge to its far edge
         self._held = {+1: wall_distance, -1: wall_distance}
 
     def step(self, p: Percept, ranges: np.ndarray, odo: Odometry) -> tuple[float, float]:
         lim = self.lim
         phi = 0.0 if math.isnan(p.wall_angle) else p.wall_angle
-        travelled = odo.distance - self.start.distance
-        self._track_openings(p, travelled)
+        travelled = odo.progress - self.start.progress  # signed: backing up to the fixed point counts back
+        self._track_openings(p, ranges, travelled)
         omega = lim.k_heading * phi + lim.k_lateral * self._lateral_error(p)
         omega = max(-lim.w_max, min(lim.w_max, omega))
         error = self._stop_error(p, ranges, travelled)
@@ -113,17 +122,33 @@ class Travel(ControlLaw):
         v *= max(0.3, 1.0 - abs(omega) / lim.w_max)
         return v, omega
 
-    def _track_openings(self, p: Percept, travelled: float) -> None:
+    def _track_openings(self, p: Percept, ranges: np.ndarray, travelled: float) -> None:
         """Openings present where the travel starts belong to the place being left: ignore them until
-        the side closes. A side that opens afterwards is a new opening, noted with the distance."""
+        the side closes. A side that opens afterwards is a new opening, noted with the distance at which
+        its near edge was passed.
+
+        The side beams only notice the opening once the robot is level with its edge, up to one control
+        period (a tenth of a metre at full speed) late. So while the wall beside the robot is closed, the
+        scan ahead is watched for where that wall ends; the edge seen last, carried by odometry, dates
+        the opening more precisely than the moment the side beams opened.
+        """
         for side, is_open, dist in ((+1, p.left_open, p.left), (-1, p.right_open, p.right)):
             if not is_open:
                 self._armed[side] = True
                 self._opened_at.pop(side, None)
+                self._width.pop(side, None)
                 if math.isfinite(dist):
                     self._held[side] = dist
+                    if self.junctions:
+                        ahead = self.perception.near_edge(ranges, side, dist + 0.5)
+                        if 0.0 <= ahead < NEAR_EDGE_WATCH:
+                            self._edge_ahead[side] = travelled + ahead
+                        elif ahead >= NEAR_EDGE_WATCH:
+                            self._edge_ahead.pop(side, None)
             elif self._armed[side] and side not in self._opened_at:
-                self._opened_at[side] = travelled
+                seen = self._edge_ahead.pop(side, None)
+                recent = seen is not None and abs(seen - travelled) < NEAR_EDGE_SLACK
+                self._opened_at[side] = seen if recent else travelled
 
     def _lateral_error(self, p: Percept) -> float:
         """Positive when the robot should turn left to get back onto its line."""
@@ -142,7 +167,14 @@ class Travel(ControlLaw):
 
     def _stop_error(self, p: Percept, ranges: np.ndarray, travelled: float) -> float:
         """Signed distance to the dstate ahead: the midpoint of a side opening, or the stop before the
-        wall ahead; ``inf`` while neither is in sight."""
+        wall ahead; ``inf`` while neither is in sight.
+
+        The opening's width is measured once, when its far edge first comes into view: the far edge's
+        distance ahead plus the distance travelled since the near edge (a short stretch of odometry).
+        From then on the hill-climbing needs only the scan: the midpoint is where the far edge is half
+        the width ahead, so the fixed point does not depend on odometry drift or on which way the robot
+        came.
+        """
         front = p.front - self.stop_distance if p.front < self.perception.range_max * 0.98 else math.inf
         if not self.junctions or not self._opened_at:
             return front
@@ -150,11 +182,17 @@ class Travel(ControlLaw):
         for side, opened in self._opened_at.items():
             depth = self._held[side] + 0.5
             far = min(p.front, self.perception.far_edge(ranges, side, depth))
-            errors.append(0.5 * (far - (travelled - opened)))
-        return min(min(errors), front)
+            width = self._width.get(side)
+            if width is None:
+                # the far edge is only measured once the beams beside the robot have left the near one
+                if not math.isfinite(far) or far < MIN_FAR_EDGE:
+                    continue
+                width = self._width[side] = far + (travelled - opened)
+            errors.append(far - 0.5 * width)
+        return min(errors + [front])
 
     def action(self, odometry: Odometry) -> Action:
-        dist = odometry.distance - self.start.distance
+        dist = odometry.progress - self.start.progress
         dtheta = math.degrees(odometry.theta - self.start.theta)
         return TravelAction(round(max(dist, 1e-3), 4), round(dtheta, 3))
 

@@ -17,7 +17,8 @@ import numpy as np
 from ..world import LaserSpec
 
 HALF_WINDOW = 3  # scan points either side of the centre of a straight-run window
-MAX_SAG = 0.015  # m: a window whose middle point leaves its chord by more is not straight
+MAX_SAG = 0.025  # m: a window with a point further than this from its chord is not straight
+AGREE = math.radians(1.5)  # chords within this of the weighted median direction are averaged
 FOLD_LIMIT = math.radians(25)  # wall directions further from the robot's axes than this are ignored
 
 
@@ -104,9 +105,16 @@ class Perception:
         k = HALF_WINDOW
         cx, cy = x[2 * k:] - x[:-2 * k], y[2 * k:] - y[:-2 * k]
         length = np.hypot(cx, cy)
-        mx, my = x[k:-k] - x[:-2 * k], y[k:-k] - y[:-2 * k]
+        # A window is straight when every point in it lies within MAX_SAG of its chord: testing the middle
+        # point alone passes a window with a step at one end (a door recess, a locker), whose chord is
+        # then tilted by several degrees.
+        n = len(ranges) - 2 * k
+        cross = np.zeros(n)
+        for j in range(1, 2 * k):
+            mx, my = x[j:j + n] - x[:n], y[j:j + n] - y[:n]
+            np.maximum(cross, np.abs(cx * my - cy * mx), out=cross)
         with np.errstate(divide="ignore", invalid="ignore"):
-            sag = np.abs(cx * my - cy * mx) / length
+            sag = cross / length
         ok = (sag < MAX_SAG) & (length > 0.05) & (length < 1.0)
         ok &= (ranges[2 * k:] < self.range_max * 0.98) & (ranges[:-2 * k] < self.range_max * 0.98)
         if ok.sum() < 4:
@@ -116,11 +124,38 @@ class Perception:
         w[np.abs(folded) > FOLD_LIMIT] = 0.0
         if w.sum() <= 0:
             return math.nan
-        # Robust mean: average, then average again over the chords that agree with the first answer.
-        first = float(np.dot(folded, w) / w.sum())
-        w[np.abs(folded - first) > math.radians(4)] = 0.0
+        # Robust mean: the weighted median direction, then the weighted mean of the chords that agree
+        # with it (the edge of a door recess or of clutter tilts a few chords; they do not pull).
+        order = np.argsort(folded)
+        cumulative = np.cumsum(w[order])
+        first = float(folded[order][np.searchsorted(cumulative, 0.5 * cumulative[-1])])
+        w[np.abs(folded - first) > AGREE] = 0.0
         total = w.sum()
         return first if total <= 0 else float(np.dot(folded, w) / total)
+
+    def near_edge(self, ranges: np.ndarray, side: int, depth: float) -> float:
+        """Distance ahead to where the wall on ``side`` ends (the near edge of an opening not reached yet).
+
+        Sweeping from the side beam towards the front, the beams hit the wall beside the robot (within
+        ``depth`` of its axis) until two beams in a row reach beyond it (two, so that a drop-out is not
+        taken for an opening). The wall ends between the last beam on it and the first beyond: the
+        estimate is the middle of the two beams' crossings of the wall's line, within half a beam's
+        spacing of the edge (a couple of centimetres a metre ahead). A wall that runs on out of the
+        laser's reach ends there, as far as the scan can tell; ``inf`` if no beam on that side leaves the
+        wall, nan if the side beam itself already looks into an opening.
+        """
+        idx = self.left_sweep if side > 0 else self.right_sweep
+        r = ranges[idx]
+        s, c = np.abs(self.sin[idx]), self.cos[idx]
+        beyond = (r * s > depth) | (r >= self.range_max * 0.98)
+        if beyond[0]:
+            return math.nan
+        two = np.flatnonzero(beyond[1:-1] & beyond[2:]) + 1
+        if not len(two):
+            return math.inf
+        i = two[0]
+        wall = r[i - 1] * s[i - 1]  # the wall's distance from the axis, seen by the last beam on it
+        return float(0.5 * (r[i - 1] * c[i - 1] + wall * c[i] / max(s[i], 1e-9)))
 
     def far_edge(self, ranges: np.ndarray, side: int, depth: float) -> float:
         """Distance ahead to the far edge of the opening on ``side`` (+1 left, -1 right).

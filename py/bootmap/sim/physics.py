@@ -27,12 +27,17 @@ MASS = 20.0  # kg, about an RWI Magellan's
 
 @dataclass
 class Odometry:
-    """Pose and path length as the wheel encoders report them, in the robot's own odometry frame."""
+    """Pose and path length as the wheel encoders report them, in the robot's own odometry frame.
+
+    ``distance`` is the path length driven either way; ``progress`` counts reversing as negative, so it
+    says how far along its path the robot is after backing up to a fixed point it overshot.
+    """
 
     x: float = 0.0
     y: float = 0.0
     theta: float = 0.0
     distance: float = 0.0
+    progress: float = 0.0
 
     def advance(self, v: float, omega: float, dt: float) -> None:
         """Integrate a constant (v, omega) for dt along the exact arc."""
@@ -46,9 +51,10 @@ class Odometry:
             self.y -= r * (math.cos(t1) - math.cos(self.theta))
         self.theta += omega * dt
         self.distance += abs(v) * dt
+        self.progress += v * dt
 
     def copy(self) -> "Odometry":
-        return Odometry(self.x, self.y, self.theta, self.distance)
+        return Odometry(self.x, self.y, self.theta, self.distance, self.progress)
 
 
 class PhysicalRobot:
