@@ -24,7 +24,7 @@ def paper_file(tmp_path):
 def test_help_explains_every_sub_command():
     out = bootmap("--help")
     assert out.returncode == 0
-    for cmd in ("map", "axioms", "schema", "demo"):
+    for cmd in ("map", "why", "axioms", "schema", "demo", "experiment", "serve"):
         assert cmd in out.stdout
     sub = bootmap("map", "--help")
     assert "--levels" in sub.stdout and "--time-limit" in sub.stdout and "--format" in sub.stdout
@@ -94,3 +94,13 @@ def test_map_of_a_simulated_run_clusters_its_images_first(tmp_path):
     assert out.returncode == 0, out.stderr
     assert "clustered 80 images into 4 views" in out.stderr
     assert out.stdout.startswith("8 dstates, 4 places, 4 paths")
+
+
+@pytest.mark.slow
+def test_demo_runs_both_paper_worlds_and_explains_s4(tmp_path):
+    out = bootmap("demo", cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    assert "reports: out/notched_rectangle/report.md, out/taylor_hall/report.md" in out.stdout
+    assert (tmp_path / "out" / "taylor_hall" / "report.md").is_file()
+    assert "8 dstates, 4 places, 4 paths" in out.stdout
+    assert "t0 (S0) and t4 (S4) cannot be one dstate" in out.stdout and "on_path_no_side" in out.stdout

@@ -174,6 +174,13 @@ def cmd_demo(args: argparse.Namespace) -> int:
         m = Resolver(levels=levels).resolve(tableau)
         print(f"\nwith levels {','.join(levels)}: {m.n_dstates} dstates, {m.n_places} places, "
               f"{m.n_paths} paths ({m.stats['total_s']:.3f} s)")
+    from .explain import Explainer
+
+    print("\nWhy is S4 not S0? (bootmap why, levels causal,topological: the paper's own argument)\n")
+    why = Explainer(levels=["causal", "topological"]).explain(tableau, "S0", "S4")
+    print(why.sentence)
+    print("evidence: " + ", ".join(f"t{t}" for t in why.evidence) + "; axioms needed: "
+          + ", ".join(r.cite() for r in why.axioms))
     print("\nreports: " + ", ".join(reports))
     return EXIT_OK
 
