@@ -488,6 +488,7 @@ _PHRASES = {
     ("turn", 2): "at t{0} it turned {1} degrees",
     ("travel", 2): "at t{0} it travelled along the path",
     ("is", 2): "t{0} is at {1}",
+    ("action", 2): "from t{0} the robot's action was {1}",
     ("next", 3): "{1} at {0} leads to {2}",
     ("feature", 3): "t{0} shows {1} {2}",
     ("dstate_feature", 3): "{0} shows {1} {2}",
