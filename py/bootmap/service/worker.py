@@ -5,7 +5,8 @@ longer than the resolver's time limit, or grow to gigabytes. So each solve runs 
 process (spawned, not forked: the server has threads) whose address space is capped with RLIMIT_AS.
 The resolver's own time limit (SolveTimeout, with the dstates proved necessary) ends most slow solves;
 a process still busy ``kill_grace_s`` after it is killed and replaced. Images-only tableaux are
-clustered into views in the solver process too, under the same deadline.
+clustered into views in the solver process too, under the same deadline; explanations
+(:class:`ExplainJob`, bootmap.explain) run there the same way.
 
 :class:`SolverPool` is the blocking pool; :class:`SolveGate` is its front for the event loop: at most
 ``running`` solves at once (in threads, off the loop), at most ``waiting`` more in line, and beyond that
