@@ -86,17 +86,19 @@ def load_theory(directory: str | Path | None = None, levels: Sequence[str] | Non
     found = {p.stem: p for p in sorted(d.glob("*.lp"))}
     if MANDATORY not in found:
         raise AxiomError(f"{d} has no {MANDATORY}.lp: the causal level defines the dstates")
-    chosen = list(found) if levels is None else _select(levels, found, d)
+    chosen = list(found) if levels is None else select_levels(levels, list(found), str(d))
     theory = Theory(d, {name: found[name] for name in chosen}, tuple(sorted((d / "core").glob("*.lp"))))
     check_syntax(theory.files)
     return theory
 
 
-def _select(levels: Iterable[str], found: dict[str, Path], d: Path) -> list[str]:
+def select_levels(levels: Iterable[str], available: Sequence[str], where: str = "the theory") -> list[str]:
+    """The levels asked for, checked against those ``where`` has: unknown ones and a missing causal level
+    raise AxiomError."""
     chosen = [lv.strip() for lv in levels if lv.strip()]
-    unknown = [lv for lv in chosen if lv not in found]
+    unknown = [lv for lv in chosen if lv not in available]
     if unknown:
-        raise AxiomError(f"unknown level(s) {', '.join(unknown)}; {d} has: {', '.join(found)}")
+        raise AxiomError(f"unknown level(s) {', '.join(unknown)}; {where} has: {', '.join(available)}")
     if MANDATORY not in chosen:
         raise AxiomError(f"the {MANDATORY} level cannot be switched off: it defines what a dstate is")
     return chosen
@@ -114,16 +116,26 @@ def check_syntax(files: Iterable[Path]) -> None:
 
 
 def _labelled_rules(path: Path, level: str) -> list[Rule]:
-    lines = path.read_text().splitlines()
-    out = []
+    return [Rule(name, level, str(path), label + 1, " ".join(text for _, text in body))
+            for name, label, body in _label_blocks(path)]
+
+
+def rule_lines(path: Path) -> dict[int, str]:
+    """Line number -> the name of the labelled rule on that line (explanations cite rules by line)."""
+    return {n: name for name, _, body in _label_blocks(path) for n, _ in body}
+
+
+def _label_blocks(path: Path):
+    """Each ``%! name`` label with its line number and the lines it names: (line number, text) up to the
+    next blank or comment line (possibly several rules under one name)."""
+    lines = Path(path).read_text().splitlines()
     for i, line in enumerate(lines):
         m = _RULE_NAME.match(line.strip())
         if not m:
             continue
-        text = []  # the rule (possibly several lines, and several rules under one name) up to a blank line
-        for nxt in lines[i + 1:]:
-            if not nxt.strip() or nxt.lstrip().startswith("%"):
+        body = []
+        for j in range(i + 1, len(lines)):
+            if not lines[j].strip() or lines[j].lstrip().startswith("%"):
                 break
-            text.append(nxt.strip())
-        out.append(Rule(m.group(1), level, str(path), i + 2, " ".join(text)))
-    return out
+            body.append((j + 1, lines[j].strip()))
+        yield m.group(1), i + 1, body

@@ -24,7 +24,7 @@ from pathlib import Path
 import clingo
 from clingo import Number, Symbol, ast
 
-from .axioms import Theory
+from .axioms import Theory, rule_lines
 
 FIRED, VIOLATED, ON = "_bm_fired", "_bm_violated", "_bm_on"
 
@@ -62,7 +62,7 @@ def load_instrumented(theory: Theory, ctl: clingo.Control) -> Instrumented:
     """Add the theory to ``ctl`` with its recording twins; declare the ``_bm_on`` externals."""
     out = Instrumented()
     level_of = {str(p): lv for lv, p in theory.levels.items()}
-    names = {str(p): _label_lines(p) for p in theory.files}
+    names = {str(p): rule_lines(p) for p in theory.files}
     with ast.ProgramBuilder(ctl) as builder:
         for path in theory.files:
             key = str(path)
@@ -127,22 +127,6 @@ def _named_premises(body, loc) -> tuple[list, list]:
             premises.append(lit.atom.symbol)
         new_body.append(lit)
     return new_body, premises
-
-
-def _label_lines(path: Path) -> dict[int, str]:
-    """Line -> the ``%! name`` label that covers it (a label names the lines below it up to a blank
-    line or a comment), as bootmap.axioms documents."""
-    out: dict[int, str] = {}
-    label = None
-    for number, text in enumerate(Path(path).read_text().splitlines(), 1):
-        stripped = text.strip()
-        if stripped.startswith("%!"):
-            label = stripped[2:].strip() or None
-        elif not stripped or stripped.startswith("%"):
-            label = None
-        elif label:
-            out[number] = label
-    return out
 
 
 @dataclass

@@ -8,6 +8,8 @@ from typing import Annotated
 from fastapi import APIRouter, Query
 from fastapi.concurrency import run_in_threadpool
 
+from ...axioms import select_levels
+from ...errors import AxiomError
 from ..deps import ServicesDep, TableauId
 from ..models import ExplanationOut
 from ..problems import JSONRoute, invalid, openapi_responses
@@ -41,13 +43,7 @@ async def why(tableau_id: TableauId, a: Point, b: Point, services: ServicesDep,
 def _levels(levels: str | None, services) -> tuple[str, ...] | None:
     if levels is None:
         return None
-    chosen = tuple(levels.split(","))
-    known = list(services.theories.current.theory.levels)
-    unknown = [lv for lv in chosen if lv not in known]
-    if unknown:
-        raise invalid("levels", f"unknown level(s) {', '.join(unknown)}; the theory has: {', '.join(known)}",
-                      kind="invalid-request")
-    if "causal" not in chosen:
-        raise invalid("levels", "the causal level cannot be switched off: it defines what a dstate is",
-                      kind="invalid-request")
-    return chosen
+    try:
+        return tuple(select_levels(levels.split(","), list(services.theories.current.theory.levels)))
+    except AxiomError as e:
+        raise invalid("levels", str(e), kind="invalid-request") from None
