@@ -9,7 +9,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-EXIT_OK, EXIT_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
+from ..cli import EXIT_BAD_INPUT, EXIT_OK
 
 
 def register(subparsers) -> None:

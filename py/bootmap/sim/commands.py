@@ -10,9 +10,8 @@ import argparse
 import sys
 from pathlib import Path
 
+from ..cli import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_OK
 from ..errors import BootmapError, TableauError, WorldError
-
-EXIT_OK, EXIT_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
 
 
 def register(subparsers) -> None:
