@@ -41,7 +41,7 @@ from clingo import Function, Number, Symbol
 
 from .cogmap import CognitiveMap, action_text
 from .errors import ExplainError, SolveTimeout
-from .facts import add_facts, excerpt_facts, quantise
+from .facts import add_facts, excerpt_facts, quantise, tableau_facts
 from .resolver import Resolver
 from .tableau import Tableau, Turn
 from .trace import Derivations, Instrumented, RuleRef, load_instrumented
@@ -181,6 +181,7 @@ class Explainer:
     max_window: int = 32
     resolver: Resolver = field(init=False, repr=False)
     _deadline: float | None = field(default=None, init=False, repr=False)
+    _cached: tuple[Tableau, list[Symbol]] | None = field(default=None, init=False, repr=False)
 
     def __post_init__(self) -> None:
         self.resolver = Resolver(self.axioms, self.levels, self.quantum_deg, self.time_limit)
@@ -252,58 +253,46 @@ class Explainer:
         """Can time points a and b be one dstate in some map of these steps (default: all) that
         satisfies the axioms, however many dstates it needs?"""
         keep = list(range(len(tableau))) if keep is None else sorted(keep)
-        ctl, _ = self._asked(tableau, a, b, keep, traced=False)
-        if ctl is None:
+        facts = self._asked(tableau, a, b, keep)
+        if facts is None:
             return False
-        return bool(_solve_within(ctl, self._deadline, []).satisfiable)
-
-    def _asked(self, tableau: Tableau, a: int, b: int, keep: list[int], traced: bool):
-        """A grounded control supposing a and b are one dstate on the kept steps, every partition of
-        each class allowed; None when a and b are not even in one class (they differ in a feature
-        every time point shows, e.g. the view)."""
-        facts = excerpt_facts(tableau, keep, self.quantum_deg)
-        layout = self._layout(facts, keep)
-        if layout is None or layout[1].get(a) != layout[1].get(b):
-            return None, layout
-        ctl = clingo.Control(["--warn=none", "-c", f"future_depth={self.resolver.future_depth}"])
-        instrumented = load_instrumented(self.resolver.theory, ctl) if traced else None
-        if not traced:
-            self.resolver.theory.load_into(ctl)
-        asked = [Function("same_asked", [Number(a), Number(b)])] + ([Function("finest_map")] if traced else [])
-        add_facts(ctl, facts + layout[0] + asked)
-        ctl.ground([("base", [])])
-        if traced:
-            for r in instrumented.switchable:  # free, so each solve's assumptions switch them
-                ctl.assign_external(instrumented.on(r), None)
-            return (ctl, instrumented), layout
-        return ctl, layout
-
-    def _layout(self, facts: list[Symbol], keep: list[int]):
-        """Classes of the kept time points (the theory's class keys), each allowed as many dstates as
-        it has time points: any partition, so "cannot be one dstate" means in no map at all."""
         ctl = self.resolver._control(facts, self.resolver.future_depth)
         ctl.ground([("base", [])])
-        key_of = {}
-        for sa in ctl.symbolic_atoms.by_signature("class_key", 2):
-            t, key = sa.symbol.arguments
-            key_of[t.number] = key
-        if set(key_of) != set(keep):
+        return bool(_solve_within(ctl, self._deadline, []).satisfiable)
+
+    def _asked(self, tableau: Tableau, a: int, b: int, keep: list[int]) -> list[Symbol] | None:
+        """The kept steps' facts, supposing a and b are one dstate, with every partition of each class
+        allowed (as many dstates as time points), so "cannot be one dstate" means in no map at all.
+        None when a and b are not even in one class (they differ in a feature every time point shows,
+        e.g. the view)."""
+        facts = excerpt_facts(self._facts(tableau), keep)
+        classes = self.resolver.classes(self.resolver.ground_prepass(facts, self.resolver.future_depth), keep)
+        if None in classes.keys or classes.of_time[keep.index(a)] != classes.of_time[keep.index(b)]:
             return None
-        out, last, size = [], {}, {}
-        for t in keep:
-            k = key_of[t]
-            if k in last:
-                out.append(Function("prev_in_class", [Number(last[k]), Number(t)]))
-            last[k] = t
-            size[k] = size.get(k, 0) + 1
-        out += [Function("slots", [k, Number(m)]) for k, m in size.items()]
-        return out, key_of
+        return facts + classes.facts(len(keep)) + [Function("same_asked", [Number(a), Number(b)])]
+
+    def _facts(self, tableau: Tableau) -> list[Symbol]:
+        """The tableau's facts, built once for all the excerpts one explanation tries."""
+        if self._cached is None or self._cached[0] is not tableau:
+            self._cached = (tableau, tableau_facts(tableau, self.quantum_deg))
+        return self._cached[1]
+
+    def _traced(self, facts: list[Symbol]) -> tuple[clingo.Control, Instrumented]:
+        """The instrumented theory (bootmap.trace) grounded with these facts, its switches free so that
+        each solve's assumptions set them."""
+        ctl = clingo.Control(["--warn=none", "-c", f"future_depth={self.resolver.future_depth}"])
+        inst = load_instrumented(self.resolver.theory, ctl)
+        add_facts(ctl, facts)
+        ctl.ground([("base", [])])
+        for r in inst.switchable:
+            ctl.assign_external(inst.on(r), None)
+        return ctl, inst
 
     def _failures(self, tableau, cmap, a, b, evidence) -> tuple[list[RuleRef], list[Failure]]:
-        asked, _ = self._asked(tableau, a, b, evidence, traced=True)
+        asked = self._asked(tableau, a, b, evidence)
         if asked is None:
             return self._feature_failure(tableau, cmap, a, b, evidence)
-        ctl, inst = asked
+        ctl, inst = self._traced(asked + [Function("finest_map")])
         needed = _needed_constraints(ctl, inst, self._deadline)
         failures = []
         for r in needed:
@@ -321,11 +310,7 @@ class Explainer:
     def _feature_failure(self, tableau, cmap, a, b, evidence) -> tuple[list[RuleRef], list[Failure]]:
         """a and b differ in a feature every time point shows: no supposition needed, the features'
         own derivations are the proof."""
-        facts = excerpt_facts(tableau, evidence, self.quantum_deg)
-        ctl = clingo.Control(["--warn=none", "-c", f"future_depth={self.resolver.future_depth}"])
-        inst = load_instrumented(self.resolver.theory, ctl)
-        add_facts(ctl, facts)
-        ctl.ground([("base", [])])
+        ctl, inst = self._traced(excerpt_facts(self._facts(tableau), evidence))
         symbols = [sa.symbol for sa in ctl.symbolic_atoms if sa.is_fact]
         derivations = Derivations.of(symbols)
         mine = {t: {(s.arguments[1], s.arguments[2]) for s in symbols

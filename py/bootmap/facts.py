@@ -11,7 +11,7 @@ Facts (see docs/asp.md): ``view(T, "label")``, ``turn(T, A)``, ``travel(T, C)``,
 
 from __future__ import annotations
 
-from typing import Iterable
+from typing import Iterable, Sequence
 
 import clingo
 from clingo import Function, Number, String, Symbol
@@ -53,18 +53,15 @@ def add_facts(ctl: clingo.Control, facts: Iterable[Symbol]) -> None:
 
 
 
-def excerpt_facts(tableau: Tableau, keep: Iterable[int], quantum_deg: float = 15.0) -> list[Symbol]:
-    """The facts of the kept time points only: their views, the actions between two kept time points,
-    and ``resume(T)`` where a run of kept time points starts after a gap (the metrical level starts a
-    frame of headings there: the turns in the gap are not part of the excerpt).
+def excerpt_facts(facts: Sequence[Symbol], keep: Iterable[int]) -> list[Symbol]:
+    """Of a tableau's facts (:func:`tableau_facts`), those of the kept time points only: their views, the
+    actions between two kept time points, and ``resume(T)`` where a run of kept time points starts after
+    a gap (the metrical level starts a frame of headings there: the turns in the gap are not part of the
+    excerpt).
 
     An excerpt is how an explanation states its evidence: these steps alone force the conclusion.
     """
     kept = set(keep)
-    out: list[Symbol] = []
-    for sym in tableau_facts(tableau, quantum_deg):
-        t = sym.arguments[0].number
-        if t in kept and (sym.name == "view" or t + 1 in kept):
-            out.append(sym)
+    out = [sym for sym in facts if (t := sym.arguments[0].number) in kept and (sym.name == "view" or t + 1 in kept)]
     out += [Function("resume", [Number(t)]) for t in sorted(kept) if t > 0 and t - 1 not in kept]
     return out

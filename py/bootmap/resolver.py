@@ -56,8 +56,9 @@ class Classes:
     actions), so that no two of them can share a dstate.
     """
 
-    keys: list[Symbol]                      # the key term of each class, by first appearance
-    of_time: list[int]                      # class of each time point
+    keys: list[Symbol | None]               # the key term of each class, by first appearance (None: no key)
+    times: list[int]                        # the time points grouped (all of a tableau, or an excerpt)
+    of_time: list[int]                      # class of each of those time points
     sizes: list[int]                        # time points per class
     prev: list[int | None]                  # previous time point of the same class
     lower: list[int]                        # dstates each class needs at least
@@ -78,7 +79,7 @@ class Classes:
         out = [Function("dstate_bound", [Number(bound)])]
         for key, size, low in zip(self.keys, self.sizes, self.lower):
             out.append(Function("slots", [key, Number(min(size, low + spare))]))
-        for t, p in enumerate(self.prev):
+        for t, p in zip(self.times, self.prev):
             if p is not None:
                 out.append(Function("prev_in_class", [Number(p), Number(t)]))
         return out
@@ -152,17 +153,18 @@ class Resolver:
         add_facts(ctl, facts)
         return ctl
 
-    def classes(self, grounded: clingo.Control, n: int) -> Classes:
+    def classes(self, grounded: clingo.Control, times: Sequence[int]) -> Classes:
         """Group time points by the class key the theory derived for each (``class_key/2``)."""
-        key_of: list[Symbol | None] = [None] * n
+        key_of: dict[int, Symbol] = {}
         for sa in grounded.symbolic_atoms.by_signature("class_key", 2):
             if sa.is_fact:
                 t, key = sa.symbol.arguments
                 key_of[t.number] = key
-        ids: dict[Symbol, int] = {}
+        ids: dict[Symbol | None, int] = {}
         keys, of_time, sizes, prev, last = [], [], [], [], {}
-        for t, key in enumerate(key_of):
-            c = ids.setdefault(key, len(ids))  # type: ignore[arg-type]
+        for t in times:
+            key = key_of.get(t)
+            c = ids.setdefault(key, len(ids))
             if c == len(sizes):
                 keys.append(key)
                 sizes.append(0)
@@ -170,20 +172,20 @@ class Resolver:
             of_time.append(c)
             prev.append(last.get(c))
             last[c] = t
-        return Classes(keys, of_time, sizes, prev, [1] * len(sizes))
+        return Classes(keys, list(times), of_time, sizes, prev, [1] * len(sizes))
 
     def lower_bounds(self, prepass: clingo.Control, classes: Classes) -> list[int]:
         """Per class, a set of time points that pairwise disagree on a feature only some of them show
         (e.g. the view seen after the same actions): no two of them can share a dstate."""
         grouping = {sa.symbol.arguments[0] for sa in prepass.symbolic_atoms.by_signature("shown_by_all", 1)}
         ids: dict[Symbol, int] = {}  # small ints: comparing clingo symbols costs a C call each
-        partial: list[dict[int, set[int]]] = [defaultdict(set) for _ in classes.of_time]
+        partial: dict[int, dict[int, set[int]]] = {t: defaultdict(set) for t in classes.times}
         for sa in prepass.symbolic_atoms.by_signature("feature", 3):
             t, key, value = sa.symbol.arguments
             if sa.is_fact and key not in grouping:
                 partial[t.number][ids.setdefault(key, len(ids))].add(ids.setdefault(value, len(ids)))
         members: list[list[int]] = [[] for _ in classes.sizes]
-        for t, c in enumerate(classes.of_time):
+        for t, c in zip(classes.times, classes.of_time):
             members[c].append(t)
         return [_apart_clique(ts, partial) for ts in members]
 
@@ -209,7 +211,7 @@ class _Search:
             cmap = self._finish(outcome.models, outcome.exhausted)
             self.stats["classes"] = self.stats["lower_bound"] = cmap.n_dstates
             return cmap
-        self.classes = self.resolver.classes(outcome.control, len(self.tableau))
+        self.classes = self.resolver.classes(outcome.control, range(len(self.tableau)))
         self.stats["classes"] = self.classes.count
         self.proved = self.classes.count + 1
         return None
@@ -290,7 +292,7 @@ class _Search:
         self.stats["bounds"].append({"dstates": what, "result": verdict})
         if not finished:
             if self.classes is None:  # timed out in the first try: the classes still bound the answer
-                self.classes = self.resolver.classes(ctl, len(self.tableau))
+                self.classes = self.resolver.classes(ctl, range(len(self.tableau)))
                 self.proved = self.classes.count
             raise self._timed_out(what, improving)
         return _Outcome(verdict, optimal, bool(result.exhausted), ctl if keep else None)
@@ -317,7 +319,7 @@ def _apart(a: dict, b: dict) -> bool:
     return any(k in large and large[k] != v for k, v in small.items())
 
 
-def _apart_clique(times: list[int], partial: list[dict]) -> int:
+def _apart_clique(times: list[int], partial: dict[int, dict]) -> int:
     """Size of a set of time points that pairwise disagree (greedy, forwards and backwards; at least 1)."""
     best = 1
     for order in (times, times[::-1]):
