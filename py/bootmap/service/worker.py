@@ -134,6 +134,10 @@ def _run(job: SolveJob | ExplainJob, cache: dict) -> tuple:
     pickle)."""
     try:
         return _explain(job, cache) if isinstance(job, ExplainJob) else _solve(job, cache)
+    except TableauError as e:
+        return "tableau", e.reason, e.where
+    except AxiomError as e:
+        return "axioms", str(e)
     except MemoryError:  # clingo's bad_alloc under RLIMIT_AS, in the solve or in naming the failing levels
         return ("memory",)
     except Exception:  # a bug: report it, keep serving
@@ -156,10 +160,6 @@ def _solve(job: SolveJob, cache: dict) -> tuple:
         # The resolver had what validation and clustering left of the limit; the user set the whole.
         message = str(e).replace(f"time limit of {resolver.time_limit} s", f"time limit of {job.time_limit_s:g} s")
         return "timeout", message, e.lower_bound, e.best_map
-    except TableauError as e:
-        return "tableau", e.reason, e.where
-    except AxiomError as e:
-        return "axioms", str(e)
 
 
 def _explain(job: ExplainJob, cache: dict) -> tuple:
@@ -181,10 +181,6 @@ def _explain(job: ExplainJob, cache: dict) -> tuple:
         return "inconsistent", str(e), []
     except SolveTimeout as e:
         return "timeout", str(e), e.lower_bound, None
-    except TableauError as e:
-        return "tableau", e.reason, e.where
-    except AxiomError as e:
-        return "axioms", str(e)
 
 
 def _views(tableau: Tableau) -> tuple[Tableau, int | None]:
