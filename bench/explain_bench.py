@@ -14,7 +14,7 @@ import statistics
 import time
 
 from bootmap.examples import notched_rectangle
-from bootmap.explain import Explainer
+from bootmap.mapping.explain import Explainer
 
 PAIRS = [("S0", "S4"), ("t0", "t8"), ("S1", "S5"), ("t0", "t1"), ("t100", "t396")]
 LEVELS = {"all levels": None, "causal+topological": ["causal", "topological"]}

@@ -17,11 +17,11 @@ import numpy as np
 
 from bootmap import examples
 from bootmap.check import tableau_headings
-from bootmap.facts import quantise
+from bootmap.mapping.facts import quantise
 from bootmap.gridworld import random_world, walk
 from bootmap.metrics import dstate_accuracy
 from bootmap.errors import SolveTimeout
-from bootmap.resolver import Resolver
+from bootmap.mapping.resolver import Resolver
 from bootmap.tableau import Tableau, Turn
 
 
@@ -126,8 +126,8 @@ def main(argv=None) -> int:
         v_states, v_time = rpni(tableau, with_heading=False)
         h_states, h_time = rpni(tableau, with_heading=True)
         print(f"{name:34} {len(tableau):>6} {len(set(truth)):>5} | {cmap.n_dstates:>5} "
-              f"{dstate_accuracy(truth, cmap.dstate_of):>6.1%} {cmap.stats['ground_s']:>7.3f} "
-              f"{cmap.stats['solve_s']:>7.3f} {total:>7.3f} {str(cmap.unique):>5} | "
+              f"{dstate_accuracy(truth, cmap.dstate_of):>6.1%} {cmap.stats.ground_s:>7.3f} "
+              f"{cmap.stats.solve_s:>7.3f} {total:>7.3f} {str(cmap.unique):>5} | "
               f"{len(set(v_states)):>7} {dstate_accuracy(truth, v_states):>6.1%} {v_time:>7.3f} | "
               f"{len(set(h_states)):>9} {dstate_accuracy(truth, h_states):>6.1%} {h_time:>7.3f}")
         sys.stdout.flush()

@@ -14,9 +14,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from bootmap import examples
-from bootmap.axioms import load_theory
+from bootmap.mapping.theory import load_theory
 from bootmap.check import LEVELS, check_map, true_partition
-from bootmap.facts import add_facts, tableau_facts
+from bootmap.mapping.facts import add_facts, tableau_facts
 from bootmap.gridworld import World, random_world, walk
 from bootmap.tableau import Tableau
 

@@ -19,9 +19,9 @@ from bootmap.check import check_map
 from bootmap.cli import main
 from bootmap.errors import ExplainError
 from bootmap.examples import corridor, notched_rectangle, square_room
-from bootmap.explain import Explainer
+from bootmap.mapping.explain import Explainer
 from bootmap.gridworld import random_world, walk
-from bootmap.resolver import Resolver
+from bootmap.mapping.resolver import Resolver
 from bootmap.tableau import Tableau
 
 TOPO = ["causal", "topological"]

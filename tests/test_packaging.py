@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from bootmap.axioms import default_axioms_dir
+from bootmap.mapping.theory import default_axioms_dir
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -35,7 +35,7 @@ def test_built_wheel_carries_the_axioms_and_maps_a_tableau(tmp_path):
     subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "--quiet", "--target", str(purelib),
                     str(wheel)], check=True, timeout=300)
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "BOOTMAP_AXIOMS")}
-    where = subprocess.check_output([str(py), "-c", "import bootmap.axioms as a; print(a.default_axioms_dir())"],
+    where = subprocess.check_output([str(py), "-c", "import bootmap.mapping.theory as a; print(a.default_axioms_dir())"],
                                     text=True, cwd=tmp_path, env=env).strip()
     assert where.startswith(str(purelib)) and where.endswith("bootmap/asp")
     tableau = tmp_path / "paper.json"

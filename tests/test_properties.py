@@ -23,7 +23,7 @@ from hypothesis import strategies as st
 from bootmap.check import check_map, tableau_headings, true_partition
 from bootmap.errors import SolveTimeout
 from bootmap.gridworld import random_world, walk
-from bootmap.resolver import Resolver
+from bootmap.mapping.resolver import Resolver
 
 LEVEL_SETS = {
     "all": ("causal", "topological", "metrical"),

@@ -4,7 +4,7 @@ import pytest
 
 from bootmap import examples
 from bootmap.errors import AxiomError, InconsistentTableau, SolveTimeout
-from bootmap.resolver import Resolver
+from bootmap.mapping.resolver import Resolver
 from bootmap.tableau import Step, Tableau, Travel, Turn
 
 ALL = None
@@ -48,9 +48,9 @@ def test_paper_tableau_without_metrical_level_still_8_by_the_boundary_rules(pape
     m = Resolver(levels=NO_METRICAL).resolve(paper_tableau)
     assert (m.n_dstates, m.n_places, m.n_paths) == (8, 4, 4) and m.unique
     assert not m.same(4, 0) and m.same(8, 0)
-    assert m.stats["bounds"][0] == {"dstates": "one dstate per class", "result": "unsat"}  # one per view fails
-    assert m.stats["classes"] == 4
-    assert m.stats["lower_bound"] == 8  # and the optimiser proved fewer than 8 impossible
+    assert m.stats.to_dict()["bounds"][0] == {"dstates": "one dstate per class", "result": "unsat"}  # one per view fails
+    assert m.stats.classes == 4
+    assert m.stats.lower_bound == 8  # and the optimiser proved fewer than 8 impossible
 
 
 def test_paper_tableau_with_causal_level_only_folds_to_4_views(paper_tableau):
@@ -184,7 +184,7 @@ def test_a_feature_only_some_time_points_show_does_not_split_the_others(axioms_c
 
 
 def test_time_out_hands_back_a_valid_map_found_on_the_way(paper_tableau, monkeypatch):
-    from bootmap import resolver as resolver_module
+    from bootmap.mapping import resolver as resolver_module
 
     real_solve = resolver_module._Search._solve
 

@@ -23,7 +23,7 @@ from collections import defaultdict
 from dataclasses import dataclass, field
 from typing import Hashable, Iterable, Sequence
 
-from .facts import quantise
+from .mapping.facts import quantise
 from .tableau import Tableau, Turn
 
 LEVELS = ("causal", "topological", "metrical")

@@ -1,7 +1,8 @@
 """The ``bootmap`` command. Each sub-command is a thin shell over a library call.
 
-Exit codes: 0 success, 1 failure (no map satisfies the axioms, time-out), 2 bad input (a tableau,
-world or axiom file that is malformed, an unknown level).
+Exit codes (bootmap.errors): 0 success, 1 failure (no map satisfies the axioms, time-out), 2 bad input
+(a tableau, world or axiom file that is malformed, an unknown level). Each of bootmap's exceptions says
+which by its ``exit_code``.
 """
 
 from __future__ import annotations
@@ -12,9 +13,7 @@ import sys
 from typing import Callable, Sequence
 
 from . import __version__
-from .errors import AxiomError, BootmapError, ExplainError, InconsistentTableau, SolveTimeout, TableauError
-
-EXIT_OK, EXIT_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
+from .errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_OK, BootmapError, SolveTimeout
 
 
 def _levels(text: str) -> list[str]:
@@ -42,7 +41,7 @@ def _add_theory_options(p: argparse.ArgumentParser) -> None:
 
 
 def cmd_map(args: argparse.Namespace) -> int:
-    from .resolver import Resolver
+    from .mapping.resolver import Resolver
     from .tableau import load
 
     tableau = _with_views(load(args.tableau))
@@ -85,7 +84,7 @@ def _print_map(cmap, args: argparse.Namespace) -> int:
 
 
 def cmd_axioms(args: argparse.Namespace) -> int:
-    from .axioms import load_theory
+    from .mapping.theory import load_theory
 
     theory = load_theory(args.axioms, args.levels)
     print(f"axiom directory: {theory.directory}")
@@ -95,7 +94,7 @@ def cmd_axioms(args: argparse.Namespace) -> int:
 
 
 def cmd_why(args: argparse.Namespace) -> int:
-    from .explain import Explainer
+    from .mapping.explain import Explainer
     from .tableau import load
 
     tableau = _with_views(load(args.tableau))
@@ -155,7 +154,7 @@ def _print_summary(r: dict) -> None:
 def cmd_demo(args: argparse.Namespace) -> int:
     from . import examples
     from .experiment import run_experiment
-    from .resolver import Resolver
+    from .mapping.resolver import Resolver
 
     runs = [("notched_rectangle", "notched rectangle, 50 clockwise circuits (the paper's Figure 2)", {"circuits": 50}),
             ("taylor_hall", "Taylor Hall, 100 dstates of exploration (the paper's Figure 5)", {"steps": 100})]
@@ -173,8 +172,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
     for levels in (["causal", "topological"], ["causal", "metrical"], ["causal"]):
         m = Resolver(levels=levels).resolve(tableau)
         print(f"\nwith levels {','.join(levels)}: {m.n_dstates} dstates, {m.n_places} places, "
-              f"{m.n_paths} paths ({m.stats['total_s']:.3f} s)")
-    from .explain import Explainer
+              f"{m.n_paths} paths ({m.stats.total_s:.3f} s)")
+    from .mapping.explain import Explainer
 
     print("\nWhy is S4 not S0? (bootmap why, levels causal,topological: the paper's own argument)\n")
     why = Explainer(levels=["causal", "topological"]).explain(tableau, "S0", "S4")
@@ -258,13 +257,17 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _register_optional(sub) -> None:
-    """Sub-commands of parts that register themselves (the simulator, the HTTP service)."""
+    """Sub-commands of parts that register themselves (the simulator, the HTTP service). A part is left
+    out only when a third-party package it needs is not installed; any other import error is a bug and
+    surfaces."""
     import importlib
 
     for module in ("bootmap.sim.commands", "bootmap.service.commands"):
         try:
             register = importlib.import_module(module).register
-        except ImportError:
+        except ModuleNotFoundError as e:
+            if e.name is None or e.name.split(".")[0] == "bootmap":
+                raise
             continue
         register(sub)
 
@@ -275,15 +278,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     handler: Callable[[argparse.Namespace], int] = args.handler
     try:
         return handler(args)
-    except (TableauError, AxiomError, ExplainError) as e:
-        print(f"bootmap: error: {e}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    except (InconsistentTableau, SolveTimeout) as e:
-        print(f"bootmap: {e}", file=sys.stderr)
-        return EXIT_FAILURE
     except BootmapError as e:
-        print(f"bootmap: {e}", file=sys.stderr)
-        return EXIT_FAILURE
+        prefix = "error: " if e.exit_code == EXIT_BAD_INPUT else ""
+        print(f"bootmap: {prefix}{e}", file=sys.stderr)
+        return e.exit_code
     except BrokenPipeError:  # output piped into e.g. `head`, which closed early
         sys.stderr.close()
         return EXIT_OK

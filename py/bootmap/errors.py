@@ -1,11 +1,30 @@
-"""Exceptions bootmap raises. Every one carries a message a person can act on."""
+"""Exceptions bootmap raises, and the exit codes the ``bootmap`` command maps them to.
+
+Every exception carries a message a person can act on, and the fields a program needs (where a tableau
+is malformed, which levels fail, the dstates proved necessary) as attributes, so nobody has to parse the
+message. Each class says how the command ends when it escapes: :data:`EXIT_BAD_INPUT` when the input must
+change, :data:`EXIT_FAILURE` when the input is fine but has no answer in time (or at all).
+"""
+
+from __future__ import annotations
+
+#: The ``bootmap`` command's exit codes (every sub-command, the simulator's and the service's included).
+EXIT_OK, EXIT_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
 
 
 class BootmapError(Exception):
     """Base class of every error bootmap raises on purpose."""
 
+    exit_code = EXIT_FAILURE
 
-class TableauError(BootmapError, ValueError):
+
+class BadInput(BootmapError):
+    """The input must change: a malformed file, an unknown level, a question about a missing dstate."""
+
+    exit_code = EXIT_BAD_INPUT
+
+
+class TableauError(BadInput, ValueError):
     """A tableau is malformed. ``where`` names the place: file, step index, field."""
 
     def __init__(self, message: str, where: str = ""):
@@ -14,28 +33,11 @@ class TableauError(BootmapError, ValueError):
         super().__init__(f"{where}: {message}" if where else message)
 
 
-class AxiomError(BootmapError):
+class AxiomError(BadInput):
     """The axiom files cannot be loaded: missing directory, unknown level, or clingo rejects the text."""
 
 
-class InconsistentTableau(BootmapError):
-    """No map satisfies the axioms for this tableau, whatever the number of dstates."""
-
-
-class SolveTimeout(BootmapError):
-    """The solver ran out of time before it proved a minimal map.
-
-    ``lower_bound`` dstates are proved necessary; ``best_map`` is a valid map found on the way (not proved
-    minimal), or None.
-    """
-
-    def __init__(self, message: str, lower_bound: int = 0, best_map=None):
-        self.lower_bound = lower_bound
-        self.best_map = best_map
-        super().__init__(message)
-
-
-class WorldError(BootmapError, ValueError):
+class WorldError(BadInput, ValueError):
     """A world file is malformed. ``where`` names the file and the field (``worlds/x.toml: laser.max_range``)."""
 
     def __init__(self, message: str, where: str = ""):
@@ -44,5 +46,38 @@ class WorldError(BootmapError, ValueError):
         super().__init__(f"{where}: {message}" if where else message)
 
 
-class ExplainError(BootmapError, ValueError):
+class ExplainError(BadInput, ValueError):
     """A question the explainer cannot take, e.g. a time point or dstate the map does not have."""
+
+
+class InconsistentTableau(BootmapError):
+    """No map satisfies the axioms for this tableau, whatever the number of dstates.
+
+    ``levels`` are the levels that were solved together. ``failing_levels`` narrows it down, when the
+    resolver could (:mod:`bootmap.mapping.diagnosis`): ``["causal"]`` when the causal axioms alone fail,
+    else each level that fails beside the causal level alone; empty when only the levels together fail or
+    nothing could be narrowed in time (``diagnosed`` says whether every try finished).
+    """
+
+    def __init__(self, message: str, levels: tuple[str, ...] = (), failing_levels: tuple[str, ...] = (),
+                 diagnosed: bool = False):
+        self.levels = tuple(levels)
+        self.failing_levels = list(failing_levels)
+        self.diagnosed = diagnosed
+        super().__init__(message)
+
+
+class SolveTimeout(BootmapError):
+    """The solver ran out of time before it proved a minimal map (or finished an explanation).
+
+    ``time_limit_s`` is the limit the caller set; ``stage`` what the solver was doing; ``lower_bound``
+    dstates are proved necessary; ``best_map`` is a valid map found on the way (not proved minimal), or None.
+    """
+
+    def __init__(self, message: str, lower_bound: int = 0, best_map=None, time_limit_s: float | None = None,
+                 stage: str = ""):
+        self.lower_bound = lower_bound
+        self.best_map = best_map
+        self.time_limit_s = time_limit_s
+        self.stage = stage
+        super().__init__(message)

@@ -3,7 +3,7 @@
 1. The robot explores a world (``bootmap.sim``): images at dstates, actions, truth.
 2. Images are clustered into views, k chosen by the internal measure M (``bootmap.views``); U(V|S)
    against the truth says whether the views removed image variability.
-3. The view/action tableau is resolved into dstates, places and paths (``bootmap.resolver``) and scored
+3. The view/action tableau is resolved into dstates, places and paths (``bootmap.mapping.resolver``) and scored
    against the truth up to renaming.
 4. Every image, labelled by its resolved dstate, trains a recogniser (``bootmap.recognise``): the online
    curve and 10-fold cross-validated learning curves.
@@ -26,7 +26,7 @@ import numpy as np
 from .errors import SolveTimeout
 from .metrics import dstate_accuracy
 from .recognise import learning_curve_cv, online_curve, online_hits
-from .resolver import Resolver
+from .mapping.resolver import Resolver
 from .sim import simulate
 from .views import ViewClusterer, view_labels, view_table
 from .world import World, load_world
@@ -147,7 +147,7 @@ def _map_section(cmap, truth, world) -> dict:
             "merged_true_dstates": {d: sorted(ts) for d, ts in merged.items() if len(ts) > 1},
             # ... and which true dstates it took for several.
             "split_true_dstates": {t: sorted(ds) for t, ds in split.items() if len(ds) > 1},
-            "solve_s": cmap.stats.get("total_s")}
+            "solve_s": cmap.stats.total_s}
 
 
 def _jsonable(x):

@@ -1,6 +1,6 @@
 """Explanations over HTTP (a real uvicorn process): the same answer `bootmap why` gives, as JSON."""
 
-from bootmap.explain import Explainer
+from bootmap.mapping.explain import Explainer
 from bootmap.tableau import Tableau
 
 PROBLEM = "application/problem+json"

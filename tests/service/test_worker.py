@@ -3,7 +3,7 @@
 import pytest
 
 from bootmap import examples
-from bootmap.axioms import default_axioms_dir
+from bootmap.mapping.theory import default_axioms_dir
 from bootmap.errors import SolveTimeout
 from bootmap.service.worker import SolveJob, SolverKilled, SolverOutOfMemory, SolverPool
 from bootmap.tableau import Tableau

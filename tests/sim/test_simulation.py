@@ -162,7 +162,7 @@ def test_circuits_rejects_an_unknown_direction():
 def test_taylor_hall_exploration_gives_the_map_its_true_topology(taylor_run):
     # With perfect views (the true dstates), the experience alone must let the map find the true
     # places and paths: every place joined by turns, every path's two ways joined by a turn-around.
-    from bootmap.resolver import Resolver
+    from bootmap.mapping.resolver import Resolver
 
     t = taylor_run.tableau
     m = Resolver().resolve(t.with_views([str(s.truth) for s in t.steps]))

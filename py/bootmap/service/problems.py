@@ -98,7 +98,7 @@ def from_bootmap_error(e: BootmapError) -> Problem:
 def _extensions(e: BootmapError) -> dict[str, Any]:
     """What a client can use beyond the message: the failing levels, the bound proved, the best map."""
     if isinstance(e, InconsistentTableau):
-        return {"failing_levels": getattr(e, "failing_levels", None)}
+        return {"failing_levels": e.failing_levels}
     if isinstance(e, SolverKilled):
         return {"time_limit_s": e.time_limit_s}
     if isinstance(e, SolveTimeout):

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from pathlib import Path
 
-from ..axioms import Theory, default_axioms_dir, load_theory
+from ..mapping.theory import Theory, default_axioms_dir, load_theory
 from ..errors import AxiomError
 
 

@@ -6,7 +6,7 @@ process (spawned, not forked: the server has threads) whose address space is cap
 The resolver's own time limit (SolveTimeout, with the dstates proved necessary) ends most slow solves;
 a process still busy ``kill_grace_s`` after it is killed and replaced. Images-only tableaux are
 clustered into views in the solver process too, under the same deadline; explanations
-(:class:`ExplainJob`, bootmap.explain) run there the same way.
+(:class:`ExplainJob`, bootmap.mapping.explain) run there the same way.
 
 :class:`SolverPool` is the blocking pool; :class:`SolveGate` is its front for the event loop: at most
 ``running`` solves at once (in threads, off the loop), at most ``waiting`` more in line, and beyond that
@@ -112,7 +112,7 @@ def _serve(conn, memory_mb: int) -> None:
     for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ[var] = "1"  # one solve per process; BLAS thread pools would only reserve memory
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C on the server: the server stops its solvers
-    from .. import resolver  # noqa: F401  (warm: the first job should not pay for the import)
+    from .. import mapping  # noqa: F401  (warm: the first job should not pay for the import)
 
     conn.send("ready")
     cache: dict = {}
@@ -145,40 +145,36 @@ def _run(job: SolveJob | ExplainJob, cache: dict) -> tuple:
 
 
 def _solve(job: SolveJob, cache: dict) -> tuple:
+    from ..mapping import Deadline
+
     start = time.perf_counter()
-    deadline = start + job.time_limit_s
-    resolver = None
+    deadline = Deadline.after(job.time_limit_s)  # validation and clustering count against it too
     try:
         tableau, k = _views(Tableau.from_dict(job.document, "tableau"))
-        resolver = _resolver(job, cache, None, deadline)
-        cmap = resolver.resolve(tableau)
+        resolver = _cached(cache, ("map", job.axioms, job.quantum_deg, job.max_models), lambda: _resolver(job))
+        cmap = resolver.resolve(tableau, deadline)
         return "ok", Solved(cmap.to_dict(), cmap.to_text(), k, time.perf_counter() - start)
-    except InconsistentTableau as e:
-        failing, complete = _failing_levels(tableau, job, cache, deadline)
-        return "inconsistent", _inconsistent_message(str(e), failing, complete), failing
+    except InconsistentTableau as e:  # the resolver names the failing levels within the same deadline
+        return "inconsistent", str(e), e.failing_levels, e.diagnosed
     except SolveTimeout as e:
-        # The resolver had what validation and clustering left of the limit; the user set the whole.
-        message = str(e).replace(f"time limit of {resolver.time_limit} s", f"time limit of {job.time_limit_s:g} s")
-        return "timeout", message, e.lower_bound, e.best_map
+        return "timeout", str(e), e.lower_bound, e.best_map
 
 
 def _explain(job: ExplainJob, cache: dict) -> tuple:
-    from ..explain import Explainer
+    from ..mapping import Deadline, Explainer
 
     start = time.perf_counter()
+    deadline = Deadline.after(job.time_limit_s)
     try:
         tableau, _ = _views(Tableau.from_dict(job.document, "tableau"))
-        key = ("explain", job.axioms, job.levels, job.quantum_deg)
-        if key not in cache:
-            cache[key] = Explainer(axioms=job.axioms, levels=job.levels, quantum_deg=job.quantum_deg)
-        explainer = cache[key]
-        explainer.time_limit = explainer.resolver.time_limit = max(0.01, job.time_limit_s - (time.perf_counter() - start))
-        e = explainer.explain(tableau, job.a, job.b)
+        explainer = _cached(cache, ("explain", job.axioms, job.levels, job.quantum_deg),
+                            lambda: Explainer(axioms=job.axioms, levels=job.levels, quantum_deg=job.quantum_deg))
+        e = explainer.explain(tableau, job.a, job.b, deadline)
         return "ok", Explained(e.to_dict(), e.to_text(), time.perf_counter() - start)
     except ExplainError as e:
         return "question", str(e)
     except InconsistentTableau as e:
-        return "inconsistent", str(e), []
+        return "inconsistent", str(e), e.failing_levels, e.diagnosed
     except SolveTimeout as e:
         return "timeout", str(e), e.lower_bound, None
 
@@ -191,53 +187,20 @@ def _views(tableau: Tableau) -> tuple[Tableau, int | None]:
     return tableau_with_views(tableau)
 
 
-def _resolver(job: SolveJob, cache: dict, levels: tuple[str, ...] | None, deadline: float):
-    """A resolver for the job's theory (kept: loading a theory parses every file), timed to the deadline."""
-    from ..resolver import Resolver
+def _resolver(job: SolveJob):
+    from ..mapping import Resolver
 
-    key = (job.axioms, levels, job.quantum_deg, job.max_models)
+    return Resolver(axioms=job.axioms, quantum_deg=job.quantum_deg, max_models=job.max_models)
+
+
+def _cached(cache: dict, key: tuple, make):
+    """A resolver or explainer for the job's theory, kept: loading a theory parses every file. Both are
+    immutable, and each job passes its own deadline."""
     if key not in cache:
         if len(cache) > 16:
             cache.clear()
-        cache[key] = Resolver(axioms=job.axioms, levels=levels, quantum_deg=job.quantum_deg,
-                              max_models=job.max_models)
-    r = cache[key]
-    r.time_limit = round(max(0.01, deadline - time.perf_counter()), 2)
-    return r
-
-
-def _failing_levels(tableau: Tableau, job: SolveJob, cache: dict, deadline: float) -> tuple[list[str], bool]:
-    """Which axiom families fail: causal alone, else each other level beside causal. Returns the failing
-    levels and whether every try finished within the deadline."""
-    levels = list(_resolver(job, cache, None, deadline).theory.levels)
-    tries = [("causal",)] + [("causal", lv) for lv in levels if lv != "causal"]
-    failing, complete = [], True
-    for subset in tries:
-        if time.perf_counter() >= deadline:
-            return failing, False
-        try:
-            _resolver(job, cache, subset, deadline).resolve(tableau)
-        except InconsistentTableau:
-            failing.append(subset[-1])
-            if subset == ("causal",):
-                break  # every other try includes causal
-        except SolveTimeout:
-            complete = False
-    return failing, complete
-
-
-def _inconsistent_message(message: str, failing: list[str], complete: bool) -> str:
-    if failing == ["causal"]:
-        why = "the causal axioms alone already fail"
-    elif failing:
-        names = ", ".join(failing)
-        why = f"the {names} level{'s' if len(failing) > 1 else ''} fail{'' if len(failing) > 1 else 's'} " \
-              "even with the causal level alone beside it"
-    elif complete:
-        why = "each level is satisfiable beside the causal one; only the levels together fail"
-    else:
-        why = "the failing level could not be narrowed down within the time limit"
-    return f"{message}; {why}"
+        cache[key] = make()
+    return cache[key]
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -354,9 +317,7 @@ def _outcome(reply: tuple, memory_mb: int) -> Solved | Explained:
     if kind == "ok":
         return rest[0]
     if kind == "inconsistent":
-        e = InconsistentTableau(rest[0])
-        e.failing_levels = rest[1]  # type: ignore[attr-defined]
-        raise e
+        raise InconsistentTableau(rest[0], failing_levels=tuple(rest[1]), diagnosed=rest[2])
     if kind == "timeout":
         raise SolveTimeout(rest[0], lower_bound=rest[1], best_map=rest[2])
     if kind == "tableau":

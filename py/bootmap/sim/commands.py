@@ -10,7 +10,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from ..cli import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_OK
+from ..errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_OK
 from ..errors import BootmapError, TableauError, WorldError
 
 

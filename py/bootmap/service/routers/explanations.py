@@ -8,7 +8,7 @@ from typing import Annotated
 from fastapi import APIRouter, Query
 from fastapi.concurrency import run_in_threadpool
 
-from ...axioms import select_levels
+from ...mapping.theory import select_levels
 from ...errors import AxiomError
 from ..deps import ServicesDep, TableauId
 from ..models import ExplanationOut

@@ -1,6 +1,6 @@
 """Tableau -> clingo facts, as data.
 
-Labels and numbers reach clingo as symbols built with clingo's API (``String``, ``Number``) and are
+Labels and numbers reach clingo as symbols built with clingo's API (through :mod:`.vocabulary`) and are
 added through the backend, so a view label such as ``a). #script (python)`` is just a string: no user
 text ever becomes program text. Angles are rounded to a quantum here, so that sensor noise on turns
 does not make the same action look like many actions, nor accumulate in headings.
@@ -14,19 +14,36 @@ from __future__ import annotations
 from typing import Iterable, Sequence
 
 import clingo
-from clingo import Function, Number, String, Symbol
+from clingo import Number, String, Symbol
 
-from .tableau import Tableau, Turn
+from ..tableau import Action, Tableau, Turn
+from .vocabulary import QUANTUM_DEG, RESUME, TRAVEL, TURN, VIEW, action_term
 
 
-def quantise(angle_deg: float, quantum_deg: float) -> int:
-    """Round an angle to the quantum and wrap it into (-180, 180]; -180 becomes 180 (turn-around)."""
+def quantise(angle_deg: float, quantum_deg: float = QUANTUM_DEG) -> int:
+    """Round an angle to the quantum and wrap it into (-180, 180]; -180 becomes 180 (turn-around).
+
+    >>> quantise(-98), quantise(-180), quantise(7.4), quantise(7.6)
+    (-90, 180, 0, 15)
+    """
     q = round(angle_deg / quantum_deg) * quantum_deg
     a = int(round(((q + 180.0) % 360.0) - 180.0))
     return 180 if a == -180 else a
 
 
-def tableau_facts(tableau: Tableau, quantum_deg: float = 15.0) -> list[Symbol]:
+def quantised_angle(action: Action, quantum_deg: float = QUANTUM_DEG) -> int:
+    """The angle the axioms see for an action: a turn's angle, or a travel's net heading change."""
+    return quantise(action.angle_deg if isinstance(action, Turn) else action.heading_change_deg, quantum_deg)
+
+
+def action_symbol(action: Action | None, quantum_deg: float = QUANTUM_DEG) -> Symbol | None:
+    """The action as the causal level names it (``turn(-90)``, ``travel``), or None after the last step."""
+    if action is None:
+        return None
+    return action_term("turn" if isinstance(action, Turn) else "travel", quantised_angle(action, quantum_deg))
+
+
+def tableau_facts(tableau: Tableau, quantum_deg: float = QUANTUM_DEG) -> list[Symbol]:
     """The tableau as ground facts (symbols). Requires every step to have a view label."""
     tableau.require_views()
     # Views and angles repeat: build each symbol once (every constructor is a call into clingo).
@@ -34,14 +51,12 @@ def tableau_facts(tableau: Tableau, quantum_deg: float = 15.0) -> list[Symbol]:
     numbers: dict[int, Symbol] = {}
     out: list[Symbol] = []
     for t, step in enumerate(tableau.steps):
-        time = Number(t)
         view = strings.get(step.view) or strings.setdefault(step.view, String(step.view))  # type: ignore[arg-type]
-        out.append(Function("view", [time, view]))
-        a = step.action
-        if a is not None:
-            angle = quantise(a.angle_deg if isinstance(a, Turn) else a.heading_change_deg, quantum_deg)
-            number = numbers.get(angle) or numbers.setdefault(angle, Number(angle))
-            out.append(Function("turn" if isinstance(a, Turn) else "travel", [time, number]))
+        out.append(VIEW(t, view))
+        if step.action is not None:
+            kind = TURN if isinstance(step.action, Turn) else TRAVEL
+            angle = quantised_angle(step.action, quantum_deg)
+            out.append(kind(t, numbers.get(angle) or numbers.setdefault(angle, Number(angle))))
     return out
 
 
@@ -50,7 +65,6 @@ def add_facts(ctl: clingo.Control, facts: Iterable[Symbol]) -> None:
     with ctl.backend() as backend:
         for sym in facts:
             backend.add_rule([backend.add_atom(sym)])
-
 
 
 def excerpt_facts(facts: Sequence[Symbol], keep: Iterable[int]) -> list[Symbol]:
@@ -62,6 +76,7 @@ def excerpt_facts(facts: Sequence[Symbol], keep: Iterable[int]) -> list[Symbol]:
     An excerpt is how an explanation states its evidence: these steps alone force the conclusion.
     """
     kept = set(keep)
-    out = [sym for sym in facts if (t := sym.arguments[0].number) in kept and (sym.name == "view" or t + 1 in kept)]
-    out += [Function("resume", [Number(t)]) for t in sorted(kept) if t > 0 and t - 1 not in kept]
+    out = [sym for sym in facts
+           if (t := sym.arguments[0].number) in kept and (VIEW.matches(sym) or t + 1 in kept)]
+    out += [RESUME(t) for t in sorted(kept) if t > 0 and t - 1 not in kept]
     return out

@@ -20,7 +20,7 @@ from typing import Iterable, Sequence
 
 import clingo
 
-from .errors import AxiomError
+from ..errors import AxiomError
 
 MANDATORY = "causal"
 _RULE_NAME = re.compile(r"^%!\s*([a-z][a-z0-9_]*)\s*$")
@@ -31,8 +31,8 @@ def default_axioms_dir() -> Path:
     env = os.environ.get("BOOTMAP_AXIOMS")
     if env:
         return Path(env)
-    here = Path(__file__).resolve().parent
-    for candidate in (here / "asp", here.parent.parent / "asp"):
+    package = Path(__file__).resolve().parent.parent  # bootmap/
+    for candidate in (package / "asp", package.parent.parent / "asp"):
         if (candidate / f"{MANDATORY}.lp").is_file():
             return candidate
     raise AxiomError("cannot find the axiom directory (asp/); set BOOTMAP_AXIOMS or pass --axioms")

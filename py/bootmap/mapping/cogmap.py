@@ -8,11 +8,38 @@ the paper's notched rectangle reads exactly like its table: S0 P0 Pa0 pos, S1 P0
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
 
 from clingo import Symbol
 
-from .tableau import Tableau, Turn
+from ..tableau import Tableau, Turn
+from .vocabulary import AHEAD, HEADING_OF, IS, LEFT, PATH_OF, PLACE_OF, RIGHT, VIEW_OF
+
+
+@dataclass(frozen=True)
+class Try:
+    """One grounding the resolver tried: what it asked (e.g. "at most 8 dstates") and clingo's verdict
+    ("sat", "unsat" or "timeout")."""
+
+    dstates: str
+    result: str
+
+
+@dataclass(frozen=True)
+class SolveStats:
+    """How a map was found: the classes of time points, the dstates proved necessary, the groundings
+    tried and the time spent grounding, solving and in all."""
+
+    classes: int = 0
+    lower_bound: int = 0
+    ground_s: float = 0.0
+    solve_s: float = 0.0
+    total_s: float = 0.0
+    bounds: tuple[Try, ...] = ()
+
+    def to_dict(self) -> dict:
+        return {"classes": self.classes, "lower_bound": self.lower_bound, "ground_s": self.ground_s,
+                "solve_s": self.solve_s, "total_s": self.total_s,
+                "bounds": [{"dstates": b.dstates, "result": b.result} for b in self.bounds]}
 
 
 @dataclass
@@ -38,8 +65,8 @@ class CognitiveMap:
         False for a fall-back map returned on time-out: valid, but not proved minimal.
     alternatives : list of list of str
         The dstate of each time point in the other minimal maps.
-    stats : dict
-        Solver figures: ground_s, solve_s, total_s, the bounds tried.
+    stats : SolveStats
+        Solver figures: classes, the bound proved, ground_s, solve_s, total_s, the groundings tried.
     """
 
     steps: list[dict]
@@ -59,7 +86,7 @@ class CognitiveMap:
     models_capped: bool
     alternatives: list[list[str]]
     levels: list[str]
-    stats: dict[str, Any] = field(default_factory=dict)
+    stats: SolveStats = field(default_factory=SolveStats)
     minimal: bool = True
 
     @property
@@ -95,7 +122,7 @@ class CognitiveMap:
             "right_of": [list(x) for x in self.right_of],
             "left_of": [list(x) for x in self.left_of],
             "alternatives": self.alternatives,
-            "stats": self.stats,
+            "stats": self.stats.to_dict(),
         }
 
     def to_text(self, all_steps: bool = True) -> str:
@@ -103,7 +130,7 @@ class CognitiveMap:
                  + ("NOT PROVED MINIMAL (time-out)" if not self.minimal else
                     "unique minimal map" if self.unique else
                     f"{self.n_models}{'+' if self.models_capped else ''} minimal maps")
-                 + f"  (levels: {', '.join(self.levels)}; {self.stats.get('total_s', 0):.3f} s)", ""]
+                 + f"  (levels: {', '.join(self.levels)}; {self.stats.total_s:.3f} s)", ""]
         header = ("t", "view", "dstate", "place", "path", "dir", "action to next")
         rows = [(f"t{s['t']}", s["view"], s["dstate"], s["place"] or "-", s["path"] or "-",
                  s["dir"] or "-", s["action"]) for s in self.steps]
@@ -131,14 +158,7 @@ def action_text(action) -> str:
     return f"travel {action.distance_m:g} m{bend}"
 
 
-def _by_name(symbols: list[Symbol]) -> dict[str, list[list[Symbol]]]:
-    out: dict[str, list[list[Symbol]]] = {}
-    for s in symbols:
-        out.setdefault(s.name, []).append(list(s.arguments))
-    return out
-
-
-def _number_dstates(is_atoms: list[list[Symbol]], n: int) -> tuple[dict[Symbol, int], list[int]]:
+def _number_dstates(is_atoms, n: int) -> tuple[dict[Symbol, int], list[int]]:
     """Dstate terms numbered by first appearance (S0, S1, ...), and the number of each time point's.
     Clingo symbols are hashed once here: comparing them costs a C call each, so the rest uses ints."""
     term: list[Symbol] = [None] * n  # type: ignore[list-item]
@@ -148,16 +168,18 @@ def _number_dstates(is_atoms: list[list[Symbol]], n: int) -> tuple[dict[Symbol, 
     return ids, [ids.setdefault(d, len(ids)) for d in term]
 
 
-def build_map(tableau: Tableau, models: list[list[Symbol]], exhausted: bool, theory, stats: dict,
+def build_map(tableau: Tableau, models: list[list[Symbol]], exhausted: bool, levels, stats: SolveStats,
               minimal: bool = True) -> CognitiveMap:
+    """The map of the first model, named as the paper names it; the other models are alternatives.
+    ``exhausted``: clingo enumerated every minimal model (so one model means a unique map)."""
     n = len(tableau)
-    atoms = _by_name(models[0])
-    ids, seq = _number_dstates(atoms["is"], n)
+    atoms = models[0]
+    ids, seq = _number_dstates(IS.args(atoms), n)
     S = [f"S{i}" for i in range(len(ids))]
-    views = {S[ids[d]]: v.string for d, v in atoms.get("view_of", [])}
-    headings = {S[ids[d]]: h.number for d, h in atoms.get("heading_of", [])}
-    place_rep = {ids[d]: ids[p] for d, p in atoms.get("place_of", [])}
-    path_rep = {ids[d]: (ids[pa], dr.name) for d, pa, dr in atoms.get("path_of", [])}
+    views = {S[ids[d]]: v.string for d, v in VIEW_OF.args(atoms)}
+    headings = {S[ids[d]]: h.number for d, h in HEADING_OF.args(atoms)}
+    place_rep = {ids[d]: ids[p] for d, p in PLACE_OF.args(atoms)}
+    path_rep = {ids[d]: (ids[pa], dr.name) for d, pa, dr in PATH_OF.args(atoms)}
     # Places and paths are named in order of first appearance; pos is the way the robot first faced.
     pname: dict[int, str] = {}
     paname: dict[int, str] = {}
@@ -178,13 +200,13 @@ def build_map(tableau: Tableau, models: list[list[Symbol]], exhausted: bool, the
     # here they are named by place and path, and sides are taken facing pos.
     on = sorted({(place_of[d], path_of[d][0]) for d in place_of if d in path_of}, key=_natural)
     order = set()
-    for d, p in atoms.get("ahead", []):
+    for d, p in AHEAD.args(atoms):
         pa, dr = path_of[S[ids[d]]]
         here, there = place_of[S[ids[d]]], pname[ids[p]]
         order.add((pa, here, there) if dr == "pos" else (pa, there, here))
     sides: dict[str, set] = {"right": set(), "left": set()}
-    for side, mirror in (("right", "left"), ("left", "right")):
-        for d, p in atoms.get(side, []):
+    for side, mirror, pred in (("right", "left", RIGHT), ("left", "right", LEFT)):
+        for d, p in pred.args(atoms):
             pa, dr = path_of[S[ids[d]]]
             sides[side if dr == "pos" else mirror].add((pname[ids[p]], pa))
     order = sorted(order, key=_natural)
@@ -197,14 +219,14 @@ def build_map(tableau: Tableau, models: list[list[Symbol]], exhausted: bool, the
                       "path": pa, "dir": dr, "action": action_text(tableau.steps[t].action)})
     alternatives = []
     for m in models[1:]:
-        _, alt = _number_dstates([list(s.arguments) for s in m if s.name == "is"], n)
+        _, alt = _number_dstates(IS.args(m), n)
         alternatives.append([f"S{i}" for i in alt])
     return CognitiveMap(
         steps=steps, dstate_of=[S[i] for i in seq], views=dict(sorted(views.items(), key=_natural1)),
         headings=headings, place_of=place_of, path_of=path_of, places=places, paths=paths, on=on,
         order=order, right_of=sorted(sides["right"], key=_natural), left_of=sorted(sides["left"], key=_natural),
         n_models=len(models) if minimal else 0, unique=minimal and len(models) == 1 and exhausted,
-        models_capped=minimal and not exhausted, alternatives=alternatives, levels=list(theory.levels),
+        models_capped=minimal and not exhausted, alternatives=alternatives, levels=list(levels),
         stats=stats, minimal=minimal)
 
 

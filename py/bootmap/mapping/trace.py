@@ -24,7 +24,7 @@ from pathlib import Path
 import clingo
 from clingo import Number, Symbol, ast
 
-from .axioms import Theory, rule_lines
+from .theory import Theory, rule_lines
 
 FIRED, VIOLATED, ON = "_bm_fired", "_bm_violated", "_bm_on"
 

@@ -1,0 +1,410 @@
+"""Explanations: why two time points are different dstates, or the same one, and which experience
+proves it.
+
+The paper resolves the tableau by assuming "dstates with the same view are equal unless they can be
+proved different". This module shows that proof. For time points a and b (or two dstates of the
+minimal map):
+
+* **different** in every minimal map: the solver is asked to suppose a and b are one dstate
+  (``same_asked`` in core/ask.lp) on ever fewer tableau steps, until the steps left are a
+  subset-minimal *evidence*: with them alone the supposition has no model, and dropping any one step
+  gives it one. Then, on the evidence, the axiom constraints are switched off one at a time to find
+  the ones the contradiction needs; for each, the finest map that keeps the others shows where it
+  fails and, through the instrumented theory (bootmap.trace), the chain of rule instances - named,
+  with file and line - from the tableau steps to the failure.
+* **same** in every minimal map: nothing in the experience tells them apart (minimality); the
+  explanation says how far their futures agree and which actions, from the tableau's own vocabulary,
+  would test them further.
+* **undecided**: minimal maps disagree; the explanation lists which of them keep a and b apart.
+
+Because the machinery reads rules from the .lp files, a rule a user adds in a new level file shows up,
+by its ``%!`` name, in the proofs it takes part in, with no change to this code.
+
+Example
+-------
+>>> from bootmap.examples import notched_rectangle
+>>> e = Explainer(levels=["causal", "topological"]).explain(notched_rectangle(3), 0, 4)
+>>> e.verdict, e.evidence
+('different', [0, 1, 2, 3, 4])
+"""
+
+from __future__ import annotations
+
+import re
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Sequence
+
+from clingo import Symbol
+
+from ..errors import ExplainError, SolveTimeout
+from ..tableau import Tableau
+from .cogmap import CognitiveMap, action_text
+from .facts import action_symbol, excerpt_facts, tableau_facts
+from .grounding import Deadline, Grounding, prepass
+from .proof import Failure, Names, ProofNode, merged, node, rule_dict
+from .resolver import Resolver
+from .trace import Derivations, Instrumented, RuleRef
+from .vocabulary import FEATURE, FINEST_MAP, QUANTUM_DEG, SAME_ASKED, SHOWN_BY_ALL, action_word
+
+__all__ = ["Explainer", "Explanation", "Failure", "ProofNode"]
+
+
+@dataclass
+class Explanation:
+    """The answer to "are time points a and b the same dstate, and why?"."""
+
+    a: int
+    b: int
+    names: tuple[str, str]              # their dstates in the (first) minimal map
+    verdict: str                        # "different", "same" or "undecided"
+    sentence: str
+    evidence: list[int] = field(default_factory=list)
+    axioms: list[RuleRef] = field(default_factory=list)    # the constraints the contradiction needs
+    failures: list[Failure] = field(default_factory=list)
+    agree_steps: int = 0                # same: how many steps their futures agree
+    suggestion: list[str] = field(default_factory=list)    # same: actions that would test them
+    alternatives: list[dict] = field(default_factory=list)  # undecided: the minimal maps and a/b in each
+    levels: list[str] = field(default_factory=list)
+    stats: dict = field(default_factory=dict)
+
+    def rules_cited(self) -> list[str]:
+        """Every rule the proof uses, each once, in order of first use."""
+        names = [r.name for r in self.axioms]
+        for f in self.failures:
+            for p in f.premises:
+                names += p.rules_cited()
+        return list(dict.fromkeys(names))
+
+    def to_dict(self) -> dict:
+        return {"a": self.a, "b": self.b, "dstates": list(self.names), "verdict": self.verdict,
+                "sentence": self.sentence, "evidence": self.evidence,
+                "axioms": [rule_dict(r) for r in self.axioms],
+                "failures": [f.to_dict() for f in self.failures], "rules_cited": self.rules_cited(),
+                "agree_steps": self.agree_steps, "suggestion": self.suggestion,
+                "alternatives": self.alternatives, "levels": self.levels, "stats": self.stats}
+
+    def to_text(self) -> str:
+        out = [f"t{self.a} ({self.names[0]}) vs t{self.b} ({self.names[1]}): {self.verdict}",
+               f"levels: {', '.join(self.levels)}", "", self.sentence]
+        if self.evidence:
+            out += ["", "evidence (these steps alone force it; dropping any one does not): "
+                    + ", ".join(f"t{t}" for t in self.evidence)]
+        if self.axioms:
+            out += ["axioms the contradiction needs: " + ", ".join(r.cite() for r in self.axioms)]
+        for f in self.failures:
+            merged = "; ".join(" = ".join(f"t{t}" for t in group) for group in f.merged)
+            out += ["", f"Suppose t{self.a} and t{self.b} are one dstate (which makes {merged}).",
+                    f"Then {f.rule.cite()} fails, because:"]
+            for p in f.premises:
+                out += p.lines(1)
+        if self.suggestion:
+            out += ["", "experience that would test them:"] + [f"  {s}" for s in self.suggestion]
+        for alt in self.alternatives:
+            out += [f"minimal map {alt['map']}: t{self.a} is {alt['a']}, t{self.b} is {alt['b']}"
+                    + (" (apart)" if alt["apart"] else " (same)")]
+        return "\n".join(out)
+
+
+@dataclass(frozen=True)
+class Explainer:
+    """Explain pairs of time points of a tableau. Its settings are fixed when it is made; each question
+    gets its own deadline.
+
+    Parameters
+    ----------
+    axioms, levels, quantum_deg, time_limit
+        As for :class:`bootmap.mapping.resolver.Resolver` (the levels are the axiom families in play).
+    max_window : int
+        The proof is looked for in windows of steps around a and b, doubling up to this many steps
+        on each side.
+
+    Attributes
+    ----------
+    resolver : Resolver
+        The resolver whose minimal maps the explanations are about.
+    """
+
+    axioms: str | Path | None = None
+    levels: Sequence[str] | None = None
+    quantum_deg: float = QUANTUM_DEG
+    time_limit: float | None = 60.0
+    max_window: int = 32
+    resolver: Resolver = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "resolver", Resolver(self.axioms, self.levels, self.quantum_deg, self.time_limit))
+
+    def explain(self, tableau: Tableau, a: int | str, b: int | str, deadline: Deadline | None = None) -> Explanation:
+        """Explain whether ``a`` and ``b`` (time points, ``"t4"``, or dstate names such as ``"S4"``) are
+        one dstate, by ``deadline`` (default: ``time_limit`` from now). Raises :class:`ExplainError` for
+        names the map does not have, :class:`SolveTimeout` when out of time."""
+        start = time.perf_counter()
+        q = _Question(self, tableau, deadline or Deadline.after(self.time_limit))
+        cmap = self.resolver.resolve(tableau, q.deadline)
+        a, b = _time_points(cmap, a, b)
+        maps = [cmap.dstate_of] + cmap.alternatives
+        apart = [m[a] != m[b] for m in maps]
+        e = Explanation(a, b, (cmap.dstate_of[a], cmap.dstate_of[b]), "", "",
+                        levels=list(self.resolver.theory.levels))
+        if all(apart):
+            q.prove_apart(cmap, e)
+        elif not any(apart):
+            _same(tableau, cmap, e, self.quantum_deg)
+        else:
+            e.verdict = "undecided"
+            e.alternatives = [{"map": i + 1, "a": m[a], "b": m[b], "apart": m[a] != m[b]} for i, m in enumerate(maps)]
+            e.sentence = (f"The minimal maps disagree: {sum(apart)} of {len(maps)} keep t{a} and t{b} apart. "
+                          "More experience is needed to decide.")
+        e.stats["total_s"] = round(time.perf_counter() - start, 4)
+        return e
+
+    def can_be_same(self, tableau: Tableau, a: int, b: int, keep: Sequence[int] | None = None,
+                    deadline: Deadline | None = None) -> bool:
+        """Can time points a and b be one dstate in some map of these steps (default: all) that
+        satisfies the axioms, however many dstates it needs?"""
+        return _Question(self, tableau, deadline or Deadline.after(self.time_limit)).can_be_same(a, b, keep)
+
+    def minimal_evidence(self, tableau: Tableau, a: int, b: int, keep: Sequence[int],
+                         deadline: Deadline | None = None) -> list[int]:
+        """Drop steps one at a time (farthest from a and b first) while a and b still cannot be one
+        dstate: what is left is subset-minimal evidence."""
+        return _Question(self, tableau, deadline or Deadline.after(self.time_limit)).minimal_evidence(a, b, keep)
+
+
+class _Question:
+    """One explanation under way: the tableau's facts (built once for every excerpt tried) and the deadline."""
+
+    def __init__(self, explainer: Explainer, tableau: Tableau, deadline: Deadline):
+        self.explainer, self.tableau, self.deadline = explainer, tableau, deadline
+        self.theory = explainer.resolver.theory
+        self.depth = explainer.resolver.future_depth
+        self.facts = tableau_facts(tableau, explainer.quantum_deg)
+
+    # ---------------------------------------------------------------------------------------------
+    # Different: evidence, the axioms it needs, and where each fails
+    # ---------------------------------------------------------------------------------------------
+
+    def prove_apart(self, cmap: CognitiveMap, e: Explanation) -> None:
+        e.verdict = "different"
+        window = self.window(e.a, e.b)
+        if window is None:
+            e.sentence = (f"Every minimal map keeps t{e.a} ({e.names[0]}) and t{e.b} ({e.names[1]}) apart, but "
+                          f"no contradiction follows from the {2 * self.explainer.max_window} steps around them: "
+                          "merging them would cost more dstates elsewhere (minimality), not break an axiom.")
+            return
+        e.evidence = self.minimal_evidence(e.a, e.b, window)
+        e.axioms, e.failures = self.failures(cmap, e.a, e.b, e.evidence)
+        e.sentence = _sentence(e, self.tableau)
+
+    def window(self, a: int, b: int) -> list[int] | None:
+        """The fewest steps around a and b (doubling) in which a and b cannot be one dstate."""
+        n, w = len(self.tableau), 0
+        while True:
+            keep = sorted({t for c in (a, b) for t in range(max(0, c - w), min(n, c + w + 1))}
+                          | (set(range(min(a, b), max(a, b) + 1)) if abs(a - b) <= 2 * w + 4 else set()))
+            if not self.can_be_same(a, b, keep):
+                return keep
+            if w >= self.explainer.max_window or len(keep) == n:
+                return None
+            w = max(1, 2 * w)
+
+    def minimal_evidence(self, a: int, b: int, keep: Sequence[int]) -> list[int]:
+        kept = list(keep)
+        for t in sorted(kept, key=lambda t: -min(abs(t - a), abs(t - b))):
+            if t in (a, b):
+                continue
+            trial = [s for s in kept if s != t]
+            if not self.can_be_same(a, b, trial):
+                kept = trial
+        return kept
+
+    def can_be_same(self, a: int, b: int, keep: Sequence[int] | None = None) -> bool:
+        keep = list(range(len(self.tableau))) if keep is None else sorted(keep)
+        facts = self.asked(a, b, keep)
+        if facts is None:
+            return False
+        return bool(self._solve(Grounding(self.theory, facts, self.depth).ground()).satisfiable)
+
+    def asked(self, a: int, b: int, keep: list[int]) -> list[Symbol] | None:
+        """The kept steps' facts, supposing a and b are one dstate, with every partition of each class
+        allowed (as many dstates as time points), so "cannot be one dstate" means in no map at all.
+        None when a and b are not even in one class (they differ in a feature every time point shows,
+        e.g. the view)."""
+        facts = excerpt_facts(self.facts, keep)
+        classes = prepass(self.theory, facts, self.depth).classes(keep)
+        if None in classes.keys or not classes.same_class(a, b):
+            return None
+        return facts + classes.layout(len(keep)) + [SAME_ASKED(a, b)]
+
+    def failures(self, cmap: CognitiveMap, a: int, b: int, evidence: list[int]) -> tuple[list[RuleRef], list[Failure]]:
+        asked = self.asked(a, b, evidence)
+        if asked is None:
+            return self.feature_failure(a, b, evidence)
+        traced = Grounding(self.theory, asked + [FINEST_MAP()], self.depth, instrumented=True).ground()
+        inst = traced.rules
+        needed = self.needed_constraints(traced)
+        out = []
+        for r in needed:
+            model = self.finest_model(traced, [x for x in needed if x != r])
+            if model is None:
+                continue
+            derivations = Derivations.of(model)
+            instance = sorted(derivations.violated.get(r, []))[0]
+            names = Names.of(model, cmap, (a, b))
+            shown: set = set()
+            premises = [node(p, derivations, inst, names, shown) for p in instance]
+            out.append(Failure(inst.rules[r], premises, merged(model)))
+        return [inst.rules[r] for r in needed], out
+
+    def feature_failure(self, a: int, b: int, evidence: list[int]) -> tuple[list[RuleRef], list[Failure]]:
+        """a and b differ in a feature every time point shows: no supposition needed, the features'
+        own derivations are the proof."""
+        traced = Grounding(self.theory, excerpt_facts(self.facts, evidence), self.depth, instrumented=True).ground()
+        inst = traced.rules
+        symbols = [sa.symbol for sa in traced.control.symbolic_atoms if sa.is_fact]
+        derivations = Derivations.of(symbols)
+        mine = {t: {(f, x) for s, f, x in FEATURE.args(symbols) if s.number == t} for t in (a, b)}
+        grouping = {args[0] for args in SHOWN_BY_ALL.args(symbols)}
+        clash = sorted(((f, x, y) for f, x in mine[a] for g, y in mine[b] if f == g and f in grouping and x != y),
+                       key=lambda c: (str(c[0]) != "view", str(c)))  # the view first: the paper's own reason
+        rule = _rule_named(inst, "one_value_per_feature")
+        names = Names({}, {}, (a, b))
+        premises = []
+        for f, x, y in clash[:1]:
+            for t, v in ((a, x), (b, y)):
+                premises.append(node(FEATURE(t, f, v), derivations, inst, names, set()))
+        return ([rule] if rule else []), ([Failure(rule, premises, [[a, b]])] if rule else [])
+
+    # ---------------------------------------------------------------------------------------------
+    # Solving on the instrumented theory
+    # ---------------------------------------------------------------------------------------------
+
+    def _solve(self, grounding: Grounding, assumptions=(), on_model=None):
+        """Solve, giving up at the deadline with SolveTimeout (grounding, done before, cannot be cut short)."""
+        result = grounding.solve(self.deadline, on_model, assumptions)
+        if result is None:
+            limit = self.deadline.limit_s
+            raise SolveTimeout(f"time limit of {limit:g} s reached while explaining; try a larger --time-limit or "
+                               "fewer levels", time_limit_s=limit, stage="explaining")
+        return result
+
+    def needed_constraints(self, traced: Grounding) -> list[int]:
+        """A subset-minimal set of the levels' constraints that still rules the supposition out (deletion:
+        switch each off in turn and keep it off if the contradiction stands). No optimising here."""
+        traced.control.configuration.solve.opt_mode = "ignore"
+        needed = list(traced.rules.switchable)
+        for r in list(needed):
+            trial = [x for x in needed if x != r]
+            if not self._solve(traced, _switches(traced.rules, trial)).satisfiable:
+                needed = trial
+        return needed
+
+    def finest_model(self, traced: Grounding, on: Sequence[int]) -> list[Symbol] | None:
+        """The map with the most dstates that keeps the constraints ``on`` (and the supposition): only the
+        merges they force. All its atoms."""
+        traced.control.configuration.solve.opt_mode = "opt"
+        best: list[list[Symbol]] = []
+        self._solve(traced, _switches(traced.rules, on), lambda m: best.append(m.symbols(atoms=True)))
+        return best[-1] if best else None
+
+
+def _switches(inst: Instrumented, on: Sequence[int]) -> list[tuple[Symbol, bool]]:
+    on_set = set(on)
+    return [(inst.on(r), r in on_set) for r in inst.switchable]
+
+
+def _rule_named(inst: Instrumented, name: str) -> RuleRef | None:
+    return next((r for r in inst.rules if r.name == name), None)
+
+
+def _sentence(e: Explanation, tableau: Tableau) -> str:
+    """One paragraph for a person: what breaks if a and b are one dstate, and on which steps."""
+    head = f"t{e.a} ({e.names[0]}) and t{e.b} ({e.names[1]}) cannot be one dstate"
+    if not e.failures:
+        return head + "."
+    f = e.failures[0]
+    because = " and ".join(p.text for p in f.premises)
+    told = "; ".join(_step_text(tableau, t, t == e.evidence[-1] or t + 1 not in e.evidence) for t in e.evidence)
+    return f"{head}: if they were, {because} - which {f.rule.name} forbids. The experience that shows it: {told}."
+
+
+def _step_text(tableau: Tableau, t: int, last: bool) -> str:
+    """A step of the evidence: its view and, unless the next step is not evidence, its action."""
+    act = "" if last else action_text(tableau.steps[t].action)
+    return f"t{t} view {tableau.steps[t].view}" + (f", {act}" if act else "")
+
+
+# -------------------------------------------------------------------------------------------------
+# Same: minimality, how far the futures agree, what would test them
+# -------------------------------------------------------------------------------------------------
+
+def _same(tableau: Tableau, cmap: CognitiveMap, e: Explanation, quantum_deg: float) -> None:
+    e.verdict = "same"
+    a, b = sorted((e.a, e.b))
+    e.agree_steps = _agreeing_steps(tableau, a, b, quantum_deg)
+    e.suggestion = _suggest(tableau, cmap, a, b, e.agree_steps, quantum_deg)
+    d = cmap.dstate_of[a]
+    e.sentence = (f"t{a} and t{b} are both {d} in every minimal map: nothing in the experience proves them "
+                  f"different, so by minimality they are one dstate (same view "
+                  f"{cmap.views.get(d)!r}; what followed them agrees for {e.agree_steps} step(s)).")
+
+
+def _agreeing_steps(tableau: Tableau, a: int, b: int, quantum_deg: float) -> int:
+    """How many steps after a and after b the robot did the same (as the causal level names actions)
+    and then saw the same view."""
+    n, k = len(tableau), 0
+    while b + k + 1 < n and _action(tableau, a + k, quantum_deg) == _action(tableau, b + k, quantum_deg) \
+            and tableau.steps[a + k + 1].view == tableau.steps[b + k + 1].view:
+        k += 1
+    return k
+
+
+def _action(tableau: Tableau, t: int, quantum_deg: float) -> str | None:
+    """The action from t as the causal level tells actions apart (a turn by its quantised angle, or a
+    travel whatever its distance), in words."""
+    term = action_symbol(tableau.steps[t].action, quantum_deg)
+    return None if term is None else action_word(term)
+
+
+def _suggest(tableau: Tableau, cmap: CognitiveMap, a: int, b: int, agree: int, quantum_deg: float) -> list[str]:
+    """Experience that would test whether a and b are one dstate. If the robot did different things
+    after them, repeat at b's dstate what it did after a; otherwise try, at their dstate, an action of
+    the tableau's own vocabulary never taken there."""
+    n = len(tableau)
+    after_a, after_b = _action(tableau, a + agree, quantum_deg), (
+        _action(tableau, b + agree, quantum_deg) if b + agree < n else None)
+    d = cmap.dstate_of[a]
+    if after_a and after_b and after_a != after_b:
+        seq = [_action(tableau, a + i, quantum_deg) for i in range(agree + 1)]
+        return [f"when at {d} again, do what followed t{a}: {', then '.join(seq)} (t{b} was followed by "
+                f"{after_b} instead): the same views again would confirm one dstate, others would prove two"]
+    vocabulary = dict.fromkeys(_action(tableau, t, quantum_deg) for t in range(n - 1))
+    taken = {_action(tableau, t, quantum_deg) for t in range(n - 1) if cmap.dstate_of[t] == d}
+    return [f"when at {d} again: {x} (never done at {d} so far; if t{a} and t{b} were different dstates, "
+            "what follows could show it)" for x in vocabulary if x not in taken]
+
+
+def _time_points(cmap: CognitiveMap, a, b) -> tuple[int, int]:
+    """Time points for the question: numbers and ``tN`` name time points; dstate names (``S4``) the
+    closest pair of their visits."""
+    n = len(cmap.dstate_of)
+
+    def visits(x) -> list[int]:
+        text = str(x).strip()
+        if re.fullmatch(r"t?\d+", text):
+            t = int(text.lstrip("t"))
+            if not 0 <= t < n:
+                raise ExplainError(f"time point {text} is not in the tableau (it has t0..t{n - 1})")
+            return [t]
+        found = [t for t, d in enumerate(cmap.dstate_of) if d == text]
+        if not found:
+            raise ExplainError(f"{text!r} is neither a time point (t0..t{n - 1}) nor a dstate of the map "
+                               f"({', '.join(dict.fromkeys(cmap.dstate_of))})")
+        return found
+
+    pairs = [(abs(x - y), x, y) for x in visits(a) for y in visits(b) if x != y] or \
+        [(0, x, x) for x in visits(a)]
+    _, x, y = min(pairs)
+    return x, y

@@ -1,0 +1,257 @@
+"""The resolver: abduce dstates, places and paths from a tableau with clingo.
+
+The search, in the paper's terms: dstates with the same view are equal unless the axioms prove them
+different. Concretely:
+
+1. Features every time point shows (its view; with the metrical level, its heading) group time points
+   into *classes*, named by a key term the theory folds from them (core/partition.lp): only time points
+   of one class can share a dstate. The first try, in a single grounding, is one dstate per class;
+   usually that settles it, by propagation alone.
+2. Otherwise, features only some time points show (what was seen after a given sequence of actions)
+   tell time points of a class apart: a set of pairwise disagreeing time points is a proved lower bound
+   on the dstates of that class. Try exactly those bounds.
+3. Otherwise find some valid map, allowing a few spare dstates per class: an upper bound.
+4. Ground once within that bound and let clingo minimise the number of dstates (core-guided, so what it
+   learns carries from one bound to the next), then enumerate the minimal maps (up to ``max_models``):
+   one means the map is unique.
+
+In every step each class gets only the candidate dstates ("slots", numbered by first appearance in
+core/partition.lp) that the bound leaves it, so the ground program stays small when the lower bound is
+tight.
+
+Example
+-------
+>>> from bootmap.tableau import Tableau
+>>> steps = [{"view": v, "action": {"type": "turn", "angle_deg": -90}} for v in "ABAB"] + [{"view": "A"}]
+>>> m = Resolver().resolve(Tableau.from_dict({"format": "bootmap.tableau/1", "steps": steps}))
+>>> m.n_dstates, m.n_places, m.unique
+(4, 1, True)
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Sequence
+
+import clingo
+from clingo import Symbol
+
+from ..errors import InconsistentTableau, SolveTimeout
+from ..tableau import Tableau
+from .cogmap import CognitiveMap, SolveStats, Try, build_map
+from .diagnosis import diagnosed
+from .facts import tableau_facts
+from .grounding import Classes, Deadline, Grounding, prepass
+from .theory import Theory, load_theory
+from .vocabulary import FUTURE_DEPTH, IS, MINIMISE_DSTATES, ONE_PER_CLASS, QUANTUM_DEG
+
+
+@dataclass(frozen=True)
+class Resolver:
+    """Resolve tableaux into cognitive maps. Its settings are fixed when it is made; each resolution
+    gets its own deadline.
+
+    Parameters
+    ----------
+    axioms : path, optional
+        Axiom directory (default: BOOTMAP_AXIOMS, else the shipped ``asp/``).
+    levels : sequence of str, optional
+        Levels (file stems) to load, e.g. ``["causal", "topological"]``; default all.
+    quantum_deg : float
+        Turn angles and heading changes are rounded to this many degrees.
+    time_limit : float or None
+        Seconds for a resolution unless :meth:`resolve` is given a deadline; on time-out
+        :class:`SolveTimeout` is raised with the number of dstates proved necessary so far and, if one
+        was found, a valid map not proved minimal.
+    max_models : int
+        Minimal maps to enumerate before calling the count capped.
+    future_depth : int
+        How many actions ahead the causal level compares what time points saw, to tell them apart
+        before the search (the ``future_depth`` constant of causal.lp).
+    diagnose : bool
+        When no map satisfies the axioms, find which levels fail (:mod:`.diagnosis`), within the
+        same deadline.
+
+    Attributes
+    ----------
+    theory : Theory
+        The loaded axiom files.
+    """
+
+    axioms: str | Path | None = None
+    levels: Sequence[str] | None = None
+    quantum_deg: float = QUANTUM_DEG
+    time_limit: float | None = 60.0
+    max_models: int = 10
+    future_depth: int = FUTURE_DEPTH
+    diagnose: bool = True
+    theory: Theory = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        if self.levels is not None:
+            object.__setattr__(self, "levels", tuple(self.levels))
+        object.__setattr__(self, "theory", load_theory(self.axioms, self.levels))
+
+    def with_levels(self, levels: Sequence[str]) -> "Resolver":
+        """The same resolver (same axiom directory and settings) on other levels, without a diagnosis."""
+        return replace(self, axioms=self.theory.directory, levels=tuple(levels), diagnose=False)
+
+    def resolve(self, tableau: Tableau, deadline: Deadline | None = None) -> CognitiveMap:
+        """The minimal map(s) of the tableau, by ``deadline`` (default: ``time_limit`` from now).
+
+        Raises
+        ------
+        InconsistentTableau
+            No map satisfies the axioms (with the failing levels, when ``diagnose``).
+        SolveTimeout
+            Out of time; it carries the dstates proved necessary and, if one was found on the way,
+            a valid map that is not proved minimal (``best_map``).
+        """
+        deadline = deadline or Deadline.after(self.time_limit)
+        try:
+            return _Search(self, tableau, deadline).run()
+        except InconsistentTableau as e:
+            if not self.diagnose:
+                raise
+            raise diagnosed(e, self, tableau, deadline) from None
+
+
+class _Search:
+    """One resolution: the tableau as facts, its classes, the clock, the figures, the best map so far."""
+
+    def __init__(self, resolver: Resolver, tableau: Tableau, deadline: Deadline):
+        self.resolver, self.tableau, self.deadline = resolver, tableau, deadline
+        self.start = time.perf_counter()
+        self.facts = tableau_facts(tableau, resolver.quantum_deg)
+        self.depth = 0  # futures only matter once one dstate per class has failed
+        self.classes: Classes | None = None  # known after the first try
+        self.proved = 1  # dstates proved necessary so far
+        self.best: CognitiveMap | None = None
+        self.ground_s = self.solve_s = 0.0
+        self.tries: list[Try] = []
+
+    def run(self) -> CognitiveMap:
+        found = self.one_per_class()
+        if found:
+            return found
+        self.bound_classes_from_below()
+        if self.classes.lower_bound > self.classes.count:
+            found = self.bounded(self.classes.lower_bound)
+            if found:
+                return found
+        return self.optimise(self.some_map())
+
+    def one_per_class(self) -> CognitiveMap | None:
+        """The first try, in one grounding: one dstate per class. If it fails, learn the classes from it."""
+        outcome = self._solve([ONE_PER_CLASS()], "one dstate per class", keep=True)
+        if outcome.models:  # every class holds its one dstate: as many classes as dstates
+            n = len({args[1] for args in IS.args(outcome.models[0])})
+            return self._map(outcome, classes=n, proved=n)
+        self.classes = outcome.grounding.classes(range(len(self.tableau)))
+        self.proved = self.classes.count + 1
+        return None
+
+    def bounded(self, bound: int) -> CognitiveMap | None:
+        """The minimal maps if at most ``bound`` dstates will do, else None (and the bound is proved)."""
+        outcome = self._solve(self.classes.layout(bound), f"at most {bound} dstates")
+        if outcome.models:
+            return self._map(outcome)
+        self.proved = max(self.proved, bound + 1)
+        return None
+
+    def bound_classes_from_below(self) -> None:
+        self._check_clock("the lower bounds")
+        self.depth = self.resolver.future_depth
+        grounded = prepass(self.resolver.theory, self.facts, self.depth)
+        self.ground_s += grounded.ground_s
+        self.classes.lower = grounded.lower_bounds(self.classes)
+        self.proved = max(self.proved, self.classes.lower_bound)
+
+    def some_map(self) -> CognitiveMap:
+        """A valid map with few spare dstates per class (doubling the spare until one is found)."""
+        widest = max(size - low for size, low in zip(self.classes.sizes, self.classes.lower))
+        spare = 1
+        while True:
+            layout = self.classes.layout(len(self.tableau), spare=spare)
+            outcome = self._solve(layout, f"any map with {spare} spare dstate(s) per class", models=1)
+            if outcome.models:
+                self.best = self._map(outcome, minimal=False)
+                return self.best
+            if spare >= widest:
+                levels = tuple(self.resolver.theory.levels)
+                raise InconsistentTableau(
+                    "no map satisfies the axioms: no partition of the time points into dstates explains "
+                    f"this experience (levels: {', '.join(levels)})", levels=levels)
+            spare = min(widest, 2 * spare)
+
+    def optimise(self, upper: CognitiveMap) -> CognitiveMap:
+        """The minimal maps within the upper map's number of dstates, by clingo's optimisation."""
+        layout = self.classes.layout(upper.n_dstates) + [MINIMISE_DSTATES()]
+        outcome = self._solve(layout, f"the fewest dstates, at most {upper.n_dstates}", optimise=True)
+        n = len({args[1] for args in IS.args(outcome.models[0])})
+        return self._map(outcome, proved=n)  # the optimiser proved it
+
+    def _map(self, outcome: "_Outcome", minimal: bool = True, classes: int | None = None,
+             proved: int | None = None) -> CognitiveMap:
+        models = outcome.models if minimal else outcome.models[:1]
+        return build_map(self.tableau, models, minimal and outcome.exhausted, self.resolver.theory.levels,
+                         self._stats(classes, proved), minimal=minimal)
+
+    def _stats(self, classes: int | None = None, proved: int | None = None) -> SolveStats:
+        """The figures so far, as a snapshot: each map keeps its own."""
+        return SolveStats(classes=classes if classes is not None else (self.classes.count if self.classes else 0),
+                          lower_bound=proved if proved is not None else self.proved,
+                          ground_s=self.ground_s, solve_s=self.solve_s,
+                          total_s=time.perf_counter() - self.start, bounds=tuple(self.tries))
+
+    def _solve(self, layout: list[Symbol], what: str, models: int | None = None, optimise: bool = False,
+               keep: bool = False) -> "_Outcome":
+        """Ground and solve; on time-out raise SolveTimeout with the best map known."""
+        if self.classes is not None:  # the first try always runs: its classes bound the answer
+            self._check_clock(what)
+        options = [str(self.resolver.max_models + 1 if models is None else models)]
+        if optimise:
+            options += ["--opt-mode=optN", "--opt-strategy=usc"]
+        grounding = Grounding(self.resolver.theory, self.facts + layout, self.depth, options).ground()
+        optimal: list[list[Symbol]] = []
+        improving: list[list[Symbol]] = []
+
+        def on_model(m: clingo.Model) -> None:
+            (optimal if not optimise or m.optimality_proven else improving).append(m.symbols(shown=True))
+
+        result = grounding.solve(self.deadline, on_model)
+        self.ground_s += grounding.ground_s
+        self.solve_s += grounding.solve_s
+        verdict = "timeout" if result is None else ("sat" if result.satisfiable else "unsat")
+        self.tries.append(Try(what, verdict))
+        if result is None:
+            if self.classes is None:  # timed out in the first try: the classes still bound the answer
+                self.classes = grounding.classes(range(len(self.tableau)))
+                self.proved = self.classes.count
+            raise self._timed_out(what, improving)
+        return _Outcome(optimal, bool(result.exhausted), grounding if keep else None)
+
+    def _check_clock(self, what: str) -> None:
+        """Out of time before a grounding starts: stop here (clingo cannot interrupt a grounding)."""
+        if self.deadline.passed():
+            raise self._timed_out(what, [])
+
+    def _timed_out(self, what: str, improving: list) -> SolveTimeout:
+        if improving:  # the optimiser's last (smallest) model so far
+            self.best = build_map(self.tableau, improving[-1:], False, self.resolver.theory.levels,
+                                  self._stats(), minimal=False)
+        found = (f"best map so far: {self.best.n_dstates} dstates, not proved minimal" if self.best
+                 else "no map found yet")
+        limit = self.deadline.limit_s
+        return SolveTimeout(f"time limit of {limit:g} s reached while looking for {what}; "
+                            f"at least {self.proved} dstates are proved necessary; {found}",
+                            lower_bound=self.proved, best_map=self.best, time_limit_s=limit, stage=what)
+
+
+@dataclass
+class _Outcome:
+    models: list[list[Symbol]]
+    exhausted: bool
+    grounding: Grounding | None = None

@@ -1,0 +1,226 @@
+"""The vocabulary shared by Python and the axioms: every predicate that crosses the boundary, once.
+
+The .lp files in ``asp/`` and the Python that meets them must agree on predicate names and arities. They
+are written here, each with its role and, for the ones a proof shows, how it reads to a person. Nothing
+else in bootmap names a predicate by a bare string: facts are built by calling a :class:`Predicate`
+(``VIEW(3, "V1")`` is the symbol ``view(3, "V1")``), and models are read through one
+(``IS.args(symbols)``). :func:`mismatches` compares this table with the signatures clingo's parser
+finds in the axiom files, and a test runs it, so renaming a predicate in an .lp file fails a test
+instead of a user's explanation.
+
+Roles:
+
+* ``tableau``: facts of the experience, built by :mod:`bootmap.mapping.facts` (the axioms read them);
+* ``layout``: facts that lay out one search (core/partition.lp reads them);
+* ``question``: facts an explanation adds (core/ask.lp reads them);
+* ``derived``: what the axioms derive, read back by Python or shown in a proof.
+
+Phrases are ``str.format`` patterns over the atom's arguments; ``{P1}`` names argument 1 as a place.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Iterable, Iterator, Sequence
+
+import clingo
+from clingo import Function, Number, String, Symbol, ast
+
+#: Turn angles and travels' heading changes are rounded to this many degrees (see facts.quantise).
+QUANTUM_DEG = 15.0
+#: How many actions ahead the causal level compares what time points saw (``#const future_depth``).
+FUTURE_DEPTH = 8
+#: The name of that constant in causal.lp.
+FUTURE_DEPTH_CONST = "future_depth"
+
+
+@dataclass(frozen=True)
+class Predicate:
+    """One predicate of the boundary: name, arity, role, and how an atom of it reads to a person."""
+
+    name: str
+    arity: int
+    role: str
+    phrase: str | None = None
+
+    @property
+    def signature(self) -> tuple[str, int]:
+        return self.name, self.arity
+
+    def __call__(self, *args: int | str | Symbol) -> Symbol:
+        """The atom with these arguments: ints become numbers, str become clingo *strings* (never
+        constants: a user's label is data, not program text)."""
+        if len(args) != self.arity:
+            raise TypeError(f"{self.name}/{self.arity} takes {self.arity} arguments, got {len(args)}")
+        return Function(self.name, [_term(a) for a in args])
+
+    def matches(self, symbol: Symbol) -> bool:
+        return symbol.type == clingo.SymbolType.Function and symbol.name == self.name \
+            and len(symbol.arguments) == self.arity
+
+    def args(self, symbols: Iterable[Symbol]) -> Iterator[Sequence[Symbol]]:
+        """The arguments of each atom of this predicate among ``symbols`` (e.g. a model)."""
+        for s in symbols:
+            if self.matches(s):
+                yield s.arguments
+
+    def facts_in(self, control: clingo.Control) -> Iterator[Sequence[Symbol]]:
+        """The arguments of each atom of this predicate a grounded control holds as a fact."""
+        for sa in control.symbolic_atoms.by_signature(self.name, self.arity):
+            if sa.is_fact:
+                yield sa.symbol.arguments
+
+
+def _term(x: int | str | Symbol) -> Symbol:
+    if isinstance(x, bool):
+        raise TypeError("booleans are not terms")
+    if isinstance(x, int):
+        return Number(x)
+    if isinstance(x, str):
+        return String(x)
+    return x
+
+
+# --------------------------------------------------------------------------------------------------
+# The tableau (causal.lp and metrical.lp read these)
+# --------------------------------------------------------------------------------------------------
+VIEW = Predicate("view", 2, "tableau", "at t{0} the robot saw view {1}")
+TURN = Predicate("turn", 2, "tableau", "at t{0} it turned {1} degrees")
+TRAVEL = Predicate("travel", 2, "tableau", "at t{0} it travelled along the path (net heading change {1} degrees)")
+RESUME = Predicate("resume", 1, "tableau", "the evidence resumes at t{0} after a gap (headings start afresh)")
+
+# --------------------------------------------------------------------------------------------------
+# The search layout (core/partition.lp reads these)
+# --------------------------------------------------------------------------------------------------
+ONE_PER_CLASS = Predicate("one_per_class", 0, "layout")
+SLOTS = Predicate("slots", 2, "layout")
+PREV_IN_CLASS = Predicate("prev_in_class", 2, "layout")
+DSTATE_BOUND = Predicate("dstate_bound", 1, "layout")
+MINIMISE_DSTATES = Predicate("minimise_dstates", 0, "layout")
+
+# --------------------------------------------------------------------------------------------------
+# Questions (core/ask.lp reads these)
+# --------------------------------------------------------------------------------------------------
+SAME_ASKED = Predicate("same_asked", 2, "question", "suppose t{0} and t{1} are one dstate")
+FINEST_MAP = Predicate("finest_map", 0, "question")
+
+# --------------------------------------------------------------------------------------------------
+# What the axioms derive: read back by Python, or shown in proofs
+# --------------------------------------------------------------------------------------------------
+# core/partition.lp
+CLASS_KEY = Predicate("class_key", 2, "derived")
+SHOWN_BY_ALL = Predicate("shown_by_all", 1, "derived")
+CANDIDATE = Predicate("cand", 2, "derived")
+# causal.lp
+TIME = Predicate("time", 1, "derived")
+IS = Predicate("is", 2, "derived", "t{0} is at {1}")
+DSTATE = Predicate("dstate", 1, "derived")
+ACTION = Predicate("action", 2, "derived", "from t{0} the robot's action was {1}")
+FEATURE = Predicate("feature", 3, "derived", "t{0} shows {1} {2}")
+DSTATE_FEATURE = Predicate("dstate_feature", 3, "derived", "{0} shows {1} {2}")
+NEXT = Predicate("next", 3, "derived", "{1} at {0} leads to {2}")
+VIEW_OF = Predicate("view_of", 2, "derived", "{0} shows view {1}")
+# metrical.lp
+HEADING = Predicate("heading", 3, "derived", "at t{0} the robot faced {2} degrees (counted from t{1})")
+HEADING_OF = Predicate("heading_of", 2, "derived", "{0} faces {1} degrees")
+# topological.lp
+TURN_LINK = Predicate("turn_link", 3, "derived", "turning {2} degrees at {0} reaches {1}, at the same place")
+AROUND = Predicate("around", 2, "derived", "turning around at {0} reaches {1}")
+TRAVEL_LINK = Predicate("travel_link", 2, "derived", "travelling on from {0} reaches {1}")
+TURN_LINKED = Predicate("turn_linked", 2, "derived", "{0} and {1} are linked by a turn")
+FLIP = Predicate("flip", 2, "derived")
+SAME_PLACE = Predicate("same_place", 2, "derived", "{0} and {1} are at one place")
+PLACE_OF = Predicate("place_of", 2, "derived", "{0} is at {P1}")
+SAME_PATH = Predicate("same_path", 3, "derived", "{1} faces along {0}'s path ({2} way)")
+PATH_REP = Predicate("path_rep", 2, "derived", "{0}'s path is the path of {1}")
+PATH_OF = Predicate("path_of", 3, "derived", "{0} faces {2} along the path of {1}")
+AHEAD = Predicate("ahead", 2, "derived", "{P1} lies ahead of {0}")
+BEHIND = Predicate("behind", 2, "derived", "{P1} lies behind {0}")
+ON_PATH = Predicate("on_path", 2, "derived", "{P1} lies on the path {0} faces")
+RIGHT = Predicate("right", 2, "derived", "{P1} lies right of the path {0} faces")
+LEFT = Predicate("left", 2, "derived", "{P1} lies left of the path {0} faces")
+
+PREDICATES: tuple[Predicate, ...] = tuple(v for v in list(globals().values()) if isinstance(v, Predicate))
+_BY_SIGNATURE = {p.signature: p for p in PREDICATES}
+
+#: Atoms a proof need not spell out: bookkeeping of the search layout.
+QUIET = frozenset(p.signature for p in (TIME, DSTATE, CANDIDATE, FLIP))
+
+
+def predicate(symbol: Symbol) -> Predicate | None:
+    """The vocabulary's predicate of an atom, or None (a user's own predicate, or not an atom)."""
+    if symbol.type != clingo.SymbolType.Function:
+        return None
+    return _BY_SIGNATURE.get((symbol.name, len(symbol.arguments)))
+
+
+# --------------------------------------------------------------------------------------------------
+# Actions, as the causal level names them
+# --------------------------------------------------------------------------------------------------
+
+def action_term(kind: str, angle: int) -> Symbol:
+    """The term causal.lp makes of an action (``turn_action``, ``travel_action``): a turn by its
+    quantised angle, ``turn(A)``, or ``travel`` whatever its length and bend."""
+    return Function("turn", [Number(angle)]) if kind == "turn" else Function("travel")
+
+
+def action_word(term: Symbol) -> str:
+    """An action term as a person reads it: ``turn(-90)`` -> "turn -90", ``travel`` -> "travel"."""
+    if term.name == "turn" and len(term.arguments) == 1:
+        return f"turn {term.arguments[0].number:+d}"
+    return term.name
+
+
+# --------------------------------------------------------------------------------------------------
+# Checking the table against the axiom files
+# --------------------------------------------------------------------------------------------------
+
+def signatures(files: Iterable[str | Path]) -> tuple[set[tuple[str, int]], set[tuple[str, int]], set[str]]:
+    """What clingo's parser finds in these files: the predicates in rule heads (defined), anywhere in a
+    rule (used), and the names of ``#const`` declarations."""
+    defined: set[tuple[str, int]] = set()
+    used: set[tuple[str, int]] = set()
+    constants: set[str] = set()
+
+    def atoms(node, into: set) -> None:
+        class Collect(ast.Transformer):
+            def visit_SymbolicAtom(self, atom):
+                term = atom.symbol
+                if term.ast_type == ast.ASTType.Function:
+                    into.add((term.name, len(term.arguments)))
+                elif term.ast_type == ast.ASTType.SymbolicTerm and term.symbol.type == clingo.SymbolType.Function:
+                    into.add((term.symbol.name, len(term.symbol.arguments)))
+                return atom
+
+        Collect()(node)
+
+    def statement(stm) -> None:
+        if stm.ast_type == ast.ASTType.Rule:
+            atoms(stm.head, defined)
+            atoms(stm.head, used)
+            for lit in stm.body:
+                atoms(lit, used)
+        elif stm.ast_type == ast.ASTType.Minimize:
+            for lit in stm.body:
+                atoms(lit, used)
+        elif stm.ast_type == ast.ASTType.Definition:
+            constants.add(stm.name)
+
+    ast.parse_files([str(f) for f in files], statement)
+    return defined, used, constants
+
+
+def mismatches(files: Iterable[str | Path]) -> list[str]:
+    """How the vocabulary and these axiom files disagree (empty when they agree): a predicate Python
+    builds that no rule reads, one Python reads that no rule defines, a missing ``future_depth``."""
+    defined, used, constants = signatures(files)
+    problems = []
+    for p in PREDICATES:
+        where = defined if p.role == "derived" else used
+        if p.signature not in where:
+            verb = "defines" if p.role == "derived" else "reads"
+            problems.append(f"no rule {verb} {p.name}/{p.arity} ({p.role})")
+    if FUTURE_DEPTH_CONST not in constants:
+        problems.append(f"no #const {FUTURE_DEPTH_CONST}")
+    return problems
