@@ -176,12 +176,12 @@ def action_word(term: Symbol) -> str:
 # Checking the table against the axiom files
 # --------------------------------------------------------------------------------------------------
 
-def signatures(files: Iterable[str | Path]) -> tuple[set[tuple[str, int]], set[tuple[str, int]], set[str]]:
+def signatures(files: Iterable[str | Path]) -> tuple[set[tuple[str, int]], set[tuple[str, int]], dict[str, str]]:
     """What clingo's parser finds in these files: the predicates in rule heads (defined), anywhere in a
-    rule (used), and the names of ``#const`` declarations."""
+    rule (used), and the ``#const`` declarations (name -> default value)."""
     defined: set[tuple[str, int]] = set()
     used: set[tuple[str, int]] = set()
-    constants: set[str] = set()
+    constants: dict[str, str] = {}
 
     def atoms(node, into: set) -> None:
         class Collect(ast.Transformer):
@@ -205,7 +205,7 @@ def signatures(files: Iterable[str | Path]) -> tuple[set[tuple[str, int]], set[t
             for lit in stm.body:
                 atoms(lit, used)
         elif stm.ast_type == ast.ASTType.Definition:
-            constants.add(stm.name)
+            constants[stm.name] = str(stm.value)
 
     ast.parse_files([str(f) for f in files], statement)
     return defined, used, constants
@@ -213,7 +213,8 @@ def signatures(files: Iterable[str | Path]) -> tuple[set[tuple[str, int]], set[t
 
 def mismatches(files: Iterable[str | Path]) -> list[str]:
     """How the vocabulary and these axiom files disagree (empty when they agree): a predicate Python
-    builds that no rule reads, one Python reads that no rule defines, a missing ``future_depth``."""
+    builds that no rule reads, one Python reads that no rule defines, a ``future_depth`` missing or with
+    another default than :data:`FUTURE_DEPTH`."""
     defined, used, constants = signatures(files)
     problems = []
     for p in PREDICATES:
@@ -223,4 +224,7 @@ def mismatches(files: Iterable[str | Path]) -> list[str]:
             problems.append(f"no rule {verb} {p.name}/{p.arity} ({p.role})")
     if FUTURE_DEPTH_CONST not in constants:
         problems.append(f"no #const {FUTURE_DEPTH_CONST}")
+    elif constants[FUTURE_DEPTH_CONST] != str(FUTURE_DEPTH):
+        problems.append(f"#const {FUTURE_DEPTH_CONST} = {constants[FUTURE_DEPTH_CONST]}, but Python's default "
+                        f"is {FUTURE_DEPTH}")
     return problems
