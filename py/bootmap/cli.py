@@ -14,6 +14,7 @@ from typing import Callable, Sequence
 
 from . import __version__
 from .errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_OK, BootmapError, SolveTimeout
+from .mapping.vocabulary import QUANTUM_DEG
 
 
 def _levels(text: str) -> list[str]:
@@ -36,8 +37,8 @@ def _add_theory_options(p: argparse.ArgumentParser) -> None:
                    help="axiom directory (default: $BOOTMAP_AXIOMS, else the shipped asp/)")
     p.add_argument("--levels", type=_levels, metavar="L1,L2",
                    help="levels to load, e.g. causal,topological (default: every .lp file in the directory)")
-    p.add_argument("--quantum", type=float, default=15.0, metavar="DEG",
-                   help="round turn angles and heading changes to this many degrees (default 15)")
+    p.add_argument("--quantum", type=float, default=QUANTUM_DEG, metavar="DEG",
+                   help=f"round turn angles and heading changes to this many degrees (default {QUANTUM_DEG:g})")
 
 
 def cmd_map(args: argparse.Namespace) -> int:
@@ -60,7 +61,7 @@ def cmd_map(args: argparse.Namespace) -> int:
 
 def _with_views(tableau):
     """A tableau of images only (e.g. from `bootmap simulate`) gets its views by k-means, k chosen by M."""
-    if all(s.view is not None for s in tableau.steps):
+    if tableau.labelled:
         return tableau  # nothing to cluster: spare the scikit-learn import (about a second)
     from .views import tableau_with_views
 

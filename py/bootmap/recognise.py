@@ -41,8 +41,13 @@ from sklearn.preprocessing import StandardScaler
 from sklearn.svm import SVC
 from sklearn.utils.validation import check_is_fitted
 
+from .errors import BootmapError
+from .images import as_images
+from .tableau import Tableau
+
 __all__ = [
     "LearningCurve",
+    "NoImages",
     "Recogniser",
     "compare_clusterers",
     "compare_learners",
@@ -50,22 +55,10 @@ __all__ = [
     "learning_curve_cv",
     "online_curve",
     "online_hits",
+    "recogniser_for_map",
 ]
 
 _BLOCK = 1024  # rows of the distance matrix computed at once: memory O(_BLOCK * n)
-
-
-def _as_images(images) -> np.ndarray:
-    """Images as a float (n, d) array; ``inf`` read as a drop-out at the largest finite range."""
-    X = np.asarray(images, dtype=float)
-    if X.ndim != 2:
-        raise ValueError(f"images must be a 2-D array (n_images, n_beams), got shape {X.shape}")
-    if np.isnan(X).any():
-        raise ValueError("images contain nan")
-    if np.isinf(X).any():
-        finite = X[np.isfinite(X)]
-        X = np.where(np.isinf(X), finite.max() if finite.size else 0.0, X)
-    return X
 
 
 def _as_labels(dstates, n: int) -> np.ndarray:
@@ -151,7 +144,7 @@ def online_hits(images, dstates, make_learner: Callable[[], object] | None = Non
     >>> online_hits(X, ["a", "a", "b", "b", "a"]).tolist()
     [False, True, False, True, True]
     """
-    X = _as_images(images)
+    X = as_images(images)
     y = _as_labels(dstates, len(X))
     if stride < 1:
         raise ValueError("stride must be at least 1")
@@ -277,7 +270,7 @@ def learning_curve_cv(images, dstates, sizes: Sequence[int] | None = None, learn
     >>> learning_curve_cv(X, y, sizes=(50, 100)).mean.tolist()
     [1.0, 1.0]
     """
-    X = _as_images(images)
+    X = as_images(images)
     y = _as_labels(dstates, len(X))
     learner = KNeighborsClassifier(n_neighbors=1) if learner is None else learner
     n_train = len(X) - -(-len(X) // n_splits)  # the smallest training set over the folds
@@ -391,7 +384,7 @@ def compare_clusterers(images, dstates, k: int, random_state: int = 0) -> list[d
         whenever several dstates share a view, as they must when views are fewer than dstates), and
         ``fit_time`` in seconds.
     """
-    X = _as_images(images)
+    X = as_images(images)
     y = _as_labels(dstates, len(X))
     clusterers = {
         "k-means": KMeans(n_clusters=k, n_init=10, random_state=random_state),
@@ -444,7 +437,7 @@ class Recogniser(ClassifierMixin, BaseEstimator):
 
     def fit(self, images, dstates):
         """Store the labelled images. Returns self."""
-        X = _as_images(images)
+        X = as_images(images)
         y = _as_labels(dstates, len(X))
         self.knn_ = KNeighborsClassifier(n_neighbors=self.n_neighbors).fit(X, y)
         self.classes_ = self.knn_.classes_
@@ -454,7 +447,7 @@ class Recogniser(ClassifierMixin, BaseEstimator):
     def predict(self, images) -> np.ndarray:
         """The dstate of each image."""
         check_is_fitted(self, "knn_")
-        return self.knn_.predict(_as_images(images))
+        return self.knn_.predict(as_images(images))
 
     def predict_with_distance(self, images) -> tuple[np.ndarray, np.ndarray]:
         """The dstate of each image and the Euclidean distance to the nearest stored image.
@@ -462,6 +455,24 @@ class Recogniser(ClassifierMixin, BaseEstimator):
         A large distance means an unfamiliar image: the prediction deserves less trust.
         """
         check_is_fitted(self, "knn_")
-        X = _as_images(images)
+        X = as_images(images)
         dist, _ = self.knn_.kneighbors(X, n_neighbors=1)
         return self.knn_.predict(X), dist[:, 0]
+
+
+class NoImages(BootmapError):
+    """A tableau of view labels only: there are no images to recognise by."""
+
+
+def recogniser_for_map(tableau: Tableau, dstate_of: Sequence[str], n_neighbors: int = 1) -> Recogniser:
+    """A recogniser of the dstates a map gives the tableau's images (``dstate_of[t]`` for time point t):
+    the paper's section 7, once abduction has labelled every image. Steps without an image are left out;
+    :class:`NoImages` if none has one."""
+    if len(dstate_of) != len(tableau):
+        raise ValueError(f"{len(dstate_of)} dstates for a tableau of {len(tableau)} steps")
+    labelled = [(s.image, d) for s, d in zip(tableau.steps, dstate_of) if s.image is not None]
+    if not labelled:
+        raise NoImages("this tableau has view labels but no images, so there is nothing to recognise by; "
+                       "post a tableau whose steps carry images")
+    images, dstates = zip(*labelled)
+    return Recogniser(n_neighbors).fit(list(images), list(dstates))

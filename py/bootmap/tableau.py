@@ -115,6 +115,41 @@ class Tableau:
         steps = tuple(Step(v, s.action, s.image, s.truth, s.pose) for v, s in zip(views, self.steps))
         return Tableau(steps, self.world, dict(self.meta))
 
+    @property
+    def labelled(self) -> bool:
+        """Every step has a view label (else the views are found by clustering the images)."""
+        return all(s.view is not None for s in self.steps)
+
+    def extend(self, more: Any, source: str = "request") -> "Tableau":
+        """This tableau with more experience after it, from a document ``{"action": ..., "steps": [...]}``:
+        ``action`` leads from this tableau's last step to the first new one.
+
+        The new steps are checked as a document of their own, so errors name its fields
+        (``request: steps[0].image``, ``request: action``), then against this tableau: view labels if it
+        has them, else images only, of the length of its images.
+        """
+        if not isinstance(more, dict) or not {"action", "steps"} <= set(more):
+            raise TableauError('expected an object with "action" and "steps"', source)
+        new = Tableau.from_dict({"format": FORMAT, "steps": more["steps"]}, source)
+        _check_schema(more["action"], source, _action_validator(), ("action",))
+        link = _action(more["action"], f"{source}: action")
+        labelled = self.labelled
+        for i, step in enumerate(new.steps):
+            if labelled and step.view is None:
+                raise TableauError("missing: the stored tableau has view labels, so new steps need them",
+                                   f"{source}: steps[{i}].view")
+            if not labelled and (step.view is not None or step.image is None):
+                raise TableauError("the stored tableau has images only (its views are found by clustering): "
+                                   "give new steps an image and no view", f"{source}: steps[{i}]")
+        length = next((len(s.image) for s in self.steps if s.image is not None), None)
+        for i, step in enumerate(new.steps):
+            if length is not None and step.image is not None and len(step.image) != length:
+                raise TableauError(f"has {len(step.image)} values where the stored steps have {length}",
+                                   f"{source}: steps[{i}].image")
+        last = self.steps[-1]
+        joined = Step(last.view, link, last.image, last.truth, last.pose)
+        return Tableau(self.steps[:-1] + (joined,) + new.steps, self.world, dict(self.meta))
+
     def to_dict(self) -> dict:
         d: dict[str, Any] = {"format": FORMAT}
         if self.world is not None:
@@ -188,27 +223,37 @@ def _validator() -> jsonschema.protocols.Validator:
     return jsonschema.Draft202012Validator(schema())
 
 
-def _check_schema(data: Any, source: str) -> None:
-    errors = list(_validator().iter_errors(data))
+@lru_cache(maxsize=1)
+def _action_validator() -> jsonschema.protocols.Validator:
+    """The schema of one action (``$defs/action``), for the action an extension starts with."""
+    return jsonschema.Draft202012Validator({"$defs": schema()["$defs"], "$ref": "#/$defs/action"})
+
+
+def _check_schema(data: Any, source: str, validator: jsonschema.protocols.Validator | None = None,
+                  prefix: tuple = ()) -> None:
+    """Raise TableauError for the error a person has to fix first; ``prefix`` is the path of ``data``
+    in the document."""
+    errors = list((validator or _validator()).iter_errors(data))
     if not errors:
         return
     # The deepest error is the one that names the field a person has to fix.
     err = max(errors, key=lambda e: (len(e.absolute_path), -len(e.context)))
-    if err.validator == "anyOf" and err.absolute_path and err.absolute_path[-1] != "action":
+    path = list(prefix) + list(err.absolute_path)
+    if err.validator == "anyOf" and err.absolute_path and path[-1] != "action":
         msg = "a step needs a view or an image"
     elif err.validator == "additionalProperties":
         msg = err.message.replace("Additional properties are not allowed", "unknown field")
-    elif err.validator == "enum" and list(err.absolute_path)[-2:-1] == ["action"]:
+    elif err.validator == "enum" and path[-2:-1] == ["action"]:
         msg = f"unknown action type {err.instance!r} (expected 'turn' or 'travel')"
-    elif err.validator == "const" and list(err.absolute_path) == ["format"]:
+    elif err.validator == "const" and path == ["format"]:
         msg = f"unsupported format {err.instance!r} (expected {FORMAT!r})"
-    elif err.validator == "pattern" and list(err.absolute_path)[-1:] == ["view"]:
+    elif err.validator == "pattern" and path[-1:] == ["view"]:
         msg = "a view label cannot contain the NUL character (clingo would cut the label there)"
-    elif err.validator == "minItems" and list(err.absolute_path) == ["steps"]:
+    elif err.validator == "minItems" and path == ["steps"]:
         msg = "a tableau needs at least one step"
     else:
         msg = err.message
-    raise TableauError(msg, f"{source}: {_pointer(err.absolute_path)}")
+    raise TableauError(msg, f"{source}: {_pointer(path)}")
 
 
 def _finite(x: float, where: str) -> float:
@@ -230,12 +275,7 @@ def _step(d: dict, i: int, last: bool, source: str) -> Step:
         raise TableauError("missing: every step but the last needs an action to the next step", where + ".action")
     if a is not None and last:
         raise TableauError("the last step has an action but no step follows it", where + ".action")
-    action: Action | None = None
-    if a is not None and a["type"] == "turn":
-        action = Turn(_finite(a["angle_deg"], where + ".action.angle_deg"))
-    elif a is not None:
-        action = Travel(_finite(a["distance_m"], where + ".action.distance_m"),
-                        _finite(a.get("heading_change_deg", 0.0), where + ".action.heading_change_deg"))
+    action = None if a is None else _action(a, where + ".action")
     image = None
     if "image" in d:
         image = tuple(_finite(x, f"{where}.image[{j}]") for j, x in enumerate(d["image"]))
@@ -243,6 +283,14 @@ def _step(d: dict, i: int, last: bool, source: str) -> Step:
     if "pose" in d:
         pose = tuple(_finite(x, f"{where}.pose[{j}]") for j, x in enumerate(d["pose"]))
     return Step(d.get("view"), action, image, d.get("truth"), pose)  # type: ignore[arg-type]
+
+
+def _action(a: dict, where: str) -> Action:
+    """An action from its (schema-checked) document."""
+    if a["type"] == "turn":
+        return Turn(_finite(a["angle_deg"], where + ".angle_deg"))
+    return Travel(_finite(a["distance_m"], where + ".distance_m"),
+                  _finite(a.get("heading_change_deg", 0.0), where + ".heading_change_deg"))
 
 
 def _check_images(steps: tuple[Step, ...], source: str) -> None:

@@ -18,15 +18,10 @@ from sklearn.cluster import KMeans
 from sklearn.metrics import completeness_score, pairwise_distances_argmin
 from sklearn.utils import check_random_state
 
+from .images import as_images
+
 __all__ = ["ViewClusterer", "internal_measure", "repair_dropouts", "uncertainty_coefficient",
            "view_labels", "view_table"]
-
-
-def _as_images(images) -> np.ndarray:
-    x = np.asarray(images, dtype=float)
-    if x.ndim != 2:
-        raise ValueError(f"images must be a 2-D array (n_images, n_values), got shape {x.shape}")
-    return x
 
 
 def internal_measure(images, labels) -> float:
@@ -58,7 +53,7 @@ def internal_measure(images, labels) -> float:
     >>> internal_measure([[1.0, 1.0], [1.0, 1.0]], ["a", "a"])
     inf
     """
-    x = _as_images(images)
+    x = as_images(images)
     labels = np.asarray(labels)
     if len(labels) != len(x):
         raise ValueError(f"{len(x)} images but {len(labels)} labels")
@@ -160,7 +155,7 @@ def repair_dropouts(images, max_range: float) -> np.ndarray:
     >>> repair_dropouts([[8.0, 0.5, 0.5]], 8.0)
     array([[0.5, 0.5, 0.5]])
     """
-    x = np.minimum(_as_images(images), float(max_range))
+    x = np.minimum(as_images(images), float(max_range))
     if x.shape[1] < 2:
         return x
     at = x >= max_range
@@ -238,7 +233,7 @@ class ViewClusterer:
         self.max_range = max_range
 
     def _prepare(self, images) -> np.ndarray:
-        x = _as_images(images)
+        x = as_images(images)
         if self.max_range is not None:
             x = repair_dropouts(x, self.max_range)
         return x
@@ -361,7 +356,7 @@ def view_table(images, labels: Sequence[Hashable], angle_min_deg: float = -90.0,
     ...  for row in view_table([scan, scan], ["V0", "V0"])]
     [{'view': 'V0', 'n': 2, 'left': 0.54, 'front': 2.5, 'right': 4.46}]
     """
-    x = _as_images(images)
+    x = as_images(images)
     labels = np.asarray(labels)
     if len(labels) != len(x):
         raise ValueError(f"{len(x)} images but {len(labels)} labels")
@@ -398,7 +393,7 @@ def tableau_with_views(tableau):
     >>> k, t.views
     (2, ['V0', 'V1', 'V0', 'V1'])
     """
-    if all(s.view is not None for s in tableau.steps) or any(s.image is None for s in tableau.steps):
+    if tableau.labelled or any(s.image is None for s in tableau.steps):
         return tableau, None
     clusterer = ViewClusterer(random_state=0, max_range=_range_max(tableau.meta))
     clusterer.fit(np.array([s.image for s in tableau.steps]))

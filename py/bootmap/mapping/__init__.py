@@ -12,10 +12,17 @@ This package is the boundary between Python and the answer set programs. Reading
 * :mod:`.trace`, :mod:`.proof`, :mod:`.explain` - why two time points are different dstates, or the same.
 """
 
-from .cogmap import CognitiveMap, SolveStats
-from .explain import Explainer, Explanation
-from .grounding import Deadline
-from .resolver import Resolver
-from .theory import Theory, load_theory
+from importlib import import_module
 
-__all__ = ["CognitiveMap", "Deadline", "Explainer", "Explanation", "Resolver", "SolveStats", "Theory", "load_theory"]
+# Imported on first use (PEP 562): the vocabulary's constants should not cost every command clingo's and
+# the whole package's import.
+_HOMES = {"CognitiveMap": "cogmap", "SolveStats": "cogmap", "Explainer": "explain", "Explanation": "explain",
+          "Deadline": "grounding", "Resolver": "resolver", "Theory": "theory", "load_theory": "theory"}
+
+__all__ = sorted(_HOMES)
+
+
+def __getattr__(name: str):
+    if name not in _HOMES:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return getattr(import_module(f".{_HOMES[name]}", __name__), name)

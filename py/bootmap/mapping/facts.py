@@ -22,9 +22,10 @@ from .vocabulary import QUANTUM_DEG, RESUME, TRAVEL, TURN, VIEW, action_term
 
 def quantise(angle_deg: float, quantum_deg: float = QUANTUM_DEG) -> int:
     """Round an angle to the quantum and wrap it into (-180, 180]; -180 becomes 180 (turn-around).
+    Noise beyond half a quantum rounds to the neighbouring angle (-98 is not a right turn at 15 degrees).
 
-    >>> quantise(-98), quantise(-180), quantise(7.4), quantise(7.6)
-    (-90, 180, 0, 15)
+    >>> quantise(-97), quantise(-98), quantise(-180), quantise(7.4), quantise(7.6)
+    (-90, -105, 180, 0, 15)
     """
     q = round(angle_deg / quantum_deg) * quantum_deg
     a = int(round(((q + 180.0) % 360.0) - 180.0))

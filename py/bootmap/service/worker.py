@@ -27,6 +27,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..errors import AxiomError, BootmapError, ExplainError, InconsistentTableau, SolveTimeout, TableauError
+from ..mapping.vocabulary import QUANTUM_DEG
 from ..tableau import Tableau
 
 log = logging.getLogger("bootmap.service")
@@ -66,7 +67,7 @@ class SolveJob:
     document: dict
     axioms: str
     time_limit_s: float
-    quantum_deg: float = 15.0
+    quantum_deg: float = QUANTUM_DEG
     max_models: int = 10
 
 
@@ -81,7 +82,7 @@ class ExplainJob:
     a: str
     b: str
     levels: tuple[str, ...] | None = None
-    quantum_deg: float = 15.0
+    quantum_deg: float = QUANTUM_DEG
 
 
 @dataclass(frozen=True)
@@ -180,7 +181,7 @@ def _explain(job: ExplainJob, cache: dict) -> tuple:
 
 
 def _views(tableau: Tableau) -> tuple[Tableau, int | None]:
-    if all(s.view is not None for s in tableau.steps):
+    if tableau.labelled:
         return tableau, None
     from ..views import tableau_with_views  # scikit-learn: only for images-only tableaux
 

@@ -7,6 +7,7 @@ import json
 from fastapi import APIRouter
 from fastapi.concurrency import run_in_threadpool
 
+from ...tableau import Tableau
 from ..deps import Services, ServicesDep, TableauId
 from ..models import Recognition, RecogniseIn
 from ..problems import JSONRoute, Problem, invalid, openapi_responses
@@ -46,13 +47,11 @@ def _model(services: Services, tableau_id: int):
 
 
 def _fit(tableau_json: str, map_json: str):
-    from ...recognise import Recogniser  # scikit-learn: imported on the first recognition only
+    from ...recognise import NoImages, recogniser_for_map  # scikit-learn: imported on the first recognition only
 
-    steps, m = json.loads(tableau_json)["steps"], json.loads(map_json)
-    labelled = [(s["image"], row["dstate"]) for s, row in zip(steps, m["steps"]) if "image" in s]
-    if not labelled:
-        raise Problem(409, "no-images", "The tableau has no images",
-                      "this tableau has view labels but no images, so there is nothing to recognise by; "
-                      "post a tableau whose steps carry images")
-    images, dstates = zip(*labelled)
-    return Recogniser().fit(list(images), list(dstates)), m["dstates"]
+    m = json.loads(map_json)
+    try:
+        model = recogniser_for_map(Tableau.loads(tableau_json, "stored tableau"), [row["dstate"] for row in m["steps"]])
+    except NoImages as e:
+        raise Problem(409, "no-images", "The tableau has no images", str(e)) from None
+    return model, m["dstates"]

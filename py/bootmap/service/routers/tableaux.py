@@ -8,14 +8,12 @@ always has a map. Appending is the same: the new revision is stored only once it
 from __future__ import annotations
 
 import json
-import re
 from typing import Annotated
 
 from fastapi import APIRouter, Query, Response
 from fastapi.concurrency import run_in_threadpool
 
-from ...errors import TableauError
-from ...tableau import FORMAT, Tableau
+from ...tableau import Tableau
 from ..deps import Services, ServicesDep, TableauId
 from ..models import AppendIn, MapOut, TableauCreated, TableauIn, TableauList, TableauListItem, TableauOut
 from ..problems import JSONRoute, invalid, openapi_responses
@@ -71,11 +69,8 @@ async def append_steps(tableau_id: TableauId, body: AppendIn, services: Services
     record = await run_in_threadpool(services.store.get, tableau_id)
     new = body.model_dump(mode="json", exclude_unset=True)
     _check_limits(new["steps"], record.n_steps + len(new["steps"]), services.settings)
-    doc = await run_in_threadpool(_appended, record, new)
-    try:
-        solved, theory = await _solve(services, doc)
-    except TableauError as e:  # e.g. images of another length than the stored ones
-        raise _renumbered(e, record.n_steps) from None
+    doc = await run_in_threadpool(_extended, record, new)
+    solved, theory = await _solve(services, doc)
     cmap = await run_in_threadpool(_map_record, solved, record.revision + 1, theory)
     stored = await run_in_threadpool(services.store.replace, tableau_id, json.dumps(doc), len(doc["steps"]),
                                      solved.views_k, cmap)
@@ -124,32 +119,7 @@ def _with_map(record: TableauRecord, cmap: MapRecord, status: int = 200, headers
                     media_type="application/json")
 
 
-_STEP = re.compile(r"^steps\[(\d+)\](.*)$")
-
-
-def _appended(record: TableauRecord, new: dict) -> dict:
-    """The stored tableau with the new steps after it. The new steps are checked here, so that errors
-    name the request's fields; the whole is checked by the solver (see :func:`_renumbered`)."""
-    Tableau.from_dict({"format": FORMAT, "steps": new["steps"]}, "request")  # each new step on its own
-    labelled = record.views_k is None
-    for i, step in enumerate(new["steps"]):
-        if labelled and "view" not in step:
-            raise invalid(f"steps[{i}].view", "missing: the stored tableau has view labels, so new steps need them")
-        if not labelled and ("view" in step or "image" not in step):
-            raise invalid(f"steps[{i}]", "the stored tableau has images only (its views are found by clustering): "
-                                         "give new steps an image and no view")
-    doc = json.loads(record.document)
-    doc["steps"][-1]["action"] = new["action"]
-    doc["steps"].extend(new["steps"])
-    return doc
-
-
-def _renumbered(e: TableauError, n_old: int) -> TableauError:
-    """An error in the joined tableau, named by the request's fields (new steps count from 0)."""
-    field = e.where.split(": ", 1)[-1]
-    m = _STEP.match(field)
-    if m and int(m.group(1)) >= n_old:
-        field = f"steps[{int(m.group(1)) - n_old}]{m.group(2)}"
-    elif m and int(m.group(1)) == n_old - 1 and m.group(2).startswith(".action"):
-        field = m.group(2)[1:]
-    return TableauError(e.reason, f"request: {field}")
+def _extended(record: TableauRecord, new: dict) -> dict:
+    """The stored tableau with the new steps after it (Tableau.extend checks them; errors name the
+    request's fields)."""
+    return Tableau.loads(record.document, "stored tableau").extend(new, "request").to_dict()
