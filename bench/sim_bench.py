@@ -14,7 +14,7 @@ import numpy as np
 
 from bootmap.sim import run
 from bootmap.sim.laser import Scene, SweepCaster, build_space, cast_reference
-from bootmap.world import load_world
+from bootmap.sim.world import load_world
 
 
 def per_call_us(fn, repeat: int) -> float:

@@ -59,7 +59,7 @@ def test_true_dstates_the_map_merges_or_splits_are_named_not_claimed_a_success()
     from types import SimpleNamespace
 
     from bootmap.experiment import _map_section, _report_text, checks
-    from bootmap.world import load_world
+    from bootmap.sim.world import load_world
 
     truth = ["P0:N", "P0:E", "P1:E", "P1:S", "P2:S", "P2:W", "P3:W", "P3:N", "P0:N", "P1:E"]
     found = ["S0", "S1", "S2", "S3", "S0", "S5", "S6", "S7", "S0", "S8"]

@@ -45,6 +45,6 @@ def test_built_wheel_carries_the_axioms_and_maps_a_tableau(tmp_path):
                          cwd=tmp_path, env=env, timeout=120)
     assert out.returncode == 0, out.stderr
     assert out.stdout.startswith("8 dstates, 4 places, 4 paths")
-    names = subprocess.check_output([str(py), "-c", "import bootmap.world as w; print(w.worlds_dir(), w.world_names())"],
+    names = subprocess.check_output([str(py), "-c", "import bootmap.sim.world as w; print(w.worlds_dir(), w.world_names())"],
                                     text=True, cwd=tmp_path, env=env)
     assert names.startswith(str(purelib)) and "notched_rectangle" in names and "taylor_hall" in names

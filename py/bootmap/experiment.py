@@ -29,7 +29,7 @@ from .recognise import learning_curve_cv, online_curve, online_hits
 from .mapping.resolver import Resolver
 from .sim import simulate
 from .views import ViewClusterer, view_labels, view_table
-from .world import World, load_world
+from .sim.world import World, load_world
 
 CURVE_SIZES = (10, 20, 30, 40, 50, 60, 70, 80, 90)
 PAPER_CIRCUITS = 50  # the paper's notched-rectangle run: 50 circuits, 400 images
@@ -176,7 +176,7 @@ def _figures(results: dict, out: Path, world, tableau) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from .render import render
+    from .sim.render import render
 
     v = results["views"]
     render(world, tableau, path=out / "world_map.png", title=f"{results['world']}: run and true dstates")

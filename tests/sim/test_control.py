@@ -15,7 +15,7 @@ from bootmap.sim import run
 from bootmap.sim.laser import Scene, SweepCaster
 from bootmap.sim.perception import Perception
 from bootmap.sim.physics import Odometry
-from bootmap.world import LaserSpec
+from bootmap.sim.world import LaserSpec
 
 SPEC = LaserSpec(180, -math.pi / 2, math.pi / 2, 8.0, 0.0, 0.0)
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from bootmap.sim.laser import Laser, Scene, SweepCaster, build_space, cast_reference
-from bootmap.world import load_world, world_names
+from bootmap.sim.world import load_world, world_names
 
 
 def _free_poses(world, rng, n):

@@ -8,7 +8,7 @@ import pytest
 
 from bootmap.sim import Circuits, Explore, Simulation, run, simulate
 from bootmap.tableau import Tableau, Travel, Turn
-from bootmap.world import load_world
+from bootmap.sim.world import load_world
 
 # The paper's four views as (left, front, right) metres, and the dstates that should show each.
 PAPER_VIEWS = {"V0": (0.5, 0.5, 4.5), "V1": (0.5, 4.5, 2.5), "V2": (0.5, 0.5, 2.5), "V3": (0.5, 2.5, 4.5)}

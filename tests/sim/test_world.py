@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from bootmap.errors import BootmapError, WorldError
-from bootmap.world import World, heading_sector, load_world, loads_world, world_names, worlds_dir
+from bootmap.sim.world import World, heading_sector, load_world, loads_world, world_names, worlds_dir
 
 MINIMAL = """
 format = "bootmap.world/1"

@@ -1,6 +1,6 @@
 """The simulator: a physical robot with a laser range-finder in 2-D worlds, producing tableaux.
 
-world file -> :class:`~bootmap.world.World` -> :class:`Simulation` (pymunk physics, laser, control laws,
+world file -> :class:`~bootmap.sim.world.World` -> :class:`Simulation` (pymunk physics, laser, control laws,
 an exploration policy) -> :class:`~bootmap.tableau.Tableau` of dstate images, actions and ground truth.
 """
 

@@ -44,7 +44,7 @@ def register(subparsers) -> None:
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
-    from ..world import load_world
+    from .world import load_world
     from .simulation import SimulationError, run
 
     try:
@@ -75,9 +75,9 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
 
 def cmd_render(args: argparse.Namespace) -> int:
-    from ..render import render
+    from .render import render
     from ..tableau import load
-    from ..world import load_world
+    from .world import load_world
 
     try:
         world = load_world(args.world)

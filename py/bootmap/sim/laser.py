@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 import pymunk
 
-from ..world import LaserSpec
+from .world import LaserSpec
 
 TWO_PI = 2.0 * np.pi
 
@@ -151,7 +151,7 @@ class Laser:
 
     Examples
     --------
-    >>> from bootmap.world import load_world
+    >>> from bootmap.sim.world import load_world
     >>> w = load_world("notched_rectangle")
     >>> laser = Laser(w.laser)
     >>> scan = laser.scan(Scene.of_world(w), (2.5, 1.5, 0.0), np.random.default_rng(0))

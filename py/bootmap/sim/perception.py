@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..world import LaserSpec
+from .world import LaserSpec
 
 HALF_WINDOW = 3  # scan points either side of the centre of a straight-run window
 MAX_SAG = 0.025  # m: a window with a point further than this from its chord is not straight
@@ -60,7 +60,7 @@ class Perception:
 
     Examples
     --------
-    >>> from bootmap.world import LaserSpec
+    >>> from bootmap.sim.world import LaserSpec
     >>> spec = LaserSpec(180, -math.pi / 2, math.pi / 2, 8.0, 0.0, 0.0)
     >>> a = spec.angles  # a corridor 2 m wide, robot in the middle, aligned
     >>> ranges = np.minimum(1.0 / np.abs(np.sin(a) + 1e-12), 8.0)

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 import pymunk
 
-from ..world import World
+from .world import World
 from .laser import Scene
 
 ROBOT_CATEGORY = 0b10  # the laser's shape filter leaves the robot's own body out

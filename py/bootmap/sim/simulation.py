@@ -22,7 +22,7 @@ import numpy as np
 
 from ..errors import BootmapError
 from ..tableau import Action, Step, Tableau
-from ..world import World, load_world
+from .world import World, load_world
 from .control import ControlLaw, Limits, Travel, Turn
 from .laser import Laser, Scene
 from .perception import Perception
@@ -86,7 +86,7 @@ class Simulation:
 
     Examples
     --------
-    >>> from bootmap.world import load_world
+    >>> from bootmap.sim.world import load_world
     >>> sim = Simulation(load_world("notched_rectangle")).reset(seed=1)
     >>> run = sim.run(Circuits(), n_steps=4)
     >>> [s.truth for s in run.tableau.steps]

@@ -29,7 +29,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .errors import WorldError
+from ..errors import WorldError
 
 FORMAT = "bootmap.world/1"
 SECTORS = ("E", "N", "W", "S")  # heading sectors, 90 degrees wide, centred on the axes
@@ -41,9 +41,9 @@ def worlds_dir() -> Path:
     env = os.environ.get("BOOTMAP_WORLDS")
     if env:
         return Path(env)
-    here = Path(__file__).resolve().parent
-    shipped = here / "worlds"
-    return shipped if shipped.is_dir() else here.parents[1] / "worlds"
+    package = Path(__file__).resolve().parents[1]  # bootmap/
+    shipped = package / "worlds"
+    return shipped if shipped.is_dir() else package.parents[1] / "worlds"
 
 
 def world_names() -> list[str]:

@@ -16,7 +16,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.patches import Circle, Polygon, Rectangle
 
-from .tableau import Tableau
+from ..tableau import Tableau
 from .world import World
 
 CLUTTER_COLOURS = {"lockers": "#8c9fb5", "bench": "#b59a72", "desk": "#a7845a", "blackboard": "#3b4a3f",
