@@ -67,7 +67,7 @@ class Explanation:
     suggestion: list[str] = field(default_factory=list)    # same: actions that would test them
     alternatives: list[dict] = field(default_factory=list)  # undecided: the minimal maps and a/b in each
     levels: list[str] = field(default_factory=list)
-    stats: dict = field(default_factory=dict)
+    total_s: float = 0.0                # seconds to answer
 
     def rules_cited(self) -> list[str]:
         """Every rule the proof uses, each once, in order of first use."""
@@ -83,7 +83,7 @@ class Explanation:
                 "axioms": [rule_dict(r) for r in self.axioms],
                 "failures": [f.to_dict() for f in self.failures], "rules_cited": self.rules_cited(),
                 "agree_steps": self.agree_steps, "suggestion": self.suggestion,
-                "alternatives": self.alternatives, "levels": self.levels, "stats": self.stats}
+                "alternatives": self.alternatives, "levels": self.levels, "stats": {"total_s": self.total_s}}
 
     def to_text(self) -> str:
         out = [f"t{self.a} ({self.names[0]}) vs t{self.b} ({self.names[1]}): {self.verdict}",
@@ -157,7 +157,7 @@ class Explainer:
             e.alternatives = [{"map": i + 1, "a": m[a], "b": m[b], "apart": m[a] != m[b]} for i, m in enumerate(maps)]
             e.sentence = (f"The minimal maps disagree: {sum(apart)} of {len(maps)} keep t{a} and t{b} apart. "
                           "More experience is needed to decide.")
-        e.stats["total_s"] = round(time.perf_counter() - start, 4)
+        e.total_s = round(time.perf_counter() - start, 4)
         return e
 
     def can_be_same(self, tableau: Tableau, a: int, b: int, keep: Sequence[int] | None = None,
