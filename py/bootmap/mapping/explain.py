@@ -51,7 +51,7 @@ from .vocabulary import FEATURE, FINEST_MAP, QUANTUM_DEG, SAME_ASKED, SHOWN_BY_A
 __all__ = ["Explainer", "Explanation", "Failure", "ProofNode"]
 
 
-@dataclass
+@dataclass(frozen=True)
 class Explanation:
     """The answer to "are time points a and b the same dstate, and why?"."""
 
@@ -146,19 +146,19 @@ class Explainer:
         a, b = _time_points(cmap, a, b)
         maps = [cmap.dstate_of] + cmap.alternatives
         apart = [m[a] != m[b] for m in maps]
-        e = Explanation(a, b, (cmap.dstate_of[a], cmap.dstate_of[b]), "", "",
-                        levels=list(self.resolver.theory.levels))
+        names = (cmap.dstate_of[a], cmap.dstate_of[b])
         if all(apart):
-            q.prove_apart(cmap, e)
+            answer = q.prove_apart(cmap, a, b, names)
         elif not any(apart):
-            _same(tableau, cmap, e, self.quantum_deg)
+            answer = _same(tableau, cmap, a, b, self.quantum_deg)
         else:
-            e.verdict = "undecided"
-            e.alternatives = [{"map": i + 1, "a": m[a], "b": m[b], "apart": m[a] != m[b]} for i, m in enumerate(maps)]
-            e.sentence = (f"The minimal maps disagree: {sum(apart)} of {len(maps)} keep t{a} and t{b} apart. "
-                          "More experience is needed to decide.")
-        e.total_s = round(time.perf_counter() - start, 4)
-        return e
+            answer = {"verdict": "undecided",
+                      "alternatives": [{"map": i + 1, "a": m[a], "b": m[b], "apart": m[a] != m[b]}
+                                       for i, m in enumerate(maps)],
+                      "sentence": f"The minimal maps disagree: {sum(apart)} of {len(maps)} keep t{a} and t{b} "
+                                  "apart. More experience is needed to decide."}
+        return Explanation(a, b, names, levels=list(self.resolver.theory.levels),
+                           total_s=round(time.perf_counter() - start, 4), **answer)
 
     def can_be_same(self, tableau: Tableau, a: int, b: int, keep: Sequence[int] | None = None,
                     deadline: Deadline | None = None) -> bool:
@@ -186,17 +186,18 @@ class _Question:
     # Different: evidence, the axioms it needs, and where each fails
     # ---------------------------------------------------------------------------------------------
 
-    def prove_apart(self, cmap: CognitiveMap, e: Explanation) -> None:
-        e.verdict = "different"
-        window = self.window(e.a, e.b)
+    def prove_apart(self, cmap: CognitiveMap, a: int, b: int, names: tuple[str, str]) -> dict:
+        """The fields of a "different" explanation: the minimal evidence, the axioms it needs, where each fails."""
+        window = self.window(a, b)
         if window is None:
-            e.sentence = (f"Every minimal map keeps t{e.a} ({e.names[0]}) and t{e.b} ({e.names[1]}) apart, but "
-                          f"no contradiction follows from the {2 * self.explainer.max_window} steps around them: "
-                          "merging them would cost more dstates elsewhere (minimality), not break an axiom.")
-            return
-        e.evidence = self.minimal_evidence(e.a, e.b, window)
-        e.axioms, e.failures = self.failures(cmap, e.a, e.b, e.evidence)
-        e.sentence = _sentence(e, self.tableau)
+            return {"verdict": "different", "sentence":
+                    f"Every minimal map keeps t{a} ({names[0]}) and t{b} ({names[1]}) apart, but no contradiction "
+                    f"follows from the {2 * self.explainer.max_window} steps around them: merging them would cost "
+                    "more dstates elsewhere (minimality), not break an axiom."}
+        evidence = self.minimal_evidence(a, b, window)
+        axioms, failures = self.failures(cmap, a, b, evidence)
+        return {"verdict": "different", "evidence": evidence, "axioms": axioms, "failures": failures,
+                "sentence": _sentence(a, b, names, evidence, failures, self.tableau)}
 
     def window(self, a: int, b: int) -> list[int] | None:
         """The fewest steps around a and b (doubling) in which a and b cannot be one dstate."""
@@ -319,14 +320,15 @@ def _rule_named(inst: Instrumented, name: str) -> RuleRef | None:
     return next((r for r in inst.rules if r.name == name), None)
 
 
-def _sentence(e: Explanation, tableau: Tableau) -> str:
+def _sentence(a: int, b: int, names: tuple[str, str], evidence: list[int], failures: list[Failure],
+              tableau: Tableau) -> str:
     """One paragraph for a person: what breaks if a and b are one dstate, and on which steps."""
-    head = f"t{e.a} ({e.names[0]}) and t{e.b} ({e.names[1]}) cannot be one dstate"
-    if not e.failures:
+    head = f"t{a} ({names[0]}) and t{b} ({names[1]}) cannot be one dstate"
+    if not failures:
         return head + "."
-    f = e.failures[0]
+    f = failures[0]
     because = " and ".join(p.text for p in f.premises)
-    told = "; ".join(_step_text(tableau, t, t == e.evidence[-1] or t + 1 not in e.evidence) for t in e.evidence)
+    told = "; ".join(_step_text(tableau, t, t == evidence[-1] or t + 1 not in evidence) for t in evidence)
     return f"{head}: if they were, {because} - which {f.rule.name} forbids. The experience that shows it: {told}."
 
 
@@ -340,15 +342,15 @@ def _step_text(tableau: Tableau, t: int, last: bool) -> str:
 # Same: minimality, how far the futures agree, what would test them
 # -------------------------------------------------------------------------------------------------
 
-def _same(tableau: Tableau, cmap: CognitiveMap, e: Explanation, quantum_deg: float) -> None:
-    e.verdict = "same"
-    a, b = sorted((e.a, e.b))
-    e.agree_steps = _agreeing_steps(tableau, a, b, quantum_deg)
-    e.suggestion = _suggest(tableau, cmap, a, b, e.agree_steps, quantum_deg)
+def _same(tableau: Tableau, cmap: CognitiveMap, a: int, b: int, quantum_deg: float) -> dict:
+    """The fields of a "same" explanation."""
+    a, b = sorted((a, b))
+    agree = _agreeing_steps(tableau, a, b, quantum_deg)
     d = cmap.dstate_of[a]
-    e.sentence = (f"t{a} and t{b} are both {d} in every minimal map: nothing in the experience proves them "
-                  f"different, so by minimality they are one dstate (same view "
-                  f"{cmap.views.get(d)!r}; what followed them agrees for {e.agree_steps} step(s)).")
+    return {"verdict": "same", "agree_steps": agree, "suggestion": _suggest(tableau, cmap, a, b, agree, quantum_deg),
+            "sentence": f"t{a} and t{b} are both {d} in every minimal map: nothing in the experience proves them "
+                        f"different, so by minimality they are one dstate (same view {cmap.views.get(d)!r}; what "
+                        f"followed them agrees for {agree} step(s))."}
 
 
 def _agreeing_steps(tableau: Tableau, a: int, b: int, quantum_deg: float) -> int:
