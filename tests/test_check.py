@@ -15,10 +15,10 @@ from hypothesis import strategies as st
 
 from bootmap import examples
 from bootmap.axioms import load_theory
-from bootmap.check import LEVELS, check_map, true_partition
 from bootmap.facts import add_facts, tableau_facts
-from bootmap.gridworld import World, random_world, walk
 from bootmap.tableau import Tableau
+from bootmap.testing.check import LEVELS, check_map, true_partition
+from bootmap.testing.gridworld import GridWorld, random_world, walk
 
 ALL = LEVELS
 CAUSAL = ("causal",)
@@ -68,7 +68,7 @@ def test_partition_length_must_match():
 # -- maps that fail --------------------------------------------------------------------------------
 
 def test_merging_dstates_with_different_views_fails():
-    w = World.from_ascii("+-+-+\n  |\n  +")
+    w = GridWorld.from_ascii("+-+-+\n  |\n  +")
     t = walk(w, 40, np.random.default_rng(0), policy="explore")
     truth = true_partition(t)
     a, b = truth[0], next(s for s, step in zip(truth, t.steps) if step.view != t.steps[0].view)
@@ -211,6 +211,6 @@ def test_agrees_with_clingo_on_random_partitions(seed, size, extra, n, n_buckets
 def test_docstring_examples():
     import doctest
 
-    import bootmap.check
+    import bootmap.testing.check
 
-    assert doctest.testmod(bootmap.check).failed == 0
+    assert doctest.testmod(bootmap.testing.check).failed == 0

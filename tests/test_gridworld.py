@@ -7,10 +7,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from bootmap.check import check_map, true_partition
-from bootmap.gridworld import (TRAVEL, TURN_AROUND, World, neighbour, random_world, truth_id,
-                               walk)
 from bootmap.tableau import Tableau, Travel, Turn
+from bootmap.testing.check import check_map, true_partition
+from bootmap.testing.gridworld import (TRAVEL, TURN_AROUND, GridWorld, neighbour, random_world,
+                                       truth_id, walk)
 
 T_JUNCTION = """
 +-+-+
@@ -28,7 +28,7 @@ def parse_truth(truth: str) -> tuple[tuple[int, int], int]:
 # -- hand-written worlds --------------------------------------------------------------------------
 
 def test_ascii_t_junction():
-    w = World.from_ascii(T_JUNCTION)
+    w = GridWorld.from_ascii(T_JUNCTION)
     assert w.nodes == {(0, 1), (1, 1), (2, 1), (1, 0)}
     assert w.edges == {((0, 1), (1, 1)), ((1, 1), (2, 1)), ((1, 0), (1, 1))}
     # At the junction, facing each way: left, front, right, back.
@@ -38,31 +38,31 @@ def test_ascii_t_junction():
 
 def test_ascii_landmarks_and_round_trip():
     text = "A-+\n| |\n+-B"
-    w = World.from_ascii(text)
+    w = GridWorld.from_ascii(text)
     assert w.landmarks == {(0, 1): "A", (1, 0): "B"}
     assert w.view(((0, 1), 0)) == ".FR./A"
     assert w.to_ascii() == text
-    assert World.from_ascii(w.to_ascii()) == w
+    assert GridWorld.from_ascii(w.to_ascii()) == w
 
 
 def test_from_edges_matches_ascii():
-    w = World.from_edges([((0, 1), (1, 1)), ((2, 1), (1, 1)), ((1, 1), (1, 0))])
-    assert w == World.from_ascii(T_JUNCTION)
+    w = GridWorld.from_edges([((0, 1), (1, 1)), ((2, 1), (1, 1)), ((1, 1), (1, 0))])
+    assert w == GridWorld.from_ascii(T_JUNCTION)
 
 
 @pytest.mark.parametrize("edges", [[((0, 0), (2, 0))], [((0, 0), (1, 1))]])
 def test_from_edges_rejects_non_unit_edges(edges):
     with pytest.raises(ValueError, match="4-neighbours"):
-        World.from_edges(edges)
+        GridWorld.from_edges(edges)
 
 
 def test_ascii_rejects_misplaced_symbols():
     with pytest.raises(ValueError, match="lattice"):
-        World.from_ascii("+--+")
+        GridWorld.from_ascii("+--+")
 
 
 def test_actions_only_turn_towards_open_sides():
-    w = World.from_ascii(T_JUNCTION)
+    w = GridWorld.from_ascii(T_JUNCTION)
     assert w.actions(((1, 1), 0)) == ["right", TURN_AROUND, TRAVEL]        # left is a wall
     assert w.actions(((0, 1), 180)) == [TURN_AROUND]                        # dead end, facing the wall
     with pytest.raises(ValueError, match="wall"):
@@ -140,7 +140,7 @@ def test_walk_never_turns_twice_in_a_row_when_it_can_travel(policy):
 
 
 def test_explore_visits_every_corridor_end_of_a_t_junction():
-    w = World.from_ascii(T_JUNCTION)
+    w = GridWorld.from_ascii(T_JUNCTION)
     t = walk(w, 40, np.random.default_rng(0), policy="explore")
     visited = {parse_truth(s.truth) for s in t.steps}
     assert {(n, h) for n in w.nodes for h in w.open_headings(n)} <= visited
@@ -180,6 +180,6 @@ def test_true_map_satisfies_every_axiom(seed, width, height, extra, landmarks, k
 def test_docstring_examples():
     import doctest
 
-    import bootmap.gridworld
+    import bootmap.testing.gridworld
 
-    assert doctest.testmod(bootmap.gridworld).failed == 0
+    assert doctest.testmod(bootmap.testing.gridworld).failed == 0

@@ -216,9 +216,9 @@ def test_several_minimal_maps_are_counted_and_listed():
 # --- Hand-made grid worlds (views from local geometry; truth = node and heading) -----------------------
 
 def _script(ascii_world, start, actions):
-    from bootmap.gridworld import World, scripted
+    from bootmap.testing.gridworld import GridWorld, scripted
 
-    return scripted(World.from_ascii(ascii_world), start, actions)
+    return scripted(GridWorld.from_ascii(ascii_world), start, actions)
 
 
 T_JUNCTION = """

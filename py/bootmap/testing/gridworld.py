@@ -17,7 +17,7 @@ travel one edge along the heading (``distance_m`` = the cell size). Everything r
 
 Example
 -------
->>> w = World.from_ascii('''
+>>> w = GridWorld.from_ascii('''
 ... +-+-+
 ...   |
 ...   +
@@ -38,7 +38,7 @@ from typing import Iterable, Mapping, Sequence
 
 import numpy as np
 
-from .tableau import FORMAT, Tableau
+from ..tableau import FORMAT, Tableau
 
 Node = tuple[int, int]
 State = tuple[Node, int]                    # (node, heading in degrees)
@@ -65,7 +65,7 @@ def neighbour(node: Node, heading: int) -> Node:
 
 
 @dataclass(frozen=True)
-class World:
+class GridWorld:
     """A graph world: nodes on an integer grid, unit edges, optional landmark letters.
 
     Build one with :meth:`from_edges`, :meth:`from_ascii` or :func:`random_world`.
@@ -104,7 +104,7 @@ class World:
     @classmethod
     def from_edges(cls, edges: Iterable[tuple[Sequence[int], Sequence[int]]],
                    nodes: Iterable[Sequence[int]] = (), landmarks: Mapping | None = None,
-                   cell_m: float = 2.0, name: str = "gridworld") -> "World":
+                   cell_m: float = 2.0, name: str = "gridworld") -> "GridWorld":
         """A world from a list of edges (pairs of grid points); extra isolated ``nodes`` are allowed."""
         es = frozenset(_edge(tuple(a), tuple(b)) for a, b in edges)      # type: ignore[arg-type]
         ns = frozenset(tuple(n) for n in nodes) | frozenset(n for e in es for n in e)
@@ -112,14 +112,14 @@ class World:
         return cls(ns, es, marks, cell_m, name)                            # type: ignore[arg-type]
 
     @classmethod
-    def from_ascii(cls, text: str, cell_m: float = 2.0, name: str = "gridworld") -> "World":
+    def from_ascii(cls, text: str, cell_m: float = 2.0, name: str = "gridworld") -> "GridWorld":
         """A world drawn in ASCII: nodes on even rows and columns, edges between them.
 
         ``+`` or ``o`` is a node, an upper-case letter a node with that landmark, ``-`` joins the nodes
         left and right of it, ``|`` the nodes above and below. The top line is the largest y, so the
         drawing looks like the plane (y up). Blank leading and trailing lines are ignored.
 
-        >>> World.from_ascii("+-A").landmarks
+        >>> GridWorld.from_ascii("+-A").landmarks
         {(1, 0): 'A'}
         """
         rows = [r.rstrip() for r in text.strip("\n").splitlines()]
@@ -226,7 +226,7 @@ def truth_id(state: State) -> str:
 
 def random_world(rng: np.random.Generator, width: int, height: int, extra_edges: int = 0,
                  landmarks: float = 0.0, keep: float = 1.0, letters: str = _LETTERS,
-                 cell_m: float = 2.0) -> World:
+                 cell_m: float = 2.0) -> GridWorld:
     """A random connected world inside a ``width`` x ``height`` grid.
 
     Parameters
@@ -257,7 +257,7 @@ def random_world(rng: np.random.Generator, width: int, height: int, extra_edges:
     edges = tree | {rest[i] for i in picks}
     marks = _place_landmarks(rng, sorted(nodes), landmarks, letters)
     name = f"grid {width}x{height}, {len(nodes)} nodes, {len(edges)} edges"
-    return World(frozenset(nodes), frozenset(edges), marks, cell_m, name)
+    return GridWorld(frozenset(nodes), frozenset(edges), marks, cell_m, name)
 
 
 def _grow_region(rng: np.random.Generator, width: int, height: int, size: int) -> set[Node]:
@@ -300,7 +300,7 @@ def _place_landmarks(rng: np.random.Generator, nodes: list[Node], fraction: floa
 
 # -- walks ----------------------------------------------------------------------------------------
 
-def walk(world: World, n_steps: int, rng: np.random.Generator, policy: str = "random",
+def walk(world: GridWorld, n_steps: int, rng: np.random.Generator, policy: str = "random",
          start: State | None = None) -> Tableau:
     """A walk of ``n_steps`` time points (``n_steps - 1`` actions) through ``world``, as a tableau.
 
@@ -337,11 +337,11 @@ def walk(world: World, n_steps: int, rng: np.random.Generator, policy: str = "ra
     return _tableau(world, states, actions, policy)
 
 
-def scripted(world: World, start: State, actions: Sequence[str]) -> Tableau:
+def scripted(world: GridWorld, start: State, actions: Sequence[str]) -> Tableau:
     """The tableau of a given sequence of actions (``"travel"``, ``"left"``, ``"right"``, ``"around"``)
     from ``start`` = (node, heading): hand-made tableaux with known answers.
 
-    >>> corridor = World.from_ascii("+-+")
+    >>> corridor = GridWorld.from_ascii("+-+")
     >>> [s.view for s in scripted(corridor, ((0, 0), 0), ["travel", "around"]).steps]
     ['.F..', '...B', '.F..']
     """
@@ -351,14 +351,14 @@ def scripted(world: World, start: State, actions: Sequence[str]) -> Tableau:
     return _tableau(world, states, list(actions), "scripted")
 
 
-def _random_start(world: World, rng: np.random.Generator) -> State:
+def _random_start(world: GridWorld, rng: np.random.Generator) -> State:
     starts = sorted((n, h) for n in world.nodes for h in world.open_headings(n))
     if not starts:
         raise ValueError("the world has no edges: the robot cannot move")
     return starts[int(rng.integers(len(starts)))]
 
 
-def _allowed(world: World, state: State, previous: str | None) -> list[str]:
+def _allowed(world: GridWorld, state: State, previous: str | None) -> list[str]:
     """Allowed actions, without a second turn in a row while a travel is possible."""
     acts = world.actions(state)
     if previous is not None and previous != TRAVEL and TRAVEL in acts:
@@ -367,7 +367,7 @@ def _allowed(world: World, state: State, previous: str | None) -> list[str]:
 
 
 class _RandomPolicy:
-    def __init__(self, world: World, rng: np.random.Generator):
+    def __init__(self, world: GridWorld, rng: np.random.Generator):
         self.world, self.rng = world, rng
 
     def choose(self, state: State, previous: str | None) -> str:
@@ -382,7 +382,7 @@ class _ExplorePolicy:
     """Systematic exploration from experience: the robot knows its state, what it sees there (which
     actions are allowed) and the transitions it has made, but nothing about unvisited parts."""
 
-    def __init__(self, world: World, rng: np.random.Generator):
+    def __init__(self, world: GridWorld, rng: np.random.Generator):
         self.world, self.rng = world, rng
         self.known: dict[tuple[State, str], State] = {}
         self.allowed_at: dict[State, list[str]] = {}
@@ -443,7 +443,7 @@ def _unwind(back: dict, node) -> list[str]:
     return out[::-1]
 
 
-def _tableau(world: World, states: list[State], actions: list[str], policy: str) -> Tableau:
+def _tableau(world: GridWorld, states: list[State], actions: list[str], policy: str) -> Tableau:
     steps = []
     for t, state in enumerate(states):
         (x, y), h = state
@@ -452,7 +452,7 @@ def _tableau(world: World, states: list[State], actions: list[str], policy: str)
         if t < len(actions):
             step["action"] = _action_dict(actions[t], world.cell_m)
         steps.append(step)
-    doc = {"format": FORMAT, "world": world.name, "meta": {"policy": policy, "generator": "bootmap.gridworld"},
+    doc = {"format": FORMAT, "world": world.name, "meta": {"policy": policy, "generator": "bootmap.testing.gridworld"},
            "steps": steps}
     return Tableau.from_dict(doc, "gridworld walk")
 
