@@ -92,6 +92,20 @@ def test_random_world_is_deterministic():
     assert a == b and a != c
 
 
+def test_bends_turn_frames_without_changing_the_graph():
+    # Frames are drawn last: the same generator gives the same nodes, edges and landmarks with bends.
+    plain = random_world(np.random.default_rng(7), 5, 4, extra_edges=3, landmarks=0.3)
+    bent = random_world(np.random.default_rng(7), 5, 4, extra_edges=3, landmarks=0.3, bends=0.5)
+    assert (bent.nodes, bent.edges, bent.landmarks) == (plain.nodes, plain.edges, plain.landmarks)
+    assert plain.frames == {} and len(bent.frames) == 10
+    assert all(a % 15 == 0 and -180 < a <= 180 and a != 0 for a in bent.frames.values())
+
+
+def test_frames_off_the_quantum_are_refused():
+    with pytest.raises(ValueError, match="multiple of 15"):
+        GridWorld.from_ascii("+-+").with_frames({(1, 0): 10})
+
+
 def test_landmark_fraction():
     w = random_world(np.random.default_rng(3), 4, 5, landmarks=0.25, letters="XY")
     assert len(w.landmarks) == 5 and set(w.landmarks.values()) <= {"X", "Y"}
@@ -113,20 +127,29 @@ def test_walk_is_deterministic(policy):
 
 
 @pytest.mark.parametrize("policy", ["random", "explore"])
-def test_walk_steps_are_consistent_with_the_world(policy):
-    w = small_world(2)
+@pytest.mark.parametrize("bends", [0.0, 0.5])
+def test_walk_steps_are_consistent_with_the_world(policy, bends):
+    w = random_world(np.random.default_rng(2), 4, 4, extra_edges=2, landmarks=0.2, bends=bends)
     t = walk(w, 120, np.random.default_rng(0), policy=policy)
     states = [parse_truth(s.truth) for s in t.steps]
+    frame = {n: w.frames.get(n, 0) for n in w.nodes}
     for step, state in zip(t.steps, states):
         assert step.view == w.view(state) and step.truth == truth_id(state)
-        assert step.pose == pytest.approx((state[0][0] * 2.0, state[0][1] * 2.0, math.radians(state[1])))
+        # The pose faces the node's heading turned by the node's frame.
+        plane = math.radians(state[1] + frame[state[0]]) % (2 * math.pi)
+        assert step.pose == pytest.approx((state[0][0] * 2.0, state[0][1] * 2.0, plane))
+    bent = 0
     for (node, h), (node2, h2), a in zip(states, states[1:], t.actions):
         if isinstance(a, Travel):
             assert w.is_open(node, h) and node2 == neighbour(node, h) and h2 == h
-            assert a.distance_m == 2.0 and a.heading_change_deg == 0
+            # A travel turns the robot in the plane by the difference of the two frames.
+            assert a.distance_m == 2.0 and (a.heading_change_deg - frame[node2] + frame[node]) % 360 == 0
+            assert -180 < a.heading_change_deg <= 180
+            bent += a.heading_change_deg != 0
         else:
             assert node2 == node and (h + a.angle_deg - h2) % 360 == 0
             assert a.angle_deg == 180 or w.is_open(node, h2)
+    assert (bent > 0) == (bends > 0)
 
 
 @pytest.mark.parametrize("policy", ["random", "explore"])
@@ -169,10 +192,11 @@ def test_walk_tableau_survives_json():
 @given(seed=st.integers(0, 2**32 - 1), width=st.integers(2, 6), height=st.integers(2, 6),
        extra=st.integers(0, 5), landmarks=st.sampled_from([0.0, 0.2, 1.0]),
        keep=st.sampled_from([1.0, 0.7]), n=st.integers(1, 150),
-       policy=st.sampled_from(["random", "explore"]))
-def test_true_map_satisfies_every_axiom(seed, width, height, extra, landmarks, keep, n, policy):
+       policy=st.sampled_from(["random", "explore"]), bends=st.sampled_from([0.0, 0.5, 1.0]))
+def test_true_map_satisfies_every_axiom(seed, width, height, extra, landmarks, keep, n, policy, bends):
+    # Bent corridors keep the world a plane figure, so its true map still satisfies every axiom.
     rng = np.random.default_rng(seed)
-    w = random_world(rng, width, height, extra_edges=extra, landmarks=landmarks, keep=keep)
+    w = random_world(rng, width, height, extra_edges=extra, landmarks=landmarks, keep=keep, bends=bends)
     t = walk(w, n, rng, policy=policy)
     assert check_map(t, true_partition(t)) == []
 

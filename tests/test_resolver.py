@@ -215,10 +215,10 @@ def test_several_minimal_maps_are_counted_and_listed():
 
 # --- Hand-made grid worlds (views from local geometry; truth = node and heading) -----------------------
 
-def _script(ascii_world, start, actions):
+def _script(ascii_world, start, actions, frames=None):
     from bootmap.testing.gridworld import GridWorld, scripted
 
-    return scripted(GridWorld.from_ascii(ascii_world), start, actions)
+    return scripted(GridWorld.from_ascii(ascii_world).with_frames(frames or {}), start, actions)
 
 
 T_JUNCTION = """
@@ -262,3 +262,70 @@ def test_loop_taken_in_both_directions():
     # other, so the two turns at a corner are linked only where it turned around: 4 + 3 places, and each
     # side is a path per direction except the side it turned around on.
     assert (m.n_places, m.n_paths) == (7, 7)
+
+
+# --- Travels that bend: the heading a travel adds (heading_after_travel) -----------------------------------
+# Every tableau above travels straight, so nothing there depends on a travel's heading change.
+
+def test_l_shaped_corridor_walked_both_ways_faces_where_the_bend_leads():
+    # West end W, a corridor that leaves it eastwards and bends left by 90 into the other end E (E's
+    # frame is turned by 90: the corridor enters E from the south). Out to E, turn around, back to W,
+    # turn around, twice. Headings by hand: leaving W 0; arriving at E 0 + 90 = 90; turned around 270;
+    # back at W 270 - 90 = 180; turned around 0 again. Four dstates, as in a straight corridor (views
+    # and turn-arounds tell them apart), on one path between two places; only their headings show the bend.
+    t = _script("+-+", ((0, 0), 0), ["travel", "around"] * 4, frames={(1, 0): 90})
+    m = Resolver().resolve(t)
+    assert (m.n_dstates, m.n_places, m.n_paths) == (4, 2, 1) and m.unique and truth_accuracy(t, m)
+    assert [m.headings[m.dstate_of[i]] for i in range(5)] == [0, 90, 270, 180, 0]
+
+
+def bent_room(circuits=3):
+    """Clockwise circuits of a room with four look-alike corners, like examples.square_room, but at each
+    corner the robot turns right by only 45 and the wall to the next corner bends right by another 45
+    (a rounded room): a lap still turns -360 in all, half of it in travels."""
+    rows = []
+    for t in range(8 * circuits):
+        corner = t // 2 % 4
+        action = Turn(-45.0) if t % 2 == 0 else Travel(3.0, heading_change_deg=-45.0)
+        rows.append(Step("corner" if t % 2 == 0 else "wall", action, truth=f"C{corner}{'in' if t % 2 == 0 else 'out'}"))
+    return Tableau(tuple(rows) + (Step("corner", truth="C0in"),))
+
+
+def test_loop_of_bent_walls_is_a_square_room_only_when_the_bends_count():
+    # As in the square room, the topological rules alone accept three corners (6 dstates). With the bends
+    # each corner turns the robot by -45 - 45 = -90, so three corners make -270, not a whole turn: four
+    # corners, 8 dstates, 4 places (a corner's two dstates share it), 4 paths (one wall each). Were the
+    # bends left out, a corner would turn only -45 and the robot would face back the way it started
+    # only after 8 corners: the room's truth (4 corners) would then not be a map at all.
+    t = bent_room(circuits=3)
+    assert Resolver(levels=NO_METRICAL).resolve(t).n_dstates == 6
+    m = Resolver().resolve(t)
+    assert (m.n_dstates, m.n_places, m.n_paths) == (8, 4, 4) and m.unique and truth_accuracy(t, m)
+
+
+BENT_COMB = """
++-+-+-+-+-+
+  | | | |
+  + + + +
+"""
+
+
+def test_curved_hallway_with_look_alike_side_corridors_is_told_apart_by_its_bends():
+    # A hallway with four side corridors to the south, the nodes between (1, 1) and (4, 1) turned by
+    # 0, 30, 60 and 90, so the hallway bends left by 30 at each junction. East from (1, 1) to (4, 1),
+    # turn around, west back to (1, 1). Every junction looks alike going east (".FRB": front, right and
+    # back open) and going west ("LF.B"). The headings by hand: east 0, 30, 60, 90; turned around 270;
+    # west 270 - 30 = 240, 210, 180. All eight differ, so the causal and metrical levels alone keep the
+    # eight true dstates apart; in a straight hallway (every heading 0 or 180) they fold to two.
+    actions = ["travel"] * 3 + ["around"] + ["travel"] * 3
+    start = ((1, 1), 0)
+    frames = {(2, 1): 30, (3, 1): 60, (4, 1): 90}
+    straight = _script(BENT_COMB, start, actions)
+    assert Resolver(levels=NO_TOPOLOGICAL).resolve(straight).n_dstates == 2
+    t = _script(BENT_COMB, start, actions, frames=frames)
+    assert [s.view for s in t.steps] == [".FRB"] * 4 + ["LF.B"] * 4
+    m = Resolver(levels=NO_TOPOLOGICAL).resolve(t)
+    assert m.n_dstates == 8 and m.unique and truth_accuracy(t, m)
+    assert [m.headings[d] for d in m.dstate_of] == [0, 30, 60, 90, 270, 240, 210, 180]
+    # With the topological level the order along the hallway separates them anyway, bends or not.
+    assert Resolver().resolve(t).n_dstates == 8
