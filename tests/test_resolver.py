@@ -6,6 +6,7 @@ from bootmap import examples
 from bootmap.errors import AxiomError, InconsistentTableau, SolveTimeout
 from bootmap.resolver import Resolver
 from bootmap.tableau import Step, Tableau, Travel, Turn
+from bootmap.testing.check import LEVELS, check_map
 
 ALL = None
 NO_METRICAL = ["causal", "topological"]
@@ -329,3 +330,48 @@ def test_curved_hallway_with_look_alike_side_corridors_is_told_apart_by_its_bend
     assert [m.headings[d] for d in m.dstate_of] == [0, 30, 60, 90, 270, 240, 210, 180]
     # With the topological level the order along the hallway separates them anyway, bends or not.
     assert Resolver().resolve(t).n_dstates == 8
+
+
+# --- one_side: the only rule that keeps a place off both sides of a path ------------------------------------
+
+def place_on_both_sides():
+    """Facing along a path at X (dstate a), the robot turns right, travels to P, turns around, travels
+    back to X, turns right onto the first path again (a), travels on to Y (a2), turns left and travels,
+    by a corridor that bends left by 90, to P again (pe), where it turns right and faces the way it
+    faced after the turn-around (q). Every view is distinct except the two a's and the two q's."""
+    rows = [("a", Turn(-90.0)), ("b", Travel(2.0)), ("pd", Turn(180.0)), ("q", Travel(2.0)), ("b2", Turn(-90.0)),
+            ("a", Travel(2.0)), ("a2", Turn(90.0)), ("e", Travel(2.0, heading_change_deg=90.0)), ("pe", Turn(-90.0)),
+            ("q", None)]
+    return Tableau(tuple(Step(v, a) for v, a in rows))
+
+
+@pytest.mark.parametrize("levels", [NO_METRICAL, ALL], ids=["causal+topological", "all"])
+def test_one_side_is_the_only_rule_that_keeps_a_place_off_both_sides_of_a_path(axioms_copy, levels):
+    # One dstate per view (8) puts P = {pd, q, pe} right of the path of a (turn right at t0, travel to
+    # P) and left of it (a travels to a2, which turns left and travels to P; sides are shared along a
+    # path). By hand, nothing else is wrong with it: places {a, b, b2}, {pd, q, pe}, {a2, e}; paths
+    # {b, pd, q, b2} (q, b2 facing back), {a, a2}, {e, pe}; no turn stays on its path, no place is
+    # ahead of or behind itself, and the only other sides (Y right of b2's path and so left of b's,
+    # X right of pe's path and e's) hold no place on those paths. Headings agree too: 0, 270, 270, 90,
+    # 90, 0, 0, 90, 180 (the bend), 90. So one_side alone refutes it, and the minimal maps split one
+    # repeated view instead: the second a (a's path then holds only the right turn) or the second q
+    # (pe's turn then reaches a place of its own, not P).
+    t = place_on_both_sides()
+    one_view_one_dstate = list(t.views)
+    broken = check_map(t, one_view_one_dstate, levels or LEVELS)
+    assert broken and all(v.startswith("one_side:") for v in broken)
+
+    with_rule = Resolver(axioms=axioms_copy, levels=levels).resolve(t)
+    assert with_rule.n_dstates == 9 and with_rule.n_models == 2
+    maps = [with_rule.dstate_of] + with_rule.alternatives
+    assert sorted((m[0] == m[5], m[3] == m[9]) for m in maps) == [(False, True), (True, False)]
+    assert all(check_map(t, m, levels or LEVELS) == [] for m in maps)
+
+    rules = axioms_copy / "topological.lp"
+    text = rules.read_text()
+    assert text.count(":- right(D, P), left(D, P).\n") == 1
+    rules.write_text(text.replace(":- right(D, P), left(D, P).\n", ""))
+    without_rule = Resolver(axioms=axioms_copy, levels=levels).resolve(t)
+    assert without_rule.n_dstates == 8 and without_rule.unique
+    assert without_rule.same(0, 5) and without_rule.same(3, 9)          # one dstate per view
+    assert (without_rule.n_places, without_rule.n_paths) == (3, 3)
