@@ -16,13 +16,13 @@ import time
 import numpy as np
 
 from bootmap import examples
-from bootmap.check import tableau_headings
-from bootmap.mapping.facts import quantise
-from bootmap.gridworld import random_world, walk
-from bootmap.metrics import dstate_accuracy
 from bootmap.errors import SolveTimeout
+from bootmap.mapping.facts import quantise
+from bootmap.metrics import dstate_accuracy
 from bootmap.mapping.resolver import Resolver
 from bootmap.tableau import Tableau, Turn
+from bootmap.testing.check import tableau_headings
+from bootmap.testing.gridworld import random_world, walk
 
 
 NO_METRICAL = ["causal", "topological"]

@@ -3,7 +3,7 @@
 Every explanation that says "different" is re-checked here twice: the solver, given the evidence
 alone, finds no map in which a and b are one dstate (and finds one as soon as any other step is
 dropped: the evidence is subset-minimal); and, where the evidence is one run of steps, the independent
-Python checker (bootmap.check) rejects every partition of it that puts a and b together.
+Python checker (bootmap.testing.check) rejects every partition of it that puts a and b together.
 """
 
 import itertools
@@ -15,14 +15,14 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from bootmap.check import check_map
 from bootmap.cli import main
 from bootmap.errors import ExplainError
 from bootmap.examples import corridor, notched_rectangle, square_room
 from bootmap.mapping.explain import Explainer
-from bootmap.gridworld import random_world, walk
 from bootmap.mapping.resolver import Resolver
 from bootmap.tableau import Tableau
+from bootmap.testing.check import check_map
+from bootmap.testing.gridworld import random_world, walk
 
 TOPO = ["causal", "topological"]
 

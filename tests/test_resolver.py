@@ -6,6 +6,7 @@ from bootmap import examples
 from bootmap.errors import AxiomError, InconsistentTableau, SolveTimeout
 from bootmap.mapping.resolver import Resolver
 from bootmap.tableau import Step, Tableau, Travel, Turn
+from bootmap.testing.check import LEVELS, check_map
 
 ALL = None
 NO_METRICAL = ["causal", "topological"]
@@ -215,10 +216,10 @@ def test_several_minimal_maps_are_counted_and_listed():
 
 # --- Hand-made grid worlds (views from local geometry; truth = node and heading) -----------------------
 
-def _script(ascii_world, start, actions):
-    from bootmap.gridworld import World, scripted
+def _script(ascii_world, start, actions, frames=None):
+    from bootmap.testing.gridworld import GridWorld, scripted
 
-    return scripted(World.from_ascii(ascii_world), start, actions)
+    return scripted(GridWorld.from_ascii(ascii_world).with_frames(frames or {}), start, actions)
 
 
 T_JUNCTION = """
@@ -262,3 +263,115 @@ def test_loop_taken_in_both_directions():
     # other, so the two turns at a corner are linked only where it turned around: 4 + 3 places, and each
     # side is a path per direction except the side it turned around on.
     assert (m.n_places, m.n_paths) == (7, 7)
+
+
+# --- Travels that bend: the heading a travel adds (heading_after_travel) -----------------------------------
+# Every tableau above travels straight, so nothing there depends on a travel's heading change.
+
+def test_l_shaped_corridor_walked_both_ways_faces_where_the_bend_leads():
+    # West end W, a corridor that leaves it eastwards and bends left by 90 into the other end E (E's
+    # frame is turned by 90: the corridor enters E from the south). Out to E, turn around, back to W,
+    # turn around, twice. Headings by hand: leaving W 0; arriving at E 0 + 90 = 90; turned around 270;
+    # back at W 270 - 90 = 180; turned around 0 again. Four dstates, as in a straight corridor (views
+    # and turn-arounds tell them apart), on one path between two places; only their headings show the bend.
+    t = _script("+-+", ((0, 0), 0), ["travel", "around"] * 4, frames={(1, 0): 90})
+    m = Resolver().resolve(t)
+    assert (m.n_dstates, m.n_places, m.n_paths) == (4, 2, 1) and m.unique and truth_accuracy(t, m)
+    assert [m.headings[m.dstate_of[i]] for i in range(5)] == [0, 90, 270, 180, 0]
+
+
+def bent_room(circuits=3):
+    """Clockwise circuits of a room with four look-alike corners, like examples.square_room, but at each
+    corner the robot turns right by only 45 and the wall to the next corner bends right by another 45
+    (a rounded room): a lap still turns -360 in all, half of it in travels."""
+    rows = []
+    for t in range(8 * circuits):
+        corner = t // 2 % 4
+        action = Turn(-45.0) if t % 2 == 0 else Travel(3.0, heading_change_deg=-45.0)
+        rows.append(Step("corner" if t % 2 == 0 else "wall", action, truth=f"C{corner}{'in' if t % 2 == 0 else 'out'}"))
+    return Tableau(tuple(rows) + (Step("corner", truth="C0in"),))
+
+
+def test_loop_of_bent_walls_is_a_square_room_only_when_the_bends_count():
+    # As in the square room, the topological rules alone accept three corners (6 dstates). With the bends
+    # each corner turns the robot by -45 - 45 = -90, so three corners make -270, not a whole turn: four
+    # corners, 8 dstates, 4 places (a corner's two dstates share it), 4 paths (one wall each). Were the
+    # bends left out, a corner would turn only -45 and the robot would face back the way it started
+    # only after 8 corners: the room's truth (4 corners) would then not be a map at all.
+    t = bent_room(circuits=3)
+    assert Resolver(levels=NO_METRICAL).resolve(t).n_dstates == 6
+    m = Resolver().resolve(t)
+    assert (m.n_dstates, m.n_places, m.n_paths) == (8, 4, 4) and m.unique and truth_accuracy(t, m)
+
+
+BENT_COMB = """
++-+-+-+-+-+
+  | | | |
+  + + + +
+"""
+
+
+def test_curved_hallway_with_look_alike_side_corridors_is_told_apart_by_its_bends():
+    # A hallway with four side corridors to the south, the nodes between (1, 1) and (4, 1) turned by
+    # 0, 30, 60 and 90, so the hallway bends left by 30 at each junction. East from (1, 1) to (4, 1),
+    # turn around, west back to (1, 1). Every junction looks alike going east (".FRB": front, right and
+    # back open) and going west ("LF.B"). The headings by hand: east 0, 30, 60, 90; turned around 270;
+    # west 270 - 30 = 240, 210, 180. All eight differ, so the causal and metrical levels alone keep the
+    # eight true dstates apart; in a straight hallway (every heading 0 or 180) they fold to two.
+    actions = ["travel"] * 3 + ["around"] + ["travel"] * 3
+    start = ((1, 1), 0)
+    frames = {(2, 1): 30, (3, 1): 60, (4, 1): 90}
+    straight = _script(BENT_COMB, start, actions)
+    assert Resolver(levels=NO_TOPOLOGICAL).resolve(straight).n_dstates == 2
+    t = _script(BENT_COMB, start, actions, frames=frames)
+    assert [s.view for s in t.steps] == [".FRB"] * 4 + ["LF.B"] * 4
+    m = Resolver(levels=NO_TOPOLOGICAL).resolve(t)
+    assert m.n_dstates == 8 and m.unique and truth_accuracy(t, m)
+    assert [m.headings[d] for d in m.dstate_of] == [0, 30, 60, 90, 270, 240, 210, 180]
+    # With the topological level the order along the hallway separates them anyway, bends or not.
+    assert Resolver().resolve(t).n_dstates == 8
+
+
+# --- one_side: the only rule that keeps a place off both sides of a path ------------------------------------
+
+def place_on_both_sides():
+    """Facing along a path at X (dstate a), the robot turns right, travels to P, turns around, travels
+    back to X, turns right onto the first path again (a), travels on to Y (a2), turns left and travels,
+    by a corridor that bends left by 90, to P again (pe), where it turns right and faces the way it
+    faced after the turn-around (q). Every view is distinct except the two a's and the two q's."""
+    rows = [("a", Turn(-90.0)), ("b", Travel(2.0)), ("pd", Turn(180.0)), ("q", Travel(2.0)), ("b2", Turn(-90.0)),
+            ("a", Travel(2.0)), ("a2", Turn(90.0)), ("e", Travel(2.0, heading_change_deg=90.0)), ("pe", Turn(-90.0)),
+            ("q", None)]
+    return Tableau(tuple(Step(v, a) for v, a in rows))
+
+
+@pytest.mark.parametrize("levels", [NO_METRICAL, ALL], ids=["causal+topological", "all"])
+def test_one_side_is_the_only_rule_that_keeps_a_place_off_both_sides_of_a_path(axioms_copy, levels):
+    # One dstate per view (8) puts P = {pd, q, pe} right of the path of a (turn right at t0, travel to
+    # P) and left of it (a travels to a2, which turns left and travels to P; sides are shared along a
+    # path). By hand, nothing else is wrong with it: places {a, b, b2}, {pd, q, pe}, {a2, e}; paths
+    # {b, pd, q, b2} (q, b2 facing back), {a, a2}, {e, pe}; no turn stays on its path, no place is
+    # ahead of or behind itself, and the only other sides (Y right of b2's path and so left of b's,
+    # X right of pe's path and e's) hold no place on those paths. Headings agree too: 0, 270, 270, 90,
+    # 90, 0, 0, 90, 180 (the bend), 90. So one_side alone refutes it, and the minimal maps split one
+    # repeated view instead: the second a (a's path then holds only the right turn) or the second q
+    # (pe's turn then reaches a place of its own, not P).
+    t = place_on_both_sides()
+    one_view_one_dstate = list(t.views)
+    broken = check_map(t, one_view_one_dstate, levels or LEVELS)
+    assert broken and all(v.startswith("one_side:") for v in broken)
+
+    with_rule = Resolver(axioms=axioms_copy, levels=levels).resolve(t)
+    assert with_rule.n_dstates == 9 and with_rule.n_models == 2
+    maps = [with_rule.dstate_of] + with_rule.alternatives
+    assert sorted((m[0] == m[5], m[3] == m[9]) for m in maps) == [(False, True), (True, False)]
+    assert all(check_map(t, m, levels or LEVELS) == [] for m in maps)
+
+    rules = axioms_copy / "topological.lp"
+    text = rules.read_text()
+    assert text.count(":- right(D, P), left(D, P).\n") == 1
+    rules.write_text(text.replace(":- right(D, P), left(D, P).\n", ""))
+    without_rule = Resolver(axioms=axioms_copy, levels=levels).resolve(t)
+    assert without_rule.n_dstates == 8 and without_rule.unique
+    assert without_rule.same(0, 5) and without_rule.same(3, 9)          # one dstate per view
+    assert (without_rule.n_places, without_rule.n_paths) == (3, 3)

@@ -11,7 +11,7 @@ rule, a twin that records it:
   body holds, so a model made with R switched off shows where R fails.
 
 R is an index into :attr:`Instrumented.rules`, which names each rule by its ``%!`` label, file and line
-(see bootmap.axioms). The core files (the search layout) are loaded as they are: their constraints are
+(see bootmap.mapping.theory). The core files (the search layout) are loaded as they are: their constraints are
 the frame of every question, not axioms under question. Nothing here touches user data: the tableau
 still arrives as facts through the backend.
 """

@@ -23,8 +23,8 @@ from collections import defaultdict
 from dataclasses import dataclass, field
 from typing import Hashable, Iterable, Sequence
 
-from .mapping.facts import quantise
-from .tableau import Tableau, Turn
+from ..mapping.facts import quantise
+from ..tableau import Tableau, Turn
 
 LEVELS = ("causal", "topological", "metrical")
 TRAVEL = "travel"

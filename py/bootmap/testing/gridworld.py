@@ -8,16 +8,25 @@ the local geometry looks like relative to the heading: which of left, front, rig
 e.g. ``"LF.B"`` (left, front, back open; right a wall). So views alias heavily, as in a real building; a
 landmark letter on some nodes (``"LF.B/A"``) makes them less ambiguous.
 
+Corridors may bend. A world may turn each node's frame by a multiple of 15 degrees (``frames``): the
+node's four sides, and so the headings ``(node, heading)`` names, are then rotated by that angle in the
+plane, and an edge between two nodes whose frames differ is a curved corridor. A travel along it has a
+net heading change (``heading_change_deg``) of the difference of the frames, e.g. an L-shaped corridor
+when one end is turned by 90. The nodes keep their order of sides, so the world is still a plane
+figure with the same places, paths and sides; only the robot's heading in the plane changes, the
+heading the metrical level accumulates from turns and bends.
+
 Because the world is a real plane figure, the map made of the true states satisfies every axiom of the
 theory (causal, topological, metrical): that is what makes these worlds useful test oracles.
 
 Actions are those of the paper's tableau: turn left (+90), right (-90) or around (180) in place, and
-travel one edge along the heading (``distance_m`` = the cell size). Everything random takes a
-``numpy.random.Generator``; nothing uses a global RNG, so a seed gives one world and one walk.
+travel one edge along the heading (``distance_m`` = the cell size, ``heading_change_deg`` the bend).
+Everything random takes a ``numpy.random.Generator``; nothing uses a global RNG, so a seed gives one
+world and one walk.
 
 Example
 -------
->>> w = World.from_ascii('''
+>>> w = GridWorld.from_ascii('''
 ... +-+-+
 ...   |
 ...   +
@@ -33,18 +42,19 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Iterable, Mapping, Sequence
 
 import numpy as np
 
-from .tableau import FORMAT, Tableau
+from ..tableau import FORMAT, Tableau
 
 Node = tuple[int, int]
 State = tuple[Node, int]                    # (node, heading in degrees)
 Edge = tuple[Node, Node]                    # always stored with the smaller node first
 
 HEADINGS = (0, 90, 180, 270)
+BEND_QUANTUM = 15                           # frames turn by multiples of the resolver's default quantum
 TURN_LEFT, TURN_RIGHT, TURN_AROUND, TRAVEL = "left", "right", "around", "travel"
 ACTIONS = (TURN_LEFT, TURN_RIGHT, TURN_AROUND, TRAVEL)
 TURN_ANGLE = {TURN_LEFT: 90, TURN_RIGHT: -90, TURN_AROUND: 180}
@@ -65,7 +75,7 @@ def neighbour(node: Node, heading: int) -> Node:
 
 
 @dataclass(frozen=True)
-class World:
+class GridWorld:
     """A graph world: nodes on an integer grid, unit edges, optional landmark letters.
 
     Build one with :meth:`from_edges`, :meth:`from_ascii` or :func:`random_world`.
@@ -81,6 +91,9 @@ class World:
         Length of an edge in metres (the ``distance_m`` of a travel).
     name : str
         Informational; copied into the tableau's ``world`` field.
+    frames : mapping node -> int
+        How far each node's frame is turned in the plane, in degrees (counter-clockwise; a multiple of
+        15; 0 where missing). A travel from node a to node b bends by ``frames[b] - frames[a]``.
     """
 
     nodes: frozenset
@@ -88,6 +101,7 @@ class World:
     landmarks: Mapping[Node, str] = field(default_factory=dict)
     cell_m: float = 2.0
     name: str = "gridworld"
+    frames: Mapping[Node, int] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         for a, b in self.edges:
@@ -98,13 +112,20 @@ class World:
         for n in self.landmarks:
             if n not in self.nodes:
                 raise ValueError(f"landmark at {n}, which is not a node")
+        for n, angle in self.frames.items():
+            if n not in self.nodes:
+                raise ValueError(f"frame at {n}, which is not a node")
+            # A bend off the quantum would be rounded by the resolver, and the true map's headings
+            # would no longer add up: the world would stop being an oracle.
+            if angle % BEND_QUANTUM != 0:
+                raise ValueError(f"frame of {n} turned by {angle} degrees, not a multiple of {BEND_QUANTUM}")
 
     # -- construction -----------------------------------------------------------------------------
 
     @classmethod
     def from_edges(cls, edges: Iterable[tuple[Sequence[int], Sequence[int]]],
                    nodes: Iterable[Sequence[int]] = (), landmarks: Mapping | None = None,
-                   cell_m: float = 2.0, name: str = "gridworld") -> "World":
+                   cell_m: float = 2.0, name: str = "gridworld") -> "GridWorld":
         """A world from a list of edges (pairs of grid points); extra isolated ``nodes`` are allowed."""
         es = frozenset(_edge(tuple(a), tuple(b)) for a, b in edges)      # type: ignore[arg-type]
         ns = frozenset(tuple(n) for n in nodes) | frozenset(n for e in es for n in e)
@@ -112,14 +133,14 @@ class World:
         return cls(ns, es, marks, cell_m, name)                            # type: ignore[arg-type]
 
     @classmethod
-    def from_ascii(cls, text: str, cell_m: float = 2.0, name: str = "gridworld") -> "World":
+    def from_ascii(cls, text: str, cell_m: float = 2.0, name: str = "gridworld") -> "GridWorld":
         """A world drawn in ASCII: nodes on even rows and columns, edges between them.
 
         ``+`` or ``o`` is a node, an upper-case letter a node with that landmark, ``-`` joins the nodes
         left and right of it, ``|`` the nodes above and below. The top line is the largest y, so the
         drawing looks like the plane (y up). Blank leading and trailing lines are ignored.
 
-        >>> World.from_ascii("+-A").landmarks
+        >>> GridWorld.from_ascii("+-A").landmarks
         {(1, 0): 'A'}
         """
         rows = [r.rstrip() for r in text.strip("\n").splitlines()]
@@ -151,6 +172,25 @@ class World:
     def is_open(self, node: Node, heading: int) -> bool:
         """Is there an edge leaving ``node`` in direction ``heading``?"""
         return _edge(node, neighbour(node, heading)) in self.edges
+
+    def bend(self, state: State) -> int:
+        """The net heading change of a travel from ``state`` (in (-180, 180]; 0 on a straight edge)."""
+        node, heading = state
+        return _wrap(self.frames.get(neighbour(node, heading), 0) - self.frames.get(node, 0))
+
+    def plane_heading(self, state: State) -> int:
+        """The robot's heading in the plane (0..359): ``heading`` turned by the node's frame."""
+        node, heading = state
+        return (heading + self.frames.get(node, 0)) % 360
+
+    def with_frames(self, frames: Mapping[Sequence[int], int]) -> "GridWorld":
+        """The same world with its nodes' frames turned (its corridors bent) as ``frames`` says.
+
+        >>> w = GridWorld.from_ascii("+-+").with_frames({(1, 0): 90})      # an L-shaped corridor
+        >>> w.bend(((0, 0), 0)), w.bend(((1, 0), 180)), w.plane_heading(((1, 0), 0))
+        (90, -90, 90)
+        """
+        return replace(self, frames={tuple(k): int(v) for k, v in frames.items() if v % 360})  # type: ignore[misc]
 
     def view(self, state: State) -> str:
         """The view at a state: open sides as ``L F R B`` (``.`` for a wall), then any landmark."""
@@ -216,6 +256,12 @@ def _require(ok: bool, ch: str, r: int, c: int) -> None:
         raise ValueError(f"{ch!r} at line {r + 1}, column {c + 1} is off the node/edge lattice")
 
 
+def _wrap(angle: int) -> int:
+    """An angle in (-180, 180], as the resolver quantises heading changes."""
+    a = (angle + 180) % 360 - 180
+    return 180 if a == -180 else a
+
+
 def truth_id(state: State) -> str:
     """The true dstate's id, e.g. ``"3,1:90"``."""
     (x, y), h = state
@@ -226,7 +272,7 @@ def truth_id(state: State) -> str:
 
 def random_world(rng: np.random.Generator, width: int, height: int, extra_edges: int = 0,
                  landmarks: float = 0.0, keep: float = 1.0, letters: str = _LETTERS,
-                 cell_m: float = 2.0) -> World:
+                 cell_m: float = 2.0, bends: float = 0.0) -> GridWorld:
     """A random connected world inside a ``width`` x ``height`` grid.
 
     Parameters
@@ -245,6 +291,10 @@ def random_world(rng: np.random.Generator, width: int, height: int, extra_edges:
         Landmark letters, drawn at random with replacement (few letters: landmarks alias too).
     cell_m : float
         Edge length in metres.
+    bends : float
+        Fraction of nodes (rounded) whose frame is turned by a random non-zero multiple of 15 degrees,
+        bending every corridor between nodes whose frames differ. (Drawn last, so ``bends=0`` gives the
+        same world from the same generator as before bends existed.)
     """
     if width * height < 2:
         raise ValueError("a world needs at least two nodes")
@@ -256,8 +306,10 @@ def random_world(rng: np.random.Generator, width: int, height: int, extra_edges:
     picks = rng.permutation(len(rest))[:max(0, extra_edges)]
     edges = tree | {rest[i] for i in picks}
     marks = _place_landmarks(rng, sorted(nodes), landmarks, letters)
+    frames = _turn_frames(rng, sorted(nodes), bends)
     name = f"grid {width}x{height}, {len(nodes)} nodes, {len(edges)} edges"
-    return World(frozenset(nodes), frozenset(edges), marks, cell_m, name)
+    name += f", {len(frames)} frames turned" if frames else ""
+    return GridWorld(frozenset(nodes), frozenset(edges), marks, cell_m, name, frames)
 
 
 def _grow_region(rng: np.random.Generator, width: int, height: int, size: int) -> set[Node]:
@@ -298,9 +350,18 @@ def _place_landmarks(rng: np.random.Generator, nodes: list[Node], fraction: floa
     return {nodes[i]: letters[int(rng.integers(len(letters)))] for i in sorted(chosen)}
 
 
+def _turn_frames(rng: np.random.Generator, nodes: list[Node], fraction: float) -> dict[Node, int]:
+    count = min(len(nodes), round(fraction * len(nodes)))
+    if count == 0:
+        return {}
+    angles = [a for a in range(-165, 181, BEND_QUANTUM) if a != 0]
+    chosen = rng.permutation(len(nodes))[:count]
+    return {nodes[i]: angles[int(rng.integers(len(angles)))] for i in sorted(chosen)}
+
+
 # -- walks ----------------------------------------------------------------------------------------
 
-def walk(world: World, n_steps: int, rng: np.random.Generator, policy: str = "random",
+def walk(world: GridWorld, n_steps: int, rng: np.random.Generator, policy: str = "random",
          start: State | None = None) -> Tableau:
     """A walk of ``n_steps`` time points (``n_steps - 1`` actions) through ``world``, as a tableau.
 
@@ -317,7 +378,8 @@ def walk(world: World, n_steps: int, rng: np.random.Generator, policy: str = "ra
     Returns
     -------
     Tableau
-        With view, action, truth (``"x,y:heading"``) and pose (metres, metres, radians) per step.
+        With view, action (a travel's ``heading_change_deg`` is its bend), truth (``"x,y:heading"``,
+        the heading in the node's frame) and pose (metres, metres, radians in the plane) per step.
     """
     if n_steps < 1:
         raise ValueError("a walk has at least one time point")
@@ -337,11 +399,11 @@ def walk(world: World, n_steps: int, rng: np.random.Generator, policy: str = "ra
     return _tableau(world, states, actions, policy)
 
 
-def scripted(world: World, start: State, actions: Sequence[str]) -> Tableau:
+def scripted(world: GridWorld, start: State, actions: Sequence[str]) -> Tableau:
     """The tableau of a given sequence of actions (``"travel"``, ``"left"``, ``"right"``, ``"around"``)
     from ``start`` = (node, heading): hand-made tableaux with known answers.
 
-    >>> corridor = World.from_ascii("+-+")
+    >>> corridor = GridWorld.from_ascii("+-+")
     >>> [s.view for s in scripted(corridor, ((0, 0), 0), ["travel", "around"]).steps]
     ['.F..', '...B', '.F..']
     """
@@ -351,14 +413,14 @@ def scripted(world: World, start: State, actions: Sequence[str]) -> Tableau:
     return _tableau(world, states, list(actions), "scripted")
 
 
-def _random_start(world: World, rng: np.random.Generator) -> State:
+def _random_start(world: GridWorld, rng: np.random.Generator) -> State:
     starts = sorted((n, h) for n in world.nodes for h in world.open_headings(n))
     if not starts:
         raise ValueError("the world has no edges: the robot cannot move")
     return starts[int(rng.integers(len(starts)))]
 
 
-def _allowed(world: World, state: State, previous: str | None) -> list[str]:
+def _allowed(world: GridWorld, state: State, previous: str | None) -> list[str]:
     """Allowed actions, without a second turn in a row while a travel is possible."""
     acts = world.actions(state)
     if previous is not None and previous != TRAVEL and TRAVEL in acts:
@@ -367,7 +429,7 @@ def _allowed(world: World, state: State, previous: str | None) -> list[str]:
 
 
 class _RandomPolicy:
-    def __init__(self, world: World, rng: np.random.Generator):
+    def __init__(self, world: GridWorld, rng: np.random.Generator):
         self.world, self.rng = world, rng
 
     def choose(self, state: State, previous: str | None) -> str:
@@ -382,7 +444,7 @@ class _ExplorePolicy:
     """Systematic exploration from experience: the robot knows its state, what it sees there (which
     actions are allowed) and the transitions it has made, but nothing about unvisited parts."""
 
-    def __init__(self, world: World, rng: np.random.Generator):
+    def __init__(self, world: GridWorld, rng: np.random.Generator):
         self.world, self.rng = world, rng
         self.known: dict[tuple[State, str], State] = {}
         self.allowed_at: dict[State, list[str]] = {}
@@ -443,21 +505,21 @@ def _unwind(back: dict, node) -> list[str]:
     return out[::-1]
 
 
-def _tableau(world: World, states: list[State], actions: list[str], policy: str) -> Tableau:
+def _tableau(world: GridWorld, states: list[State], actions: list[str], policy: str) -> Tableau:
     steps = []
     for t, state in enumerate(states):
         (x, y), h = state
         step = {"view": world.view(state), "truth": truth_id(state),
-                "pose": [x * world.cell_m, y * world.cell_m, math.radians(h)]}
+                "pose": [x * world.cell_m, y * world.cell_m, math.radians(world.plane_heading(state))]}
         if t < len(actions):
-            step["action"] = _action_dict(actions[t], world.cell_m)
+            step["action"] = _action_dict(actions[t], world.cell_m, world.bend(state))
         steps.append(step)
-    doc = {"format": FORMAT, "world": world.name, "meta": {"policy": policy, "generator": "bootmap.gridworld"},
+    doc = {"format": FORMAT, "world": world.name, "meta": {"policy": policy, "generator": "bootmap.testing.gridworld"},
            "steps": steps}
     return Tableau.from_dict(doc, "gridworld walk")
 
 
-def _action_dict(action: str, cell_m: float) -> dict:
+def _action_dict(action: str, cell_m: float, bend: int) -> dict:
     if action == TRAVEL:
-        return {"type": "travel", "distance_m": cell_m}
+        return {"type": "travel", "distance_m": cell_m, **({"heading_change_deg": bend} if bend else {})}
     return {"type": "turn", "angle_deg": TURN_ANGLE[action]}
