@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 from typing import Hashable, Iterable, Sequence
 
 from ..mapping.facts import quantise
+from ..mapping.vocabulary import QUANTUM_DEG
 from ..tableau import Tableau, Turn
 
 LEVELS = ("causal", "topological", "metrical")
@@ -42,7 +43,8 @@ def true_partition(tableau: Tableau) -> list[str]:
 
 
 def check_map(tableau: Tableau, dstate_of: Sequence[Hashable],
-              levels: Iterable[str] = LEVELS, quantum_deg: float = 15.0) -> list[str]:
+              levels: Iterable[str] = LEVELS, quantum_deg: float = QUANTUM_DEG,
+              keep: Sequence[int] | None = None) -> list[str]:
     """Every violation of the axioms by the partition ``dstate_of`` of the tableau's time points.
 
     Parameters
@@ -50,11 +52,16 @@ def check_map(tableau: Tableau, dstate_of: Sequence[Hashable],
     tableau : Tableau
         Needs a view on every step.
     dstate_of : sequence
-        The dstate of each time point (any hashable names, e.g. ``CognitiveMap.dstate_of``).
+        The dstate of each time point (any hashable names, e.g. ``CognitiveMap.dstate_of``); with
+        ``keep``, of each kept time point, in order.
     levels : iterable of str
         Which levels' axioms to check; ``causal`` is always checked (it defines dstates).
     quantum_deg : float
         Turn angles and heading changes are rounded to this quantum, as the resolver rounds them.
+    keep : sequence of int, optional
+        Check an excerpt, as an explanation states its evidence: only these time points, the actions
+        between two consecutive kept ones, and headings counted afresh after every gap (the ``resume``
+        frames of metrical.lp).
 
     Returns
     -------
@@ -66,10 +73,11 @@ def check_map(tableau: Tableau, dstate_of: Sequence[Hashable],
     unknown = levels - set(LEVELS)
     if unknown:
         raise ValueError(f"unknown level(s) {sorted(unknown)}; expected some of {LEVELS}")
-    if len(dstate_of) != len(tableau):
-        raise ValueError(f"{len(dstate_of)} dstates for {len(tableau)} time points")
+    times = list(range(len(tableau))) if keep is None else sorted(keep)
+    if len(dstate_of) != len(times):
+        raise ValueError(f"{len(dstate_of)} dstates for {len(times)} time points")
     tableau.require_views()
-    exp = Experience.build(tableau, [str(d) for d in dstate_of], quantum_deg)
+    exp = Experience.build(tableau, [str(d) for d in dstate_of], quantum_deg, times)
     out = _one_view(exp) + _deterministic(exp)
     if "metrical" in levels:
         out += _one_heading(exp)
@@ -82,24 +90,33 @@ def check_map(tableau: Tableau, dstate_of: Sequence[Hashable],
 
 @dataclass
 class Experience:
-    """The tableau seen through a partition: each time point's dstate, view and action, and the
-    experienced transitions ``(dstate, action) -> {dstates}`` (``next/3`` in causal.lp)."""
+    """The tableau (or an excerpt of it) seen through a partition: each kept time point's dstate, view
+    and action, and the experienced transitions ``(dstate, action) -> {dstates}`` (``next/3`` in
+    causal.lp). Lists are aligned with ``times``; the action of a time point whose successor is not
+    kept is None."""
 
+    times: list[int]
     dstate_of: list[str]
     views: list[str]
-    actions: list[object]               # "travel" or a quantised turn angle (int), per time point but the last
-    changes: list[int]                  # quantised heading change of each action
+    actions: list[object]               # "travel" or a quantised turn angle (int), or None
+    changes: list[int | None]           # quantised heading change of each action
     next: dict[tuple[str, object], dict[str, int]] = field(default_factory=dict)
 
     @classmethod
-    def build(cls, tableau: Tableau, dstate_of: list[str], quantum_deg: float) -> "Experience":
-        changes = [_heading_change(a, quantum_deg) for a in tableau.actions]
+    def build(cls, tableau: Tableau, dstate_of: list[str], quantum_deg: float,
+              times: Sequence[int] | None = None) -> "Experience":
+        times = list(range(len(tableau))) if times is None else list(times)
+        kept = set(times)
+        steps = [tableau.steps[t] for t in times]
+        linked = [s.action if t + 1 in kept else None for t, s in zip(times, steps)]
+        changes = [None if a is None else _heading_change(a, quantum_deg) for a in linked]
         # A turn is named by its quantised angle (which is also its heading change), a travel by "travel".
-        actions = [c if isinstance(a, Turn) else TRAVEL for a, c in zip(tableau.actions, changes)]
-        exp = cls(dstate_of, list(tableau.views), actions, changes)   # type: ignore[arg-type]
-        for t, a in enumerate(actions):
-            # Remember the first time each transition was made, to cite it.
-            exp.next.setdefault((dstate_of[t], a), {}).setdefault(dstate_of[t + 1], t)
+        actions = [None if a is None else c if isinstance(a, Turn) else TRAVEL for a, c in zip(linked, changes)]
+        exp = cls(times, dstate_of, [s.view for s in steps], actions, changes)   # type: ignore[arg-type]
+        for i, a in enumerate(actions):
+            if a is not None:
+                # Remember the first time each transition was made, to cite it.
+                exp.next.setdefault((dstate_of[i], a), {}).setdefault(dstate_of[i + 1], times[i])
         return exp
 
     @property
@@ -117,14 +134,16 @@ def action_name(a: object) -> str:
 
 
 def _feature_clash(exp: Experience, values: list, what: str, rule: str) -> list[str]:
-    """one_value_per_feature: the first two different values a dstate shows, with their times."""
-    first: dict[str, dict] = defaultdict(dict)
-    for t, (d, v) in enumerate(zip(exp.dstate_of, values)):
-        first[d].setdefault(v, t)
+    """one_value_per_feature: the first two different values a dstate shows, with their times. A value
+    is a (feature, value) pair; only values of one feature clash."""
+    first: dict[tuple, dict] = defaultdict(dict)
+    for t, d, (feature, v) in zip(exp.times, exp.dstate_of, values):
+        first[(d, feature)].setdefault(v, t)
     out = []
-    for d in sorted(first, key=_natural):
-        if len(first[d]) > 1:
-            (v1, t1), (v2, t2) = sorted(first[d].items(), key=lambda kv: kv[1])[:2]
+    for d, feature in sorted(first, key=lambda k: (_natural(k[0]), str(k[1]))):
+        shown = first[(d, feature)]
+        if len(shown) > 1:
+            (v1, t1), (v2, t2) = sorted(shown.items(), key=lambda kv: kv[1])[:2]
             out.append(f"one_value_per_feature: {d} shows {what} {v1!r} (t{t1}) and {what} {v2!r} (t{t2})"
                        + (f" ({rule})" if rule else ""))
     return out
@@ -132,15 +151,25 @@ def _feature_clash(exp: Experience, values: list, what: str, rule: str) -> list[
 
 def _one_view(exp: Experience) -> list[str]:
     """view_is_feature + one_value_per_feature: a dstate has one view."""
-    return _feature_clash(exp, exp.views, "view", "")
+    return _feature_clash(exp, [("view", v) for v in exp.views], "view", "")
 
 
-def headings(exp: Experience) -> list[int]:
-    """heading_origin, heading_after_turn, heading_after_travel: the heading of every time point."""
-    return _accumulate(exp.changes)
+def headings(exp: Experience) -> list[tuple[int, int]]:
+    """heading_origin, heading_resumed, heading_after_turn, heading_after_travel: the (frame, heading)
+    of every kept time point. Frame 0 starts at time 0; a run of kept time points after a gap starts a
+    frame of its own, named by its first time point (headings in different frames say nothing about
+    each other)."""
+    out: list[tuple[int, int]] = []
+    for i, t in enumerate(exp.times):
+        if i == 0 or exp.actions[i - 1] is None:
+            out.append((t, 0))  # the run starts a frame (frame 0 when it starts at time 0)
+        else:
+            frame, h = out[-1]
+            out.append((frame, (h + exp.changes[i - 1]) % 360))  # type: ignore[operator]
+    return out
 
 
-def tableau_headings(tableau: Tableau, quantum_deg: float = 15.0) -> list[int]:
+def tableau_headings(tableau: Tableau, quantum_deg: float = QUANTUM_DEG) -> list[int]:
     """The heading of every time point as the metrical level derives it (0 at time 0)."""
     return _accumulate(_heading_change(a, quantum_deg) for a in tableau.actions)
 
@@ -159,7 +188,7 @@ def _accumulate(changes: Iterable[int]) -> list[int]:
 
 
 def _one_heading(exp: Experience) -> list[str]:
-    """heading_is_feature + one_value_per_feature: a dstate faces one way (metrical level)."""
+    """heading_is_feature + one_value_per_feature: a dstate faces one way (metrical level), in each frame."""
     return _feature_clash(exp, headings(exp), "heading", "heading_is_feature")
 
 
