@@ -4,6 +4,11 @@ For each tableau: our resolve time (ground, solve, total), dstates found and acc
 (best one-to-one renaming); then AALpy's RPNI (generalised state merging, Moore machine) learning from
 the same steps with outputs = views, and outputs = views + heading: its states, accuracy and time.
 
+Targets (README, Benchmarks): the paper's 401-step tableau resolved in under 0.1 s; 10,000 steps in under
+10 s; our map always the true one (100% of time points on their true dstate, proved minimal, on every
+tableau); no time-out (10 s) on the aliased 30-step walks; within 10 times RPNI's time where both are
+right. Each is printed beside the measured figure; the exit status is 1 if any is missed.
+
 Run: make bench   (or .venv/bin/python bench/resolve_bench.py [--quick])
 """
 
@@ -23,9 +28,14 @@ from bootmap.mapping.resolver import Resolver
 from bootmap.tableau import Tableau, Turn
 from bootmap.testing.check import tableau_headings
 from bootmap.testing.gridworld import random_world, walk
+from targets import Targets
 
 
 NO_METRICAL = ["causal", "topological"]
+PAPER_MAX_S = 0.1  # the paper's 401-step tableau, resolved
+LARGE_STEPS, LARGE_MAX_S = 10_000, 10.0  # the largest grid walk, resolved
+ALIASED_TIME_LIMIT_S = 10.0
+RATIO_MAX = 10.0  # ours / RPNI where both find the true map
 
 
 def rpni(tableau: Tableau, with_heading: bool) -> tuple[list, float]:
@@ -70,8 +80,8 @@ def aliased_walks(count: int):
         yield walk(world, 30, rng, policy="random" if seed % 3 else "explore")
 
 
-def aliasing_sweep(count: int) -> None:
-    resolver = Resolver(levels=NO_METRICAL, time_limit=10)
+def aliasing_sweep(count: int, targets: Targets) -> None:
+    resolver = Resolver(levels=NO_METRICAL, time_limit=ALIASED_TIME_LIMIT_S)
     times, timeouts = [], 0
     for tableau in aliased_walks(count):
         t0 = time.perf_counter()
@@ -83,9 +93,10 @@ def aliasing_sweep(count: int) -> None:
     q = np.percentile(times, [50, 90, 100])
     print(f"\n{count} aliased 30-step walks on 3x3/4x4 grids, no landmarks, levels causal+topological: "
           f"median {q[0]:.2f} s, p90 {q[1]:.2f} s, max {q[2]:.2f} s, time-outs (10 s) {timeouts}")
+    targets.check(f"  time-outs ({ALIASED_TIME_LIMIT_S:.0f} s) on the aliased walks", timeouts, "==", 0, fmt="{}")
 
 
-def ratio_where_both_are_right(sizes=(50, 250, 625), runs: int = 30) -> None:
+def ratio_where_both_are_right(targets: Targets, sizes=(50, 250, 625), runs: int = 30) -> None:
     """Ours against RPNI (views + heading) where both find the true map: the notched rectangle at
     several lengths, the two timed alternately, many times (milliseconds are noisy)."""
     print("\nwhere both are right (notched rectangle, views + heading for RPNI), medians of", runs, "alternating runs:")
@@ -103,6 +114,7 @@ def ratio_where_both_are_right(sizes=(50, 250, 625), runs: int = 30) -> None:
         assert dstate_accuracy(truth, cmap.dstate_of) == 1.0 and dstate_accuracy(truth, states) == 1.0
         o, r = np.median(ours[3:]), np.median(theirs[3:])
         print(f"  {len(tableau):>5} steps: ours {o * 1000:7.1f} ms, RPNI {r * 1000:6.1f} ms, ours / RPNI = {o / r:4.1f}")
+        targets.check(f"  ours / RPNI, {len(tableau)} steps", o / r, "<=", RATIO_MAX, fmt="{:.1f}", unit="x")
 
 
 def main(argv=None) -> int:
@@ -114,6 +126,7 @@ def main(argv=None) -> int:
             f" {'uniq':>5} | {'rpni(v)':>7} {'acc':>6} {'time':>7} | {'rpni(v+h)':>9} {'acc':>6} {'time':>7}")
     print(head)
     print("-" * len(head))
+    targets, rows = Targets(), []
     for name, tableau, *levels in cases(args.quick):
         resolver = Resolver(levels=levels[0] if levels else None, time_limit=120)
         truth = [s.truth for s in tableau.steps]
@@ -131,12 +144,20 @@ def main(argv=None) -> int:
               f"{len(set(v_states)):>7} {dstate_accuracy(truth, v_states):>6.1%} {v_time:>7.3f} | "
               f"{len(set(h_states)):>9} {dstate_accuracy(truth, h_states):>6.1%} {h_time:>7.3f}")
         sys.stdout.flush()
-    aliasing_sweep(10 if args.quick else 40)
-    ratio_where_both_are_right((50,) if args.quick else (50, 250, 625))
+        rows.append((name, len(tableau), levels, cmap, dstate_accuracy(truth, cmap.dstate_of), total))
     print("\ntimes in seconds; accuracy = time points in their true dstate under the best one-to-one renaming;"
           "\n'true' = distinct true dstates visited; ours: median of", args.repeat, "resolves, proved minimal and"
-          " (uniq) unique")
-    return 0
+          " (uniq) unique\n")
+    for name, steps, levels, cmap, accuracy, total in rows:
+        targets.check(f"ours, {name}: accuracy", accuracy, "==", 1.0, fmt="{:.1%}", bound_text="100%")
+        targets.check(f"ours, {name}: proved minimal", cmap.minimal, "==", True, fmt="{}", bound_text="True")
+        if name == "paper notched rectangle":
+            targets.check(f"ours, {name}: time", total, "<", PAPER_MAX_S, fmt="{:.3f}", unit=" s")
+        if steps == LARGE_STEPS:
+            targets.check(f"ours, {name}: time", total, "<", LARGE_MAX_S, fmt="{:.1f}", unit=" s")
+    aliasing_sweep(10 if args.quick else 40, targets)
+    ratio_where_both_are_right(targets, (50,) if args.quick else (50, 250, 625))
+    return targets.exit_status()
 
 
 if __name__ == "__main__":

@@ -6,7 +6,8 @@ Starts ``bootmap serve`` on a free port with a fresh data directory (or uses --u
 1. posts the paper's 401-step tableau ``--posts`` times (each post is validated, solved and stored), and
 2. reads its stored map ``--reads`` times.
 
-Targets on the project's 2-core machine: p50 under 0.5 s for post-and-solve, over 300 map reads per second.
+Targets on the project's 2-core machine: p50 under 0.5 s for post-and-solve, over 300 map reads per second,
+and no failed request. Each is printed beside the measured figure; the exit status is 1 if any is missed.
 
     .venv/bin/python bench/service_bench.py [--clients 4] [--posts 200] [--reads 2000] [--url URL]
 """
@@ -26,6 +27,10 @@ import httpx
 import numpy as np
 
 from bootmap import examples
+from targets import Targets
+
+POST_P50_MAX_S = 0.5
+READS_PER_S_MIN = 300.0
 
 
 def start_server(data_dir: Path) -> tuple[subprocess.Popen, str]:
@@ -86,13 +91,14 @@ def run(url: str, clients: int, n: int, request) -> tuple[np.ndarray, float, int
     return np.array(latencies), time.perf_counter() - t0, failures[0]
 
 
-def report(name: str, lat: np.ndarray, wall: float, failures: int) -> None:
+def report(name: str, lat: np.ndarray, wall: float, failures: int) -> dict:
     p50, p90, p99 = np.percentile(lat, [50, 90, 99]) * 1000
     print(f"{name:34} {len(lat):5d} req  {len(lat) / wall:7.1f} req/s  p50 {p50:6.1f} ms  p90 {p90:6.1f} ms  "
           f"p99 {p99:6.1f} ms  max {lat.max() * 1000:6.1f} ms  failures {failures}")
+    return {"p50_s": p50 / 1000, "per_s": len(lat) / wall, "failures": failures}
 
 
-def main() -> None:
+def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--url", help="a running server (default: start one)")
     ap.add_argument("--clients", type=int, default=4)
@@ -119,15 +125,22 @@ def main() -> None:
                     post(c)
             print(f"bootmap service at {url}, {args.clients} concurrent clients, loopback, "
                   f"{os.cpu_count()} CPUs")
-            report("POST /tableaux (401 steps, solve)", *run(url, args.clients, args.posts, post))
+            posts = report("POST /tableaux (401 steps, solve)", *run(url, args.clients, args.posts, post))
             target = ids[0]
-            report("GET /tableaux/{id}/map", *run(url, args.clients, args.reads,
-                                                  lambda c: c.get(f"/tableaux/{target}/map").status_code == 200))
+            reads = report("GET /tableaux/{id}/map", *run(url, args.clients, args.reads,
+                                                          lambda c: c.get(f"/tableaux/{target}/map").status_code == 200))
         finally:
             if proc is not None:
                 proc.terminate()
                 proc.wait(20)
+    print()
+    targets = Targets()
+    targets.check("POST /tableaux p50", posts["p50_s"], "<", POST_P50_MAX_S, fmt="{:.3f}", unit=" s")
+    targets.check("GET /tableaux/{id}/map throughput", reads["per_s"], ">", READS_PER_S_MIN, fmt="{:.0f}",
+                  unit=" req/s")
+    targets.check("failed requests", posts["failures"] + reads["failures"], "==", 0, fmt="{}")
+    return targets.exit_status()
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

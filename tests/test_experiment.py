@@ -6,7 +6,7 @@ import sys
 
 import pytest
 
-from bootmap.experiment import run_experiment
+from bootmap.experiment import CHECKS, NN_TARGET, checks, run_experiment
 
 PAPER_VIEWS = {(0.5, 0.5, 4.5), (0.5, 4.5, 2.5), (0.5, 0.5, 2.5), (0.5, 2.5, 4.5)}  # left, front, right
 
@@ -30,7 +30,7 @@ def test_notched_rectangle_reproduces_the_paper(notched):
     assert (m["dstates"], m["places"], m["paths"]) == (8, 4, 4) and m["unique"] and m["proved_minimal"]
     assert m["dstate_accuracy"] == 1.0 and not m["merged_true_dstates"] and not m["split_true_dstates"]
     assert r["recognition"]["cv_at_90"] >= 0.85  # the paper: about 90% after about 90 images
-    assert all(r["checks"].values())
+    assert r["checks"] == {c.id: True for c in CHECKS}
 
 
 def test_report_and_figures_are_written(notched):
@@ -50,7 +50,8 @@ def test_a_map_that_is_not_proved_minimal_is_reported_as_such(tmp_path):
     assert "error" in m or not m["proved_minimal"]
     report = (tmp_path / "report.md").read_text()
     assert "not proved minimal" in report or "No map" in report
-    assert not r["checks"]["map is the true topology"] and "**Not everything holds**" in report
+    assert not r["checks"]["map_is_true_topology"] and "**Not everything holds**" in report
+    assert "- map is the true topology: **no**" in report
 
 
 def test_true_dstates_the_map_merges_or_splits_are_named_not_claimed_a_success():
@@ -72,7 +73,7 @@ def test_true_dstates_the_map_merges_or_splits_are_named_not_claimed_a_success()
          "timings": {}, "views": {"k": 4, "largest_k_with_U_1": 4, "table": []}}
     r["checks"] = checks(r)
     assert (m["dstates"], m["places"], m["paths"]) == (8, 4, 4)  # the counts alone would look right
-    assert not r["checks"]["every image on its dstate"]
+    assert not r["checks"]["every_image_on_its_dstate"]
     report = _report_text(r)
     assert "**The map could not tell these true dstates apart** (map dstate: true dstates): S0: P0:N, P2:S" in report
     assert "**The map took these true dstates for several** (true dstate: map dstates): P1:E: S2, S8" in report
@@ -80,24 +81,127 @@ def test_true_dstates_the_map_merges_or_splits_are_named_not_claimed_a_success()
 
 
 def test_experiment_command_exits_0_and_names_the_report(tmp_path):
+    out = subprocess.run([sys.executable, "-m", "bootmap.cli", "experiment", "notched_rectangle", "--circuits", "15",
+                          "--seed", "1", "-o", str(tmp_path)], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stdout + out.stderr
+    assert "views: k = 4 by M" in out.stdout and f"report: {tmp_path}/report.md" in out.stdout
+    assert "the paper's figures: all hold" in out.stdout
+
+
+def test_experiment_command_exits_1_when_a_check_fails(tmp_path):
+    # 12 circuits are 96 images: 10-fold CV trains on at most 86, so nearest neighbour at 90 images is
+    # not measured and the run does not show it. The map itself is right.
     out = subprocess.run([sys.executable, "-m", "bootmap.cli", "experiment", "notched_rectangle", "--circuits", "12",
                           "--seed", "2", "-o", str(tmp_path)], capture_output=True, text=True, timeout=300)
-    assert out.returncode == 0, out.stderr
-    assert "views: k = 4 by M" in out.stdout and f"report: {tmp_path}/report.md" in out.stdout
+    assert out.returncode == 1, out.stdout + out.stderr
+    assert "map: 8 dstates, 4 places, 4 paths (truth 8, 4, 4)" in out.stdout
+    assert "the paper's figures: NOT (nearest neighbour at 90 images >= 85%)" in out.stdout
+    assert "- nearest neighbour at 90 images >= 85%: **no**" in (tmp_path / "report.md").read_text()
 
 
-def test_seeds_report_mean_and_spread(tmp_path):
-    from bootmap.experiment import run_seeds
+def test_seeds_report_mean_and_spread_and_exit_1_when_one_seed_fails(tmp_path, capsys):
+    from bootmap.cli import main
 
-    out = run_seeds("notched_rectangle", [1, 2], out_dir=tmp_path, circuits=15)
+    # At 15 circuits (120 images), seed 2's nearest neighbour is 82.5% at 90 images, seed 1's 89.2%.
+    assert main(["experiment", "notched_rectangle", "--seeds", "1,2", "--circuits", "15", "-o", str(tmp_path)]) == 1
+    printed = capsys.readouterr().out
+    assert "notched_rectangle (seed 1)" in printed and "notched_rectangle (seed 2)" in printed
+    assert "the paper's figures: NOT (nearest neighbour at 90 images >= 85%)" in printed
+    out = json.loads((tmp_path / "summary.json").read_text())
+    assert [r["checks"]["nn_at_90_at_least_85"] for r in out["runs"]] == [True, False]
     s = out["summary"]
     assert s["k by M"]["values"] == [4, 4] and s["dstates"]["mean"] == 8 and s["dstates"]["std"] == 0
     nn = s["1-NN at 90 images (CV)"]
-    assert nn["min"] == min(nn["values"]) and nn["max"] == max(nn["values"])
+    assert nn["min"] == min(nn["values"]) and nn["max"] == max(nn["values"]) and nn["min"] < nn["max"]
     assert nn["mean"] == pytest.approx(sum(nn["values"]) / 2)
     assert (tmp_path / "seed_1" / "report.md").exists() and (tmp_path / "seed_2" / "report.md").exists()
     summary = (tmp_path / "summary.md").read_text()
     assert "| k by M | 4 | 4, 4 | 4 | 4 - 4 |" in summary  # the paper's figure, then ours
+    assert "- k by M is the largest k with U = 1: yes, on every seed (2)" in summary
+    assert "- nearest neighbour at 90 images >= 85%: **no** on seed(s) 2" in summary
+    assert "**Not everything holds** (above)." in summary
+
+
+# -- each check, false on results built to fail it ---------------------------------------------------
+# Results as run_experiment writes them, with only the keys the checks read: the paper's notched
+# rectangle, every check holding (nearest neighbour exactly at the target).
+
+def paper_results() -> dict:
+    return {"world": "notched_rectangle", "seed": 1, "images": 400,
+            "views": {"k": 4, "largest_k_with_U_1": 4},
+            "map": {"dstates": 8, "places": 4, "paths": 4, "true_dstates": 8, "true_places": 4, "true_paths": 4,
+                    "proved_minimal": True, "dstate_accuracy": 1.0},
+            "recognition": {"cv_at_90": NN_TARGET}}
+
+
+def test_check_ids_are_stable_snake_case_and_each_has_its_sentence():
+    assert [c.id for c in CHECKS] == ["k_by_m_is_largest_u1", "map_is_true_topology", "every_image_on_its_dstate",
+                                      "nn_at_90_at_least_85"]
+    assert [c.text for c in CHECKS] == ["k by M is the largest k with U = 1", "map is the true topology",
+                                        "every image on its dstate", "nearest neighbour at 90 images >= 85%"]
+    assert NN_TARGET == 0.85  # the id names the target
+
+
+def test_the_papers_figures_pass_every_check():
+    assert checks(paper_results()) == {c.id: True for c in CHECKS}
+
+
+def _with(section: str, **changes):
+    """A change to one section of the results."""
+    def change(r):
+        r[section] = {**r[section], **changes}
+        return r
+    return change
+
+
+def _map_error(r):
+    r["map"], r["recognition"] = {"error": "no map satisfies the axioms"}, None
+    return r
+
+
+FAILING = {
+    # k by M against the largest k with U = 1
+    "M chose fewer views than U allows (4 vs 5)": (_with("views", k=4, largest_k_with_U_1=5), {"k_by_m_is_largest_u1"}),
+    "M chose more views than U allows (5 vs 4)": (_with("views", k=5, largest_k_with_U_1=4), {"k_by_m_is_largest_u1"}),
+    "no k with U = 1": (_with("views", largest_k_with_U_1=None), {"k_by_m_is_largest_u1"}),
+    # the map's topology
+    "right counts, not proved minimal": (_with("map", proved_minimal=False), {"map_is_true_topology"}),
+    "one place too few": (_with("map", places=3), {"map_is_true_topology"}),
+    "one path too many": (_with("map", paths=5), {"map_is_true_topology"}),
+    "a dstate too many": (_with("map", dstates=9, dstate_accuracy=399 / 400),
+                          {"map_is_true_topology", "every_image_on_its_dstate"}),
+    "no map": (_map_error, {"map_is_true_topology", "every_image_on_its_dstate", "nn_at_90_at_least_85"}),
+    # images on their dstates
+    "one image in 400 on the wrong dstate": (_with("map", dstate_accuracy=0.9975), {"every_image_on_its_dstate"}),
+    # nearest neighbour at 90 images
+    "nearest neighbour 84.9%": (_with("recognition", cv_at_90=0.849), {"nn_at_90_at_least_85"}),
+    "nearest neighbour not measured (run too short)": (_with("recognition", cv_at_90=None), {"nn_at_90_at_least_85"}),
+    "nearest neighbour 0%": (_with("recognition", cv_at_90=0.0), {"nn_at_90_at_least_85"}),
+}
+
+
+@pytest.mark.parametrize("case", FAILING)
+def test_each_check_is_false_on_results_built_to_fail_it(case):
+    build, fails = FAILING[case]
+    got = checks(build(paper_results()))
+    assert {id_ for id_, ok in got.items() if not ok} == fails
+
+
+def test_every_check_has_a_case_where_it_alone_fails():
+    alone = {next(iter(fails)) for _, fails in FAILING.values() if len(fails) == 1}
+    assert alone == {c.id for c in CHECKS}
+
+
+def test_the_summary_line_names_the_failed_checks_by_their_sentences(capsys):
+    from bootmap.cli import _print_summary
+
+    r = _with("map", dstate_accuracy=0.9975)(_with("recognition", cv_at_90=0.849)(paper_results()))
+    r["map"].update(merged_true_dstates={}, split_true_dstates={})
+    r["recognition"]["online_after_90"] = 0.9
+    r["checks"] = checks(r)
+    _print_summary(r)
+    assert capsys.readouterr().out.splitlines()[-1] == \
+        "  the paper's figures: NOT (every image on its dstate; nearest neighbour at 90 images >= 85%)"
 
 
 @pytest.mark.parametrize("text,seeds", [("1,2,3", [1, 2, 3]), ("1-5", [1, 2, 3, 4, 5]), ("7", [7])])

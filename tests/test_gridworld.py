@@ -122,7 +122,8 @@ def test_walk_is_deterministic(policy):
     w = small_world()
     a = walk(w, 50, np.random.default_rng(5), policy=policy)
     b = walk(w, 50, np.random.default_rng(5), policy=policy)
-    assert a.to_dict() == b.to_dict()
+    c = walk(w, 50, np.random.default_rng(6), policy=policy)
+    assert a.to_dict() == b.to_dict() and a.to_dict() != c.to_dict()
     assert len(a) == 50 and a.meta["policy"] == policy
 
 

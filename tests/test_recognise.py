@@ -99,6 +99,8 @@ def test_cv_curve_rises_and_is_deterministic():
     a = learning_curve_cv(X, y, sizes=(10, 30, 90), random_state=1)
     b = learning_curve_cv(X, y, sizes=(10, 30, 90), random_state=1)
     np.testing.assert_array_equal(a.scores, b.scores)
+    other = learning_curve_cv(X, y, sizes=(10, 30, 90), random_state=2)  # other folds, other subsets
+    assert not np.array_equal(a.scores, other.scores)
     assert a.sizes.tolist() == [10, 30, 90]
     assert a.scores.shape == (3, 10)
     assert a.at(10) < a.at(90)
@@ -127,7 +129,7 @@ def test_cv_sizes_beyond_training_folds_are_dropped():
 
 # -- comparisons -------------------------------------------------------------------------------------
 
-def test_compare_learners_returns_every_learner_with_accuracies_in_unit_interval():
+def test_compare_learners_scores_every_learner_and_more_images_help():
     X, y = blobs(n_per=15, dim=40, spread=2.0)
     rows = compare_learners(X, y, at=(30, 60, 90))
     assert [r["learner"] for r in rows] == ["1-NN", "3-NN", "logistic", "linear SVM", "RBF SVM", "MLP (32)"]
@@ -135,14 +137,23 @@ def test_compare_learners_returns_every_learner_with_accuracies_in_unit_interval
         assert {"learner", "sizes", "accuracy", "accuracy_std", "fit_time",
                 "acc@30", "acc@60", "acc@90"} <= r.keys()
         assert r["sizes"] == [30, 60, 90]
-        assert all(0.0 <= a <= 1.0 for a in r["accuracy"])
-        assert all(t >= 0 for t in r["fit_time"])
+        assert r["accuracy"] == [r["acc@30"], r["acc@60"], r["acc@90"]]
+        # 8 dstates in 4 close pairs: telling only the pairs apart would score 1/2; every learner tells
+        # the close dstates apart too, and better from 90 images than from 30.
+        assert r["acc@90"] > 0.5 and r["acc@90"] > r["acc@30"], r
+    # fit_time times the fit: the grid-searched learners (15 settings x 3 folds) take longer than
+    # nearest neighbour, which only stores the images.
+    fit_at_90 = {r["learner"]: r["fit_time"][-1] for r in rows}
+    assert 0 < fit_at_90["1-NN"] < min(fit_at_90["RBF SVM"], fit_at_90["MLP (32)"])
     # Seeded throughout, grid searches included: the same answer again (checked on two of them, at one
-    # size, to keep the test quick).
-    again = compare_learners(X, y, at=(30,), learners={k: v for k, v in default_learners().items()
-                                                         if k in ("1-NN", "RBF SVM")})
+    # size, to keep the test quick), and another from another seed (other folds and training subsets).
+    def at_30(seed, names):
+        learners = {k: v for k, v in default_learners(seed).items() if k in names}
+        return [r["accuracy"][0] for r in compare_learners(X, y, at=(30,), random_state=seed, learners=learners)]
+
     assert [r["accuracy"][0] for r in rows if r["learner"] in ("1-NN", "RBF SVM")] == pytest.approx(
-        [r["accuracy"][0] for r in again])
+        at_30(0, ("1-NN", "RBF SVM")))
+    assert at_30(1, ("1-NN",)) != pytest.approx([r["accuracy"][0] for r in rows if r["learner"] == "1-NN"])
 
 
 @pytest.mark.filterwarnings("ignore::sklearn.exceptions.ConvergenceWarning")
@@ -163,12 +174,11 @@ def test_compare_clusterers_scores_views_against_dstates():
     assert [r["clusterer"] for r in rows] == ["k-means", "Gaussian mixture (diag)", "agglomerative (ward)"]
     for r in rows:
         assert {"clusterer", "k", "U", "ari", "fit_time"} <= r.keys()
-        assert r["U"] == pytest.approx(1.0)  # close pairs merge: each dstate in one view
+        assert r["U"] == 1.0  # close pairs merge: each dstate in one view
         assert 0.0 < r["ari"] < 1.0  # 4 views for 8 dstates
-    def strip(rs):
-        return [{k: v for k, v in r.items() if k != "fit_time"} for r in rs]
-
-    assert strip(rows) == strip(compare_clusterers(X, y, k=4, random_state=0))
+    # One view per dstate: every clusterer finds the 8 dstates themselves.
+    for r in compare_clusterers(X, y, k=8, random_state=0):
+        assert (r["k"], r["U"], r["ari"]) == (8, 1.0, pytest.approx(1.0)), r
 
 
 # -- the estimator -----------------------------------------------------------------------------------

@@ -8,7 +8,7 @@ from collections import defaultdict
 
 import pytest
 
-from bootmap.experiment import run_experiment, run_seeds
+from bootmap.experiment import CHECKS, run_experiment, run_seeds
 
 # The 8 views the hallway's shapes make at 8 m (worlds/taylor_hall.toml): which true dstates share one.
 VIEWS = [
@@ -39,7 +39,7 @@ def test_taylor_hall_reproduces_the_paper(taylor):
     assert m["proved_minimal"] and m["dstate_accuracy"] == 1.0
     assert not m["merged_true_dstates"] and not m["split_true_dstates"]
     assert rec["cv_at_90"] >= 0.85  # the paper: 88% within 90 trials
-    assert all(r["checks"].values())
+    assert r["checks"] == {c.id: True for c in CHECKS}
 
 
 def test_views_are_the_shapes_of_the_places(taylor):
@@ -66,7 +66,7 @@ def test_report_says_what_holds(taylor):
 def test_taylor_hall_holds_on_five_seeds(tmp_path):
     out = run_seeds("taylor_hall", [1, 2, 3, 4, 5], out_dir=tmp_path)
     for r in out["runs"]:
-        assert all(r["checks"].values()), (r["seed"], r["checks"])
+        assert r["checks"] == {c.id: True for c in CHECKS}, r["seed"]
         assert r["views"]["k"] == 8
     summary = (tmp_path / "summary.md").read_text()
     assert "All of it holds on every seed." in summary

@@ -157,14 +157,29 @@ def test_repair_keeps_open_directions_and_fills_single_drop_outs():
 
 @settings(max_examples=40, deadline=None)
 @given(st.integers(2, 30), st.integers(1, 6), st.integers(0, 2**16))
-def test_measures_are_in_range_for_random_data(n, dim, seed):
+def test_m_depends_only_on_the_clusters_spread(n, dim, seed):
+    # M is a property of the partition and the images' geometry: renaming the views, or moving every
+    # image by the same offset, leaves it as it is; scaling the images by s divides it by s^2.
     rng = np.random.default_rng(seed)
     images = rng.normal(size=(n, dim))
     labels = rng.integers(0, 4, n)
-    dstates = rng.integers(0, 3, n)
     m = internal_measure(images, labels)
     assert m > 0
-    assert 0.0 <= uncertainty_coefficient(labels, dstates) <= 1.0
+    renamed = np.array(["V%d" % ((3 * x + 1) % 4) for x in labels])
+    assert internal_measure(images, renamed) == pytest.approx(m, rel=1e-9)
+    assert internal_measure(images + rng.normal(size=dim) * 10, labels) == pytest.approx(m, rel=1e-6)
+    assert internal_measure(images * 3.0, labels) == pytest.approx(m / 9.0, rel=1e-9)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(st.integers(0, 5), st.integers(0, 3)), min_size=1, max_size=30))
+def test_u_is_1_exactly_when_every_dstate_shows_one_view(pairs):
+    # U(V|S) is 1 when the dstate determines the view (aliasing allowed: many dstates, one view), or there
+    # is only one view; else some dstate shows two views and U is below 1.
+    dstates, views = [f"S{s}" for s, _ in pairs], [f"V{v}" for _, v in pairs]
+    u = uncertainty_coefficient(views, dstates)
+    determined = all(len({v for s2, v in pairs if s2 == s}) == 1 for s, _ in pairs) or len(set(views)) == 1
+    assert (u == 1.0) == determined
 
 
 # --- naming and the view table -----------------------------------------------------------------------
