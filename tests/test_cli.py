@@ -104,3 +104,28 @@ def test_demo_runs_both_paper_worlds_and_explains_s4(tmp_path):
     assert (tmp_path / "out" / "taylor_hall" / "report.md").is_file()
     assert "8 dstates, 4 places, 4 paths" in out.stdout
     assert "t0 (S0) and t4 (S4) cannot be one dstate" in out.stdout and "on_path_no_side" in out.stdout
+
+
+def test_a_sub_command_is_hidden_only_when_a_third_party_package_is_missing(monkeypatch, capsys):
+    # The service needs fastapi; without it `serve` is left out and the rest of the command works. Any
+    # other import error (a bug in bootmap itself) surfaces instead of silently dropping the command.
+    import importlib
+
+    from bootmap import cli
+
+    real = importlib.import_module
+
+    def missing(name):
+        def fake(module, *args):
+            if module == "bootmap.service.commands":
+                raise ModuleNotFoundError(f"No module named {name!r}", name=name)
+            return real(module, *args)
+        return fake
+
+    monkeypatch.setattr(importlib, "import_module", missing("fastapi"))
+    parser = cli.build_parser()
+    commands = parser._subparsers._group_actions[0].choices
+    assert "serve" not in commands and {"map", "why", "simulate"} <= set(commands)
+    monkeypatch.setattr(importlib, "import_module", missing("bootmap.service.nowhere"))
+    with pytest.raises(ModuleNotFoundError, match="bootmap.service.nowhere"):
+        cli.build_parser()

@@ -60,12 +60,13 @@ def test_true_dstates_the_map_merges_or_splits_are_named_not_claimed_a_success()
     from types import SimpleNamespace
 
     from bootmap.experiment import _map_section, _report_text, checks
+    from bootmap.mapping import SolveStats
     from bootmap.sim.world import load_world
 
     truth = ["P0:N", "P0:E", "P1:E", "P1:S", "P2:S", "P2:W", "P3:W", "P3:N", "P0:N", "P1:E"]
     found = ["S0", "S1", "S2", "S3", "S0", "S5", "S6", "S7", "S0", "S8"]
     cmap = SimpleNamespace(dstate_of=found, n_dstates=8, n_places=4, n_paths=4, unique=True, minimal=True,
-                           stats={"total_s": 0.01})
+                           stats=SolveStats(total_s=0.01))
     m = {**_map_section(cmap, truth, load_world("notched_rectangle")), "proved_minimal": True, "note": None}
     assert m["merged_true_dstates"] == {"S0": ["P0:N", "P2:S"]}
     assert m["split_true_dstates"] == {"P1:E": ["S2", "S8"]}

@@ -212,7 +212,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("axioms", help="list the axiom files and their named rules",
                        description="List the levels (.lp files) of the axiom directory and every rule named by a "
-                                   "'%%! name' comment, with file and line. A file that does not parse is reported "
+                                   "'%! name' comment, with file and line. A file that does not parse is reported "
                                    "with clingo's message.")
     _add_theory_options(p)
     p.set_defaults(handler=cmd_axioms)
@@ -221,7 +221,7 @@ def build_parser() -> argparse.ArgumentParser:
                        description="Explain whether two time points (t4, or 4) or two dstates of the minimal map (S4) "
                                    "are one dstate. If they differ: the smallest set of tableau steps that forces them "
                                    "apart, the axioms the contradiction needs, and the chain of rule instances (named "
-                                   "by their '%%! name' label, with file and line) from those steps to the axiom that "
+                                   "by their '%! name' label, with file and line) from those steps to the axiom that "
                                    "fails. If they are the same: why (minimality) and what experience would test it.")
     p.add_argument("tableau", help="tableau JSON file")
     p.add_argument("a", help="a time point (t0 or 0) or a dstate name (S0)")
