@@ -172,7 +172,7 @@ def test_shipped_paper_tableau_file_is_the_one_the_examples_build():
 
     from bootmap.tableau import load
 
-    assert load(Path(__file__).parent / "data" / "paper_notched_rectangle.json").steps == \
+    assert load(Path(__file__).parents[1] / "data" / "paper_notched_rectangle.json").steps == \
         examples.notched_rectangle(circuits=50).steps
 
 
