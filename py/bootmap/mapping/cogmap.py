@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from clingo import Symbol
 
 from ..tableau import Tableau, Turn
-from .vocabulary import AHEAD, HEADING_OF, IS, LEFT, PATH_OF, PLACE_OF, RIGHT, VIEW_OF
+from .vocabulary import AHEAD, HEADING_OF, IS, LEFT, PATH_OF, PLACE_OF, RIGHT, VIEW_OF, Atoms
 
 
 @dataclass(frozen=True)
@@ -173,13 +173,13 @@ def build_map(tableau: Tableau, models: list[list[Symbol]], exhausted: bool, lev
     """The map of the first model, named as the paper names it; the other models are alternatives.
     ``exhausted``: clingo enumerated every minimal model (so one model means a unique map)."""
     n = len(tableau)
-    atoms = models[0]
-    ids, seq = _number_dstates(IS.args(atoms), n)
+    atoms = Atoms(models[0])
+    ids, seq = _number_dstates(atoms[IS], n)
     S = [f"S{i}" for i in range(len(ids))]
-    views = {S[ids[d]]: v.string for d, v in VIEW_OF.args(atoms)}
-    headings = {S[ids[d]]: h.number for d, h in HEADING_OF.args(atoms)}
-    place_rep = {ids[d]: ids[p] for d, p in PLACE_OF.args(atoms)}
-    path_rep = {ids[d]: (ids[pa], dr.name) for d, pa, dr in PATH_OF.args(atoms)}
+    views = {S[ids[d]]: v.string for d, v in atoms[VIEW_OF]}
+    headings = {S[ids[d]]: h.number for d, h in atoms[HEADING_OF]}
+    place_rep = {ids[d]: ids[p] for d, p in atoms[PLACE_OF]}
+    path_rep = {ids[d]: (ids[pa], dr.name) for d, pa, dr in atoms[PATH_OF]}
     # Places and paths are named in order of first appearance; pos is the way the robot first faced.
     pname: dict[int, str] = {}
     paname: dict[int, str] = {}
@@ -200,13 +200,13 @@ def build_map(tableau: Tableau, models: list[list[Symbol]], exhausted: bool, lev
     # here they are named by place and path, and sides are taken facing pos.
     on = sorted({(place_of[d], path_of[d][0]) for d in place_of if d in path_of}, key=_natural)
     order = set()
-    for d, p in AHEAD.args(atoms):
+    for d, p in atoms[AHEAD]:
         pa, dr = path_of[S[ids[d]]]
         here, there = place_of[S[ids[d]]], pname[ids[p]]
         order.add((pa, here, there) if dr == "pos" else (pa, there, here))
     sides: dict[str, set] = {"right": set(), "left": set()}
     for side, mirror, pred in (("right", "left", RIGHT), ("left", "right", LEFT)):
-        for d, p in pred.args(atoms):
+        for d, p in atoms[pred]:
             pa, dr = path_of[S[ids[d]]]
             sides[side if dr == "pos" else mirror].add((pname[ids[p]], pa))
     order = sorted(order, key=_natural)

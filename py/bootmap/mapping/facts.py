@@ -14,7 +14,7 @@ from __future__ import annotations
 from typing import Iterable, Sequence
 
 import clingo
-from clingo import Number, String, Symbol
+from clingo import Function, Number, String, Symbol
 
 from ..tableau import Action, Tableau, Turn
 from .vocabulary import QUANTUM_DEG, RESUME, TRAVEL, TURN, VIEW, action_term
@@ -51,13 +51,16 @@ def tableau_facts(tableau: Tableau, quantum_deg: float = QUANTUM_DEG) -> list[Sy
     strings: dict[str, Symbol] = {}
     numbers: dict[int, Symbol] = {}
     out: list[Symbol] = []
+    # The vocabulary's names, with clingo's constructors called directly: this loop runs per step.
+    view_name, turn_name, travel_name = VIEW.name, TURN.name, TRAVEL.name
     for t, step in enumerate(tableau.steps):
+        time = Number(t)
         view = strings.get(step.view) or strings.setdefault(step.view, String(step.view))  # type: ignore[arg-type]
-        out.append(VIEW(t, view))
+        out.append(Function(view_name, [time, view]))
         if step.action is not None:
-            kind = TURN if isinstance(step.action, Turn) else TRAVEL
+            name = turn_name if isinstance(step.action, Turn) else travel_name
             angle = quantised_angle(step.action, quantum_deg)
-            out.append(kind(t, numbers.get(angle) or numbers.setdefault(angle, Number(angle))))
+            out.append(Function(name, [time, numbers.get(angle) or numbers.setdefault(angle, Number(angle))]))
     return out
 
 

@@ -45,7 +45,7 @@ from .diagnosis import diagnosed
 from .facts import tableau_facts
 from .grounding import Classes, Deadline, Grounding, prepass
 from .theory import Theory, load_theory
-from .vocabulary import FUTURE_DEPTH, IS, MINIMISE_DSTATES, ONE_PER_CLASS, QUANTUM_DEG
+from .vocabulary import FUTURE_DEPTH, MINIMISE_DSTATES, ONE_PER_CLASS, QUANTUM_DEG
 
 
 @dataclass(frozen=True)
@@ -147,8 +147,8 @@ class _Search:
         """The first try, in one grounding: one dstate per class. If it fails, learn the classes from it."""
         outcome = self._solve([ONE_PER_CLASS()], "one dstate per class", keep=True)
         if outcome.models:  # every class holds its one dstate: as many classes as dstates
-            n = len({args[1] for args in IS.args(outcome.models[0])})
-            return self._map(outcome, classes=n, proved=n)
+            cmap = self._map(outcome)
+            return replace(cmap, stats=replace(cmap.stats, classes=cmap.n_dstates, lower_bound=cmap.n_dstates))
         self.classes = outcome.grounding.classes(range(len(self.tableau)))
         self.proved = self.classes.count + 1
         return None
@@ -190,19 +190,17 @@ class _Search:
         """The minimal maps within the upper map's number of dstates, by clingo's optimisation."""
         layout = self.classes.layout(upper.n_dstates) + [MINIMISE_DSTATES()]
         outcome = self._solve(layout, f"the fewest dstates, at most {upper.n_dstates}", optimise=True)
-        n = len({args[1] for args in IS.args(outcome.models[0])})
-        return self._map(outcome, proved=n)  # the optimiser proved it
+        cmap = self._map(outcome)
+        return replace(cmap, stats=replace(cmap.stats, lower_bound=cmap.n_dstates))  # the optimiser proved it
 
-    def _map(self, outcome: "_Outcome", minimal: bool = True, classes: int | None = None,
-             proved: int | None = None) -> CognitiveMap:
+    def _map(self, outcome: "_Outcome", minimal: bool = True) -> CognitiveMap:
         models = outcome.models if minimal else outcome.models[:1]
         return build_map(self.tableau, models, minimal and outcome.exhausted, self.resolver.theory.levels,
-                         self._stats(classes, proved), minimal=minimal)
+                         self._stats(), minimal=minimal)
 
-    def _stats(self, classes: int | None = None, proved: int | None = None) -> SolveStats:
+    def _stats(self) -> SolveStats:
         """The figures so far, as a snapshot: each map keeps its own."""
-        return SolveStats(classes=classes if classes is not None else (self.classes.count if self.classes else 0),
-                          lower_bound=proved if proved is not None else self.proved,
+        return SolveStats(classes=self.classes.count if self.classes else 0, lower_bound=self.proved,
                           ground_s=self.ground_s, solve_s=self.solve_s,
                           total_s=time.perf_counter() - self.start, bounds=tuple(self.tries))
 

@@ -72,6 +72,20 @@ class Predicate:
                 yield sa.symbol.arguments
 
 
+class Atoms:
+    """A model's atoms grouped by predicate in one pass (reading a symbol's name and arguments is a call
+    into clingo each): ``atoms[IS]`` lists the arguments of every ``is/2`` atom."""
+
+    def __init__(self, symbols: Iterable[Symbol]):
+        self._args: dict[tuple[str, int], list[Sequence[Symbol]]] = {}
+        for s in symbols:
+            args = s.arguments
+            self._args.setdefault((s.name, len(args)), []).append(args)
+
+    def __getitem__(self, p: Predicate) -> list[Sequence[Symbol]]:
+        return self._args.get(p.signature, [])
+
+
 def _term(x: int | str | Symbol) -> Symbol:
     if isinstance(x, bool):
         raise TypeError("booleans are not terms")
