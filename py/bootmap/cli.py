@@ -14,11 +14,20 @@ from typing import Callable, Sequence
 
 from . import __version__
 from .errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_OK, BootmapError, SolveTimeout
-from .mapping.vocabulary import QUANTUM_DEG
 
 
 def _levels(text: str) -> list[str]:
     return [x.strip() for x in text.split(",") if x.strip()]
+
+
+def _quantum(text: str) -> float:
+    try:
+        q = float(text)
+    except ValueError:
+        q = float("nan")
+    if not 0 < q <= 180:
+        raise argparse.ArgumentTypeError(f"expected degrees in (0, 180], got {text!r}")
+    return q
 
 
 def _seeds(text: str) -> list[int]:
@@ -37,8 +46,10 @@ def _add_theory_options(p: argparse.ArgumentParser) -> None:
                    help="axiom directory (default: $BOOTMAP_AXIOMS, else the shipped asp/)")
     p.add_argument("--levels", type=_levels, metavar="L1,L2",
                    help="levels to load, e.g. causal,topological (default: every .lp file in the directory)")
-    p.add_argument("--quantum", type=float, default=QUANTUM_DEG, metavar="DEG",
-                   help=f"round turn angles and heading changes to this many degrees (default {QUANTUM_DEG:g})")
+    p.add_argument("--quantum", type=_quantum, metavar="DEG",
+                   help="round each turn angle and heading change to this many degrees (e.g. 15), instead of "
+                        "learning the robot's action types from the tableau (the default, robust to odometry "
+                        "noise)")
 
 
 def cmd_map(args: argparse.Namespace) -> int:

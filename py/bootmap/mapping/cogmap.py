@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 from clingo import Symbol
 
 from ..tableau import Tableau, Turn
+from .motion import ActionType
 from .vocabulary import AHEAD, HEADING_OF, IS, LEFT, PATH_OF, PLACE_OF, RIGHT, VIEW_OF, Atoms
 
 
@@ -65,6 +66,8 @@ class CognitiveMap:
         False for a fall-back map returned on time-out: valid, but not proved minimal.
     alternatives : list of list of str
         The dstate of each time point in the other minimal maps.
+    action_types : list of ActionType
+        The robot's action types the axioms saw (learned, or the measurements rounded to a quantum).
     stats : SolveStats
         Solver figures: classes, the bound proved, ground_s, solve_s, total_s, the groundings tried.
     """
@@ -88,6 +91,7 @@ class CognitiveMap:
     levels: list[str]
     stats: SolveStats = field(default_factory=SolveStats)
     minimal: bool = True
+    action_types: list[ActionType] = field(default_factory=list)
 
     @property
     def n_dstates(self) -> int:
@@ -122,6 +126,7 @@ class CognitiveMap:
             "right_of": [list(x) for x in self.right_of],
             "left_of": [list(x) for x in self.left_of],
             "alternatives": self.alternatives,
+            "action_types": [a.to_dict() for a in self.action_types],
             "stats": self.stats.to_dict(),
         }
 
@@ -140,6 +145,8 @@ class CognitiveMap:
         for r in [header] + rows:
             lines.append("  ".join(str(x).ljust(w) for x, w in zip(r, widths)).rstrip())
         lines.append("")
+        if self.action_types:
+            lines.append("action types: " + "; ".join(str(a) for a in self.action_types))
         for pa, places in self.paths.items():
             lines.append(f"{pa}: {' -> '.join(places)} (pos)")
         for p, pa in self.right_of:
@@ -169,7 +176,7 @@ def _number_dstates(is_atoms, n: int) -> tuple[dict[Symbol, int], list[int]]:
 
 
 def build_map(tableau: Tableau, models: list[list[Symbol]], exhausted: bool, levels, stats: SolveStats,
-              minimal: bool = True) -> CognitiveMap:
+              minimal: bool = True, action_types: list[ActionType] | None = None) -> CognitiveMap:
     """The map of the first model, named as the paper names it; the other models are alternatives.
     ``exhausted``: clingo enumerated every minimal model (so one model means a unique map)."""
     n = len(tableau)
@@ -227,7 +234,7 @@ def build_map(tableau: Tableau, models: list[list[Symbol]], exhausted: bool, lev
         order=order, right_of=sorted(sides["right"], key=_natural), left_of=sorted(sides["left"], key=_natural),
         n_models=len(models) if minimal else 0, unique=minimal and len(models) == 1 and exhausted,
         models_capped=minimal and not exhausted, alternatives=alternatives, levels=list(levels),
-        stats=stats, minimal=minimal)
+        stats=stats, minimal=minimal, action_types=list(action_types or []))
 
 
 def _natural(t: tuple) -> tuple:

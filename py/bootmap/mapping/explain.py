@@ -41,12 +41,12 @@ from clingo import Symbol
 from ..errors import ExplainError, SolveTimeout
 from ..tableau import Tableau
 from .cogmap import CognitiveMap, action_text
-from .facts import action_symbol, excerpt_facts, tableau_facts
+from .facts import action_angles, action_symbol, excerpt_facts, tableau_facts
 from .grounding import Deadline, Grounding, prepass
 from .proof import Failure, Names, ProofNode, merged, node, rule_dict
 from .resolver import Resolver
 from .trace import Derivations, Instrumented, RuleRef
-from .vocabulary import FEATURE, FINEST_MAP, QUANTUM_DEG, SAME_ASKED, SHOWN_BY_ALL, action_word
+from .vocabulary import FEATURE, FINEST_MAP, SAME_ASKED, SHOWN_BY_ALL, action_word
 
 __all__ = ["Explainer", "Explanation", "Failure", "ProofNode"]
 
@@ -128,7 +128,7 @@ class Explainer:
 
     axioms: str | Path | None = None
     levels: Sequence[str] | None = None
-    quantum_deg: float = QUANTUM_DEG
+    quantum_deg: float | None = None
     time_limit: float | None = 60.0
     max_window: int = 32
     resolver: Resolver = field(init=False, repr=False, compare=False)
@@ -150,7 +150,7 @@ class Explainer:
         if all(apart):
             answer = q.prove_apart(cmap, a, b, names)
         elif not any(apart):
-            answer = _same(tableau, cmap, a, b, self.quantum_deg)
+            answer = _same(tableau, cmap, a, b, q.angles)
         else:
             answer = {"verdict": "undecided",
                       "alternatives": [{"map": i + 1, "a": m[a], "b": m[b], "apart": m[a] != m[b]}
@@ -180,7 +180,8 @@ class _Question:
         self.explainer, self.tableau, self.deadline = explainer, tableau, deadline
         self.theory = explainer.resolver.theory
         self.depth = explainer.resolver.future_depth
-        self.facts = tableau_facts(tableau, explainer.quantum_deg)
+        self.angles = action_angles(tableau, explainer.quantum_deg)
+        self.facts = tableau_facts(tableau, angles=self.angles)
 
     # ---------------------------------------------------------------------------------------------
     # Different: evidence, the axioms it needs, and where each fails
@@ -342,48 +343,48 @@ def _step_text(tableau: Tableau, t: int, last: bool) -> str:
 # Same: minimality, how far the futures agree, what would test them
 # -------------------------------------------------------------------------------------------------
 
-def _same(tableau: Tableau, cmap: CognitiveMap, a: int, b: int, quantum_deg: float) -> dict:
+def _same(tableau: Tableau, cmap: CognitiveMap, a: int, b: int, angles: list[int]) -> dict:
     """The fields of a "same" explanation."""
     a, b = sorted((a, b))
-    agree = _agreeing_steps(tableau, a, b, quantum_deg)
+    agree = _agreeing_steps(tableau, a, b, angles)
     d = cmap.dstate_of[a]
-    return {"verdict": "same", "agree_steps": agree, "suggestion": _suggest(tableau, cmap, a, b, agree, quantum_deg),
+    return {"verdict": "same", "agree_steps": agree, "suggestion": _suggest(tableau, cmap, a, b, agree, angles),
             "sentence": f"t{a} and t{b} are both {d} in every minimal map: nothing in the experience proves them "
                         f"different, so by minimality they are one dstate (same view {cmap.views.get(d)!r}; what "
                         f"followed them agrees for {agree} step(s))."}
 
 
-def _agreeing_steps(tableau: Tableau, a: int, b: int, quantum_deg: float) -> int:
+def _agreeing_steps(tableau: Tableau, a: int, b: int, angles: list[int]) -> int:
     """How many steps after a and after b the robot did the same (as the causal level names actions)
     and then saw the same view."""
     n, k = len(tableau), 0
-    while b + k + 1 < n and _action(tableau, a + k, quantum_deg) == _action(tableau, b + k, quantum_deg) \
+    while b + k + 1 < n and _action(tableau, a + k, angles) == _action(tableau, b + k, angles) \
             and tableau.steps[a + k + 1].view == tableau.steps[b + k + 1].view:
         k += 1
     return k
 
 
-def _action(tableau: Tableau, t: int, quantum_deg: float) -> str | None:
-    """The action from t as the causal level tells actions apart (a turn by its quantised angle, or a
+def _action(tableau: Tableau, t: int, angles: list[int]) -> str | None:
+    """The action from t as the causal level tells actions apart (a turn by its type's angle, or a
     travel whatever its distance), in words."""
-    term = action_symbol(tableau.steps[t].action, quantum_deg)
+    term = action_symbol(tableau.steps[t].action, angles[t] if t < len(angles) else 0)
     return None if term is None else action_word(term)
 
 
-def _suggest(tableau: Tableau, cmap: CognitiveMap, a: int, b: int, agree: int, quantum_deg: float) -> list[str]:
+def _suggest(tableau: Tableau, cmap: CognitiveMap, a: int, b: int, agree: int, angles: list[int]) -> list[str]:
     """Experience that would test whether a and b are one dstate. If the robot did different things
     after them, repeat at b's dstate what it did after a; otherwise try, at their dstate, an action of
     the tableau's own vocabulary never taken there."""
     n = len(tableau)
-    after_a, after_b = _action(tableau, a + agree, quantum_deg), (
-        _action(tableau, b + agree, quantum_deg) if b + agree < n else None)
+    after_a, after_b = _action(tableau, a + agree, angles), (
+        _action(tableau, b + agree, angles) if b + agree < n else None)
     d = cmap.dstate_of[a]
     if after_a and after_b and after_a != after_b:
-        seq = [_action(tableau, a + i, quantum_deg) for i in range(agree + 1)]
+        seq = [_action(tableau, a + i, angles) for i in range(agree + 1)]
         return [f"when at {d} again, do what followed t{a}: {', then '.join(seq)} (t{b} was followed by "
                 f"{after_b} instead): the same views again would confirm one dstate, others would prove two"]
-    vocabulary = dict.fromkeys(_action(tableau, t, quantum_deg) for t in range(n - 1))
-    taken = {_action(tableau, t, quantum_deg) for t in range(n - 1) if cmap.dstate_of[t] == d}
+    vocabulary = dict.fromkeys(_action(tableau, t, angles) for t in range(n - 1))
+    taken = {_action(tableau, t, angles) for t in range(n - 1) if cmap.dstate_of[t] == d}
     return [f"when at {d} again: {x} (never done at {d} so far; if t{a} and t{b} were different dstates, "
             "what follows could show it)" for x in vocabulary if x not in taken]
 

@@ -2,8 +2,9 @@
 
 Labels and numbers reach clingo as symbols built with clingo's API (through :mod:`.vocabulary`) and are
 added through the backend, so a view label such as ``a). #script (python)`` is just a string: no user
-text ever becomes program text. Angles are rounded to a quantum here, so that sensor noise on turns
-does not make the same action look like many actions, nor accumulate in headings.
+text ever becomes program text. Each action's angle is the angle of its learned type (:mod:`.motion`), or
+the measurement rounded to a quantum when one is given, so that sensor noise on turns does not make the
+same action look like many actions, nor accumulate in headings.
 
 Facts (see docs/asp.md): ``view(T, "label")``, ``turn(T, A)``, ``travel(T, C)``, with
 ``A``, ``C`` integer degrees in (-180, 180]; ``turn(T, 180)`` is a turn-around.
@@ -17,6 +18,7 @@ import clingo
 from clingo import Function, Number, String, Symbol
 
 from ..tableau import Action, Tableau, Turn
+from .motion import MotionPrimitives, measured_angle
 from .vocabulary import QUANTUM_DEG, RESUME, TRAVEL, TURN, VIEW, action_term
 
 
@@ -32,21 +34,30 @@ def quantise(angle_deg: float, quantum_deg: float = QUANTUM_DEG) -> int:
     return 180 if a == -180 else a
 
 
-def quantised_angle(action: Action, quantum_deg: float = QUANTUM_DEG) -> int:
-    """The angle the axioms see for an action: a turn's angle, or a travel's net heading change."""
-    return quantise(action.angle_deg if isinstance(action, Turn) else action.heading_change_deg, quantum_deg)
+def action_angles(tableau: Tableau, quantum_deg: float | None = None) -> list[int]:
+    """The angle the axioms see for each action of the tableau (a turn's angle, a travel's net heading
+    change): the angle of its learned type (:mod:`.motion`), or, given a quantum, the measurement rounded
+    to it."""
+    actions = tableau.actions
+    if quantum_deg is None:
+        return MotionPrimitives().fit(actions).angles_ if actions else []
+    return [quantise(measured_angle(a), quantum_deg) for a in actions]
 
 
-def action_symbol(action: Action | None, quantum_deg: float = QUANTUM_DEG) -> Symbol | None:
+def action_symbol(action: Action | None, angle: int) -> Symbol | None:
     """The action as the causal level names it (``turn(-90)``, ``travel``), or None after the last step."""
     if action is None:
         return None
-    return action_term("turn" if isinstance(action, Turn) else "travel", quantised_angle(action, quantum_deg))
+    return action_term("turn" if isinstance(action, Turn) else "travel", angle)
 
 
-def tableau_facts(tableau: Tableau, quantum_deg: float = QUANTUM_DEG) -> list[Symbol]:
-    """The tableau as ground facts (symbols). Requires every step to have a view label."""
+def tableau_facts(tableau: Tableau, quantum_deg: float | None = None,
+                  angles: Sequence[int] | None = None) -> list[Symbol]:
+    """The tableau as ground facts (symbols). Requires every step to have a view label. ``angles`` are
+    the actions' angles when already known (:func:`action_angles`)."""
     tableau.require_views()
+    if angles is None:
+        angles = action_angles(tableau, quantum_deg)
     # Views and angles repeat: build each symbol once (every constructor is a call into clingo).
     strings: dict[str, Symbol] = {}
     numbers: dict[int, Symbol] = {}
@@ -59,7 +70,7 @@ def tableau_facts(tableau: Tableau, quantum_deg: float = QUANTUM_DEG) -> list[Sy
         out.append(Function(view_name, [time, view]))
         if step.action is not None:
             name = turn_name if isinstance(step.action, Turn) else travel_name
-            angle = quantised_angle(step.action, quantum_deg)
+            angle = angles[t]
             out.append(Function(name, [time, numbers.get(angle) or numbers.setdefault(angle, Number(angle))]))
     return out
 

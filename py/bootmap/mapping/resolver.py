@@ -42,10 +42,11 @@ from ..errors import InconsistentTableau, SolveTimeout
 from ..tableau import Tableau
 from .cogmap import CognitiveMap, SolveStats, Try, build_map
 from .diagnosis import diagnosed
-from .facts import tableau_facts
+from .facts import action_angles, tableau_facts
+from .motion import action_types
 from .grounding import Classes, Deadline, Grounding, prepass
 from .theory import Theory, load_theory
-from .vocabulary import FUTURE_DEPTH, MINIMISE_DSTATES, ONE_PER_CLASS, QUANTUM_DEG
+from .vocabulary import FUTURE_DEPTH, MINIMISE_DSTATES, ONE_PER_CLASS
 
 
 @dataclass(frozen=True)
@@ -59,8 +60,10 @@ class Resolver:
         Axiom directory (default: BOOTMAP_AXIOMS, else the shipped ``asp/``).
     levels : sequence of str, optional
         Levels (file stems) to load, e.g. ``["causal", "topological"]``; default all.
-    quantum_deg : float
-        Turn angles and heading changes are rounded to this many degrees.
+    quantum_deg : float, optional
+        Round each turn angle and heading change to this many degrees. By default the robot's action
+        types are learned from the tableau instead (:mod:`.motion`), which odometry noise cannot push
+        across a rounding boundary.
     time_limit : float or None
         Seconds for a resolution unless :meth:`resolve` is given a deadline; on time-out
         :class:`SolveTimeout` is raised with the number of dstates proved necessary so far and, if one
@@ -82,7 +85,7 @@ class Resolver:
 
     axioms: str | Path | None = None
     levels: Sequence[str] | None = None
-    quantum_deg: float = QUANTUM_DEG
+    quantum_deg: float | None = None
     time_limit: float | None = 60.0
     max_models: int = 10
     future_depth: int = FUTURE_DEPTH
@@ -124,7 +127,8 @@ class _Search:
     def __init__(self, resolver: Resolver, tableau: Tableau, deadline: Deadline):
         self.resolver, self.tableau, self.deadline = resolver, tableau, deadline
         self.start = time.perf_counter()
-        self.facts = tableau_facts(tableau, resolver.quantum_deg)
+        self.angles = action_angles(tableau, resolver.quantum_deg)
+        self.facts = tableau_facts(tableau, angles=self.angles)
         self.depth = 0  # futures only matter once one dstate per class has failed
         self.classes: Classes | None = None  # known after the first try
         self.proved = 1  # dstates proved necessary so far
@@ -196,7 +200,10 @@ class _Search:
     def _map(self, outcome: "_Outcome", minimal: bool = True) -> CognitiveMap:
         models = outcome.models if minimal else outcome.models[:1]
         return build_map(self.tableau, models, minimal and outcome.exhausted, self.resolver.theory.levels,
-                         self._stats(), minimal=minimal)
+                         self._stats(), minimal=minimal, action_types=self._types())
+
+    def _types(self):
+        return action_types(self.tableau.actions, self.angles)
 
     def _stats(self) -> SolveStats:
         """The figures so far, as a snapshot: each map keeps its own."""
@@ -239,7 +246,7 @@ class _Search:
     def _timed_out(self, what: str, improving: list) -> SolveTimeout:
         if improving:  # the optimiser's last (smallest) model so far
             self.best = build_map(self.tableau, improving[-1:], False, self.resolver.theory.levels,
-                                  self._stats(), minimal=False)
+                                  self._stats(), minimal=False, action_types=self._types())
         found = (f"best map so far: {self.best.n_dstates} dstates, not proved minimal" if self.best
                  else "no map found yet")
         limit = self.deadline.limit_s

@@ -27,7 +27,8 @@ from typing import Iterable, Iterator, Sequence
 import clingo
 from clingo import Function, Number, String, Symbol, ast
 
-#: Turn angles and travels' heading changes are rounded to this many degrees (see facts.quantise).
+#: A fixed quantum in degrees (`--quantum 15`), the independent checker's rounding (bootmap.testing.check); the
+#: resolver learns the robot's action types instead unless it is given one (see motion.py, facts.quantise).
 QUANTUM_DEG = 15.0
 #: How many actions ahead the causal level compares what time points saw (``#const future_depth``).
 FUTURE_DEPTH = 8

@@ -150,6 +150,16 @@ class DstateOut(Out):
     dir: Literal["pos", "neg"] | None
 
 
+class ActionTypeOut(Out):
+    """One of the robot's action types: the angle the axioms saw, and what odometry measured for it."""
+
+    kind: Literal["turn", "travel"]
+    angle_deg: int = Field(description="The angle the axioms saw (a turn's angle, a travel's heading change).")
+    count: int = Field(description="Actions of this type in the tableau.")
+    measured_mean_deg: float
+    measured_sd_deg: float
+
+
 class MapOut(Out):
     """The minimal map: dstates, places, paths and how they relate, and every step annotated."""
 
@@ -167,6 +177,8 @@ class MapOut(Out):
     right_of: list[list[str]] = Field(description="[place, path]: the place is right of the path facing pos.")
     left_of: list[list[str]] = Field(description="[place, path]: the place is left of the path facing pos.")
     alternatives: list[list[str]] = Field(description="The dstate of each time point in the other minimal maps.")
+    action_types: list[ActionTypeOut] = Field(description="The robot's action types, learned from the tableau's "
+                                                         "angles (or its angles rounded to the server's quantum).")
     stats: dict[str, Any] = Field(description="Solver figures (seconds, bounds tried).")
 
 

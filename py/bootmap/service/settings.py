@@ -12,7 +12,6 @@ from pathlib import Path
 from pydantic import Field
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
-from ..mapping.vocabulary import QUANTUM_DEG
 
 
 def default_data_dir() -> Path:
@@ -45,7 +44,8 @@ class Settings(BaseSettings):
     max_queued_solves: int = Field(8, ge=0, description="Solves that may wait for a solver; beyond, 503.")
     retry_after_s: int = Field(2, ge=1, description="Retry-After of a 503 when every solver is busy.")
     max_models: int = Field(10, ge=1, le=1000, description="Minimal maps enumerated before the count is capped.")
-    quantum_deg: float = Field(QUANTUM_DEG, gt=0, le=180, description="Angles are rounded to this many degrees.")
+    quantum_deg: float | None = Field(None, gt=0, le=180, description="Round angles to this many degrees; "
+                                      "unset: learn the robot's action types from each tableau.")
     log_level: str = Field("info", pattern="^(critical|error|warning|info|debug|trace)$")
 
     @property

@@ -27,7 +27,6 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..errors import AxiomError, BootmapError, ExplainError, InconsistentTableau, SolveTimeout, TableauError
-from ..mapping.vocabulary import QUANTUM_DEG
 from ..tableau import Tableau
 
 log = logging.getLogger("bootmap.service")
@@ -67,7 +66,7 @@ class SolveJob:
     document: dict
     axioms: str
     time_limit_s: float
-    quantum_deg: float = QUANTUM_DEG
+    quantum_deg: float | None = None
     max_models: int = 10
 
 
@@ -82,7 +81,7 @@ class ExplainJob:
     a: str
     b: str
     levels: tuple[str, ...] | None = None
-    quantum_deg: float = QUANTUM_DEG
+    quantum_deg: float | None = None
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,213 @@
+"""Motion primitives: the robot's few action types, learned from the angles it measured.
+
+A physical robot's odometry reads a right turn as -87, -93 or -98 degrees. Rounding each measurement to
+a fixed quantum (15 degrees) turns -98 into -105, and every heading after it is wrong. The paper's
+bootstrap learning has the robot learn its own primitives; this module does so for actions, as views
+are learned for images:
+
+1. The measured angles of each action kind (turn angles; travels' net heading changes) are clustered
+   in one dimension: sorted on the circle, they are split wherever neighbours are more than 10 degrees
+   apart (what a robot may misread a primitive by), and each angle then joins the type whose mean is
+   nearest (k-means steps). (The paper's measure M, which picks the number of views, is nearly flat in
+   one dimension when clusters are cut at the widest gaps: it cannot tell noise from types here.)
+2. Each type's mean is snapped to the coarsest angular grid (180, 90, 45, 15, 5 or 1 degrees) near
+   which every common type of the tableau lies (within three of its spreads, or 10 degrees for a tight
+   type, and less than a third of a step), so that a loop of four right turns still closes on 360
+   however the robot misreads them; types that snap to one angle are one type. A type of one or two
+   stray readings does not choose the grid (it is as likely a misread as a primitive): it snaps onto it.
+
+The axioms then see each action's type angle (``turn(T, -90)``), as if the robot had turned exactly.
+Clean experience, whose angles are exact multiples of the grid, gets exactly its own angles.
+
+Example
+-------
+>>> from bootmap.tableau import Travel, Turn
+>>> m = MotionPrimitives().fit([Turn(-87.0), Travel(4.0, 1.5), Turn(-98.0), Travel(2.0, -2.0), Turn(178.0)])
+>>> m.angles_, m.grid_deg_
+([-90, 0, -90, 0, 180], 90)
+>>> [f"{t.kind} {t.angle:+d}" for t in m.types_]
+['turn -90', 'turn +180', 'travel +0']
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+
+from ..tableau import Action, Turn
+
+#: Candidate grids, coarsest first; each divides the one before, so a finer grid keeps every coarser angle.
+GRIDS = (180, 90, 45, 15, 5, 1)
+#: How far a robot's odometry may read a primitive off its true angle, consistently (gyro scale, slip):
+#: a tight type this near a grid angle is that angle; one farther is a primitive of its own (a 30-degree
+#: bend stays 30).
+BIAS_DEG = 10.0
+#: A type that sets the grid accounts for at least this share of its kind's actions (and three of them) ...
+MIN_SHARE = 0.05
+#: ... or is read the same, within this many degrees, at least twice (noise cannot do that).
+EXACT_DEG = 0.5
+
+
+@dataclass(frozen=True)
+class ActionType:
+    """One motion primitive: its kind, the angle the axioms see, and what the robot measured for it."""
+
+    kind: str           # "turn" or "travel"
+    angle: int          # degrees, in (-180, 180]
+    count: int          # actions of this type
+    mean_deg: float     # their measured mean (circular)
+    sd_deg: float       # and spread
+
+    def to_dict(self) -> dict:
+        return {"kind": self.kind, "angle_deg": self.angle, "count": self.count,
+                "measured_mean_deg": round(self.mean_deg, 2), "measured_sd_deg": round(self.sd_deg, 2)}
+
+    def __str__(self) -> str:
+        return f"{self.kind} {self.angle:+d} ({self.count}x, measured {self.mean_deg:+.1f} +- {self.sd_deg:.1f})"
+
+
+class MotionPrimitives:
+    """Learn the action types of a sequence of actions (scikit-learn's estimator contract).
+
+    Parameters
+    ----------
+    grids : sequence of int
+        Candidate grids in degrees, coarsest first, each a divisor of the one before.
+
+    Attributes
+    ----------
+    types_ : list of ActionType
+        The types found, turns first, by angle.
+    angles_ : list of int
+        The type angle of each action, in order.
+    grid_deg_ : int
+        The grid the type angles lie on.
+    """
+
+    def __init__(self, grids: Sequence[int] = GRIDS):
+        self.grids = grids
+
+    def fit(self, actions: Sequence[Action]) -> "MotionPrimitives":
+        kinds = np.array(["turn" if isinstance(a, Turn) else "travel" for a in actions])
+        measured = _wrap(np.array([measured_angle(a) for a in actions], dtype=float))
+        clusters: list[tuple[str, np.ndarray]] = []  # (kind, indices into actions)
+        for kind in ("turn", "travel"):
+            idx = np.flatnonzero(kinds == kind)
+            if idx.size:
+                clusters += [(kind, idx[members]) for members in _cluster(measured[idx])]
+        means = [_circular_mean(measured[i]) for _, i in clusters]
+        spreads = [_circular_sd(measured[i], m) for m, (_, i) in zip(means, clusters)]
+        # A type seen once or twice is as likely a misread as a primitive: the grid is set by the types
+        # that account for more (when there are any), and a stray reading snaps onto it like the others.
+        common = []
+        for kind in ("turn", "travel"):
+            mine = [(m, sd, len(i)) for m, sd, (k, i) in zip(means, spreads, clusters) if k == kind]
+            total = sum(n for _, _, n in mine)
+            # How far this kind's readings stray from their types: the noise every type of it shares.
+            pooled = float(np.sqrt(sum(n * sd * sd for _, sd, n in mine) / total)) if total else 0.0
+            # Readings without noise (a hand-written or simulated tableau) are all primitives.
+            keep = [(m, pooled) for m, sd, n in mine
+                    if n >= max(3, MIN_SHARE * total) or (n >= 2 and sd < EXACT_DEG) or pooled < EXACT_DEG]
+            common += keep or [(m, pooled) for m, _, _ in mine]
+        self.grid_deg_ = _coarsest_grid(common, self.grids)
+        snapped = [_snap(m, self.grid_deg_) for m in means]
+        self.angles_ = [0] * len(actions)
+        for (_, idx), angle in zip(clusters, snapped):
+            for i in idx:
+                self.angles_[i] = angle
+        self.types_ = action_types(actions, self.angles_)
+        return self
+
+
+def measured_angle(action: Action) -> float:
+    """What odometry measured: a turn's angle, or a travel's net heading change."""
+    return action.angle_deg if isinstance(action, Turn) else action.heading_change_deg
+
+
+def action_types(actions: Sequence[Action], angles: Sequence[int]) -> list[ActionType]:
+    """The types of these actions given the angle each was read as (learned, or rounded to a quantum):
+    turns first, by angle."""
+    groups: dict[tuple[str, int], list[float]] = {}
+    for a, angle in zip(actions, angles):
+        groups.setdefault(("turn" if isinstance(a, Turn) else "travel", angle), []).append(measured_angle(a))
+    out = []
+    for (kind, angle), values in sorted(groups.items(), key=lambda kv: (kv[0][0] != "turn", kv[0][1])):
+        v = _wrap(np.array(values))
+        out.append(ActionType(kind, angle, len(values), _circular_mean(v), _circular_sd(v, angle)))
+    return out
+
+
+def _wrap(a: np.ndarray) -> np.ndarray:
+    """Angles into (-180, 180]."""
+    w = (a + 180.0) % 360.0 - 180.0
+    return np.where(w == -180.0, 180.0, w)
+
+
+def _cluster(values: np.ndarray) -> list[np.ndarray]:
+    """The angles split wherever neighbours (sorted, on the circle) are more than :data:`BIAS_DEG`
+    apart, then each moved to the type whose mean is nearest."""
+    order = np.argsort(values)
+    v = values[order]
+    # Start the circle at its widest empty arc, so that a type around 180 (turn-arounds read as 178 and
+    # -179) is not cut in two.
+    gaps = np.append(np.diff(v), v[0] + 360.0 - v[-1])  # the last one wraps around
+    start = (int(np.argmax(gaps)) + 1) % len(v)
+    order = np.concatenate([order[start:], order[:start]])
+    v = np.concatenate([v[start:], v[:start] + 360.0])
+    # Readings that repeat exactly (a hand-written tableau, a simulator without odometry noise) are as many
+    # types as values: noisy readings never repeat to a millionth of a degree.
+    exact = len(np.unique(np.round(v, 6))) <= len(v) / 2
+    splits = np.flatnonzero(np.diff(v) > (EXACT_DEG if exact else BIAS_DEG)) + 1
+    parts = np.split(np.arange(len(v)), splits)
+    # A gap that noise opened inside one type: neighbours less than twice the bias apart, one of them
+    # spread over more than a quarter of the distance, are one type (exact angles 15 apart stay two).
+    merged = [parts[0]]
+    for p in parts[1:]:
+        last = merged[-1]
+        apart = v[p].mean() - v[last].mean()
+        if apart < 2 * BIAS_DEG and max(v[p].std(), v[last].std()) > apart / 4:
+            merged[-1] = np.concatenate([last, p])
+        else:
+            merged.append(p)
+    return _refined(values, [order[p] for p in merged])
+
+
+def _refined(values: np.ndarray, clusters: list[np.ndarray]) -> list[np.ndarray]:
+    """Each angle to the type whose mean is nearest on the circle, until nothing moves (k-means, started
+    from the gap split: a far outlier of one type can sit across a gap nearer another type's tail)."""
+    labels = np.empty(len(values), dtype=int)
+    for c, idx in enumerate(clusters):
+        labels[idx] = c
+    for _ in range(20):
+        means = np.array([_circular_mean(values[labels == c]) for c in range(len(clusters))])
+        nearest = np.argmin(np.abs(_wrap(values[:, None] - means[None, :])), axis=1)
+        if np.array_equal(nearest, labels) or len(np.unique(nearest)) < len(clusters):
+            break
+        labels = nearest
+    return [np.flatnonzero(labels == c) for c in range(len(clusters))]
+
+
+def _circular_mean(a: np.ndarray) -> float:
+    r = np.radians(a)
+    return float(_wrap(np.array([np.degrees(np.arctan2(np.sin(r).mean(), np.cos(r).mean()))]))[0])
+
+
+def _circular_sd(a: np.ndarray, centre: float) -> float:
+    return float(np.sqrt(np.mean(_wrap(a - centre) ** 2)))
+
+
+def _coarsest_grid(types: Sequence[tuple[float, float]], grids: Sequence[int]) -> int:
+    """The coarsest grid near every type: its mean within three spreads (sd, the noise of its kind), or
+    :data:`BIAS_DEG` for tight readings, of a grid angle, and less than a third of a step away."""
+    for q in grids:
+        if all(abs(_wrap(np.array([m - _snap(m, q)]))[0]) < min(q / 3, max(3 * sd, BIAS_DEG)) for m, sd in types):
+            return q
+    return grids[-1]
+
+
+def _snap(angle: float, q: int) -> int:
+    a = int(round(angle / q) * q)
+    a = (a + 180) % 360 - 180
+    return 180 if a == -180 else a

@@ -1,0 +1,91 @@
+"""Motion primitives (bootmap.mapping.motion): action types learned from measured angles, so that odometry
+noise no longer changes the map; clean experience keeps its own angles."""
+
+import json
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from bootmap.cli import main
+from bootmap.mapping import Resolver
+from bootmap.mapping.motion import MotionPrimitives
+from bootmap.metrics import dstate_accuracy
+from bootmap.tableau import Step, Tableau, Travel, Turn
+from bootmap.testing.check import true_partition
+from bootmap.testing.gridworld import random_world, walk
+
+
+def noisy(tableau: Tableau, turn_sd: float, drift_sd: float, rng: np.random.Generator) -> Tableau:
+    """The tableau as a real robot's odometry would read it: every turn off by N(0, turn_sd), every travel's
+    heading change by N(0, drift_sd)."""
+    steps = []
+    for s in tableau.steps:
+        a = s.action
+        if isinstance(a, Turn):
+            a = Turn(a.angle_deg + float(rng.normal(0, turn_sd)))
+        elif isinstance(a, Travel):
+            a = Travel(a.distance_m, a.heading_change_deg + float(rng.normal(0, drift_sd)))
+        steps.append(Step(s.view, a, s.image, s.truth, s.pose))
+    return Tableau(tuple(steps), tableau.world, dict(tableau.meta))
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.sampled_from([-135, -90, -45, -30, 0, 7, 15, 30, 45, 60, 90, 120, 180]), min_size=2, max_size=40),
+       st.lists(st.sampled_from([-90, -15, 0, 0, 0, 15, 90]), min_size=2, max_size=40))
+def test_exact_angles_that_repeat_are_kept_as_they_are(turns, bends):
+    # Clean experience (hand-written, or a simulator without odometry noise) reads the same angle the same
+    # way every time: each value is its own type, and the axioms see exactly the angles given.
+    turns, bends = turns + turns, bends + bends  # every value at least twice
+    actions = [Turn(float(a)) for a in turns] + [Travel(2.0, float(b)) for b in bends]
+    m = MotionPrimitives().fit(actions)
+    assert m.angles_ == turns + bends
+    assert sum(t.count for t in m.types_) == len(actions) and all(t.sd_deg == 0 for t in m.types_)
+
+
+@pytest.mark.parametrize("turn_sd, drift_sd", [(0, 0), (3, 1.5), (6, 3), (10, 4)])
+@pytest.mark.parametrize("seed", [101, 202, 303])
+def test_turn_noise_up_to_10_degrees_does_not_change_the_map(seed, turn_sd, drift_sd):
+    # Long explorations of random grid worlds, read with turn noise and travel drift: the learned action
+    # types give the true map, exactly as the clean tableau does.
+    rng = np.random.default_rng(seed)
+    world = random_world(rng, 4, 3, extra_edges=2, landmarks=0.4)
+    clean = walk(world, 300, rng, policy="explore")
+    tableau = noisy(clean, turn_sd, drift_sd, rng)
+    truth = true_partition(tableau)
+    cmap = Resolver(time_limit=60).resolve(tableau)
+    assert cmap.n_dstates == len(set(truth)) and dstate_accuracy(truth, cmap.dstate_of) == 1.0
+    assert cmap.minimal and cmap.unique
+    assert {t.angle for t in cmap.action_types if t.kind == "turn"} <= {-90, 90, 180}
+
+
+def test_a_fixed_quantum_breaks_where_learned_types_do_not():
+    # The issue's example: one turn read at -98 degrees. Rounded to 15 degrees it is -105, every later
+    # heading is off, and the map splits dstates; learned, it is one of the robot's right turns.
+    rng = np.random.default_rng(7)
+    world = random_world(rng, 3, 3, extra_edges=1, landmarks=0.4)
+    clean = walk(world, 120, rng, policy="explore")
+    t = next(i for i, a in enumerate(clean.actions) if isinstance(a, Turn) and a.angle_deg == -90)
+    steps = list(clean.steps)
+    steps[t] = Step(steps[t].view, Turn(-98.0), None, steps[t].truth, steps[t].pose)
+    tableau = Tableau(tuple(steps), clean.world)
+    truth = true_partition(tableau)
+    assert dstate_accuracy(truth, Resolver().resolve(tableau).dstate_of) == 1.0
+    assert Resolver(quantum_deg=15).resolve(tableau).n_dstates > len(set(truth))
+
+
+def test_bootmap_map_names_the_action_types_and_refuses_a_bad_quantum(tmp_path, capsys):
+    rng = np.random.default_rng(5)
+    tableau = noisy(walk(random_world(rng, 3, 3, landmarks=0.4), 60, rng), 5, 2, rng)
+    path = tmp_path / "t.json"
+    path.write_text(tableau.dumps())
+    assert main(["map", str(path)]) == 0
+    assert "action types: turn " in capsys.readouterr().out
+    assert main(["map", str(path), "--format", "json"]) == 0
+    types = json.loads(capsys.readouterr().out)["action_types"]
+    assert sum(t["count"] for t in types) == len(tableau) - 1
+    assert {t["kind"] for t in types} == {"turn", "travel"}
+    with pytest.raises(SystemExit) as e:
+        main(["map", str(path), "--quantum", "0"])
+    assert e.value.code == 2 and "expected degrees in (0, 180]" in capsys.readouterr().err
