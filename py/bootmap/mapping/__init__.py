@@ -4,6 +4,7 @@ This package is the boundary between Python and the answer set programs. Reading
 
 * :mod:`.vocabulary` - every predicate that crosses the boundary, with how it reads to a person;
 * :mod:`.theory` - the .lp files of the axiom directory, grouped into levels, with their named rules;
+* :mod:`.motion` - the robot's action types, learned from the angles it measured;
 * :mod:`.facts` - a tableau as clingo facts (symbols, never program text);
 * :mod:`.grounding` - one clingo control: ground, solve by a deadline, read the prepass;
 * :mod:`.resolver` - the search for the minimal maps (which groundings to make);
