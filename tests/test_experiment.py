@@ -205,14 +205,64 @@ def test_the_summary_line_names_the_failed_checks_by_their_sentences(capsys):
         "  the paper's figures: NOT (every image on its dstate; nearest neighbour at 90 images >= 85%)"
 
 
-@pytest.mark.parametrize("text,seeds", [("1,2,3", [1, 2, 3]), ("1-5", [1, 2, 3, 4, 5]), ("7", [7])])
+@pytest.mark.parametrize("text,seeds", [("1,2,3", [1, 2, 3]), ("1-5", [1, 2, 3, 4, 5]), ("7", [7]),
+                                        ("0-2,5", [0, 1, 2, 5]), ("3,1-3", [3, 1, 2])])
 def test_seed_lists(text, seeds):
-    from bootmap.cli import _seeds
+    from bootmap.arguments import seeds as parse_seeds
 
-    assert _seeds(text) == seeds
+    assert parse_seeds(text) == seeds
 
 
 def test_bad_seed_list_exits_2():
     out = subprocess.run([sys.executable, "-m", "bootmap.cli", "experiment", "notched_rectangle", "--seeds", "a-b"],
                          capture_output=True, text=True, timeout=60)
     assert out.returncode == 2 and "expected seeds like 1,2,3 or 1-5" in out.stderr
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--seeds", "5-1"], "runs backwards"),
+    (["--seeds", "1,,2"], "an empty seed"),
+    (["--seeds", "a-b"], "expected seeds like"),
+    (["--seed", "-3"], "expected seed >= 0"),
+    (["--circuits", "-5"], "expected circuits >= 1"),
+    (["--circuits", "0"], "expected circuits >= 1"),
+    (["--k-max", "0"], "expected views >= 1"),
+    (["--time-limit", "-1"], "expected seconds"),
+])
+def test_bad_experiment_arguments_exit_2_with_a_message(args, message, capsys):
+    from bootmap.cli import main
+
+    with pytest.raises(SystemExit) as e:
+        main(["experiment", "notched_rectangle", *args])
+    assert e.value.code == 2 and message in capsys.readouterr().err
+
+
+def test_circuits_on_an_explored_world_are_refused(capsys, tmp_path):
+    from bootmap.cli import main
+
+    assert main(["experiment", "taylor_hall", "--circuits", "3", "-o", str(tmp_path)]) == 2
+    assert "--steps" in capsys.readouterr().err
+
+
+def test_one_failing_seed_is_named_and_the_others_still_run(monkeypatch, tmp_path):
+    # A seed whose simulation fails (the robot stuck, say) is recorded with its error; the sweep goes on,
+    # the summary is written, and no check holds for that seed.
+    from bootmap import experiment
+    from bootmap.errors import BootmapError
+
+    real = experiment.run_experiment
+
+    def stuck_on_seed_2(world, seed=0, **kw):
+        if seed == 2:
+            raise BootmapError("the robot got stuck at t=12.5 s")
+        return real(world, seed=seed, **kw)
+
+    monkeypatch.setattr(experiment, "run_experiment", stuck_on_seed_2)
+    out = experiment.run_seeds("notched_rectangle", [1, 2, 3], out_dir=tmp_path, circuits=2, k_max=6)
+    assert [r["seed"] for r in out["runs"]] == [1, 2, 3]
+    failed = out["runs"][1]
+    assert "stuck" in failed["error"] and not any(failed["checks"].values())
+    values = out["summary"]["dstates"]["values"]
+    assert values[1] is None and values[0] == out["runs"][0]["map"]["dstates"] and values[2] is not None
+    assert (tmp_path / "seed_1" / "report.md").exists() and (tmp_path / "seed_3" / "report.md").exists()
+    assert "on seed(s) 1, 2, 3" in (tmp_path / "summary.md").read_text()  # 2 circuits: too few images for 1-NN

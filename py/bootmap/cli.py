@@ -12,41 +12,16 @@ import json
 import sys
 from typing import Callable, Sequence
 
-from . import __version__
+from . import __version__, arguments
 from .errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_OK, BootmapError, SolveTimeout
-
-
-def _levels(text: str) -> list[str]:
-    return [x.strip() for x in text.split(",") if x.strip()]
-
-
-def _quantum(text: str) -> float:
-    try:
-        q = float(text)
-    except ValueError:
-        q = float("nan")
-    if not 0 < q <= 180:
-        raise argparse.ArgumentTypeError(f"expected degrees in (0, 180], got {text!r}")
-    return q
-
-
-def _seeds(text: str) -> list[int]:
-    """'1,2,3' or '1-5' -> a list of seeds."""
-    try:
-        if "-" in text and "," not in text:
-            lo, hi = (int(x) for x in text.split("-", 1))
-            return list(range(lo, hi + 1))
-        return [int(x) for x in text.split(",") if x.strip()]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected seeds like 1,2,3 or 1-5, got {text!r}") from None
 
 
 def _add_theory_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--axioms", metavar="DIR",
                    help="axiom directory (default: $BOOTMAP_AXIOMS, else the shipped asp/)")
-    p.add_argument("--levels", type=_levels, metavar="L1,L2",
+    p.add_argument("--levels", type=arguments.levels, metavar="L1,L2",
                    help="levels to load, e.g. causal,topological (default: every .lp file in the directory)")
-    p.add_argument("--quantum", type=_quantum, metavar="DEG",
+    p.add_argument("--quantum", type=arguments.quantum, metavar="DEG",
                    help="round each turn angle and heading change to this many degrees (e.g. 15), instead of "
                         "learning the robot's action types from the tableau (the default, robust to odometry "
                         "noise)")
@@ -129,7 +104,7 @@ def cmd_experiment(args: argparse.Namespace) -> int:
 
     if args.seeds:
         out = run_seeds(args.world, args.seeds, out_dir=args.output, circuits=args.circuits, steps=args.steps,
-                        k_max=args.k_max, time_limit=args.time_limit)
+                        k_max=args.k_max, time_limit=args.time_limit, progress=True)
         runs = out["runs"]
         for r in runs:
             _print_summary(r)
@@ -147,6 +122,9 @@ def cmd_experiment(args: argparse.Namespace) -> int:
 def _print_summary(r: dict) -> None:
     from .experiment import CHECK_TEXT
 
+    if r.get("error"):
+        print(f"{r['world']} (seed {r['seed']}): FAILED: {r['error']}")
+        return
     v, m, rec = r["views"], r["map"], r["recognition"]
     print(f"{r['world']} (seed {r['seed']}): {r['images']} images; views: k = {v['k']} by M, "
           f"largest k with U = 1: {v['largest_k_with_U_1']}")
@@ -215,8 +193,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("tableau", help="tableau JSON file")
     p.add_argument("--format", choices=["text", "json"], default="text")
     p.add_argument("--all", action="store_true", help="also print every other minimal map found")
-    p.add_argument("--time-limit", type=float, default=60.0, metavar="S", help="seconds for the search (default 60)")
-    p.add_argument("--max-models", type=int, default=10, metavar="N",
+    p.add_argument("--time-limit", type=arguments.seconds, default=60.0, metavar="S", help="seconds for the search (default 60)")
+    p.add_argument("--max-models", type=arguments.count("maps"), default=10, metavar="N",
                    help="minimal maps to enumerate before calling the count capped (default 10)")
     _add_theory_options(p)
     p.set_defaults(handler=cmd_map)
@@ -238,7 +216,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("a", help="a time point (t0 or 0) or a dstate name (S0)")
     p.add_argument("b", help="a time point or a dstate name")
     p.add_argument("--format", choices=["text", "json"], default="text")
-    p.add_argument("--time-limit", type=float, default=60.0, metavar="S", help="seconds for the map (default 60)")
+    p.add_argument("--time-limit", type=arguments.seconds, default=60.0, metavar="S", help="seconds for the map (default 60)")
     _add_theory_options(p)
     p.set_defaults(handler=cmd_why)
 
@@ -255,14 +233,16 @@ def build_parser() -> argparse.ArgumentParser:
                                    "1 when any fails (the summary names which), 2 on bad input.")
     p.add_argument("world", help="world file, or the name of one in worlds/")
     runs = p.add_mutually_exclusive_group()
-    runs.add_argument("--circuits", type=int, metavar="N", help="circuits of a room (circuits policy; default 50)")
-    runs.add_argument("--steps", type=int, metavar="N",
+    runs.add_argument("--circuits", type=arguments.count("circuits"), metavar="N",
+                      help="circuits of a room (worlds of the circuits policy; default 50)")
+    runs.add_argument("--steps", type=arguments.count("steps", 2), metavar="N",
                       help="dstates to record (explore policy; default 100, the paper's Taylor Hall run)")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--seeds", type=_seeds, metavar="S1,S2,...",
+    p.add_argument("--seed", type=arguments.count("seed", 0), default=0, help="random seed (default 0)")
+    p.add_argument("--seeds", type=arguments.seeds, metavar="S1,S2,...",
                    help="repeat over these seeds (e.g. 1,2,3,4,5 or 1-5) and report mean and spread")
-    p.add_argument("--k-max", type=int, default=12, metavar="K", help="largest number of views tried (default 12)")
-    p.add_argument("--time-limit", type=float, default=60.0, metavar="S", help="seconds for the map (default 60)")
+    p.add_argument("--k-max", type=arguments.count("views"), default=12, metavar="K",
+                   help="largest number of views tried (default 12)")
+    p.add_argument("--time-limit", type=arguments.seconds, default=60.0, metavar="S", help="seconds for the map (default 60)")
     p.add_argument("-o", "--output", default="out", metavar="DIR", help="output directory (default out/)")
     p.set_defaults(handler=cmd_experiment)
 

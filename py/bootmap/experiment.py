@@ -25,13 +25,13 @@ from typing import Callable
 
 import numpy as np
 
-from .errors import SolveTimeout
+from .errors import BadInput, BootmapError, SolveTimeout
+from .mapping.resolver import Resolver
 from .metrics import dstate_accuracy
 from .recognise import learning_curve_cv, online_curve, online_hits
-from .mapping.resolver import Resolver
 from .sim import simulate
-from .views import ViewClusterer, view_labels, view_table
 from .sim.world import World, load_world
+from .views import ViewClusterer, view_labels, view_table
 
 CURVE_SIZES = (10, 20, 30, 40, 50, 60, 70, 80, 90)
 PAPER_CIRCUITS = 50  # the paper's notched-rectangle run: 50 circuits, 400 images
@@ -51,6 +51,9 @@ def run_experiment(world: str | World, circuits: int | None = None, steps: int |
     """
     world = world if isinstance(world, World) else load_world(world)
     policy = world.policy or "circuits"
+    if circuits is not None and policy == "explore":
+        raise BadInput(f"{world.name} is explored (policy explore), not circled: give its run length as "
+                       "steps (--steps), not circuits")
     if steps is None and circuits is None and policy == "explore":
         steps = PAPER_EXPLORE_STEPS
     clock, timings = time.perf_counter(), {}
@@ -302,15 +305,25 @@ def _checks_text(runs: list[dict]) -> list[str]:
     return lines
 
 
-def run_seeds(world: str | World, seeds: list[int], out_dir: str | Path | None = None, **kwargs) -> dict:
+def run_seeds(world: str | World, seeds: list[int], out_dir: str | Path | None = None, progress: bool = False,
+              **kwargs) -> dict:
     """The experiment once per seed (each in ``out_dir/seed_N``), and the mean and spread over seeds.
+    A seed whose run fails (the simulated robot gets stuck, say) is recorded with its error, and the
+    other seeds run; ``progress`` shows a bar over the seeds.
 
     Returns ``{"world", "seeds", "runs": [results...], "summary": {figure: {"mean", "std", "min", "max"}}}``
     and writes ``summary.json`` and ``summary.md`` when ``out_dir`` is given.
     """
     world = world if isinstance(world, World) else load_world(world)
-    runs = [run_experiment(world, seed=s, out_dir=None if out_dir is None else Path(out_dir) / f"seed_{s}", **kwargs)
-            for s in seeds]
+    runs = []
+    for s in _over(seeds, progress):
+        try:
+            runs.append(run_experiment(world, seed=s, out_dir=None if out_dir is None else Path(out_dir) / f"seed_{s}",
+                                       **kwargs))
+        except BadInput:
+            raise  # the same for every seed: say it once
+        except BootmapError as e:  # e.g. the simulated robot got stuck: record it, run the other seeds
+            runs.append(_failed_run(world, s, e))
     summary = {name: _spread([f(r) for r in runs]) for name, f in _FIGURES.items()}
     out = {"world": world.name, "seeds": list(seeds), "runs": runs, "summary": summary}
     if out_dir is not None:
@@ -320,10 +333,26 @@ def run_seeds(world: str | World, seeds: list[int], out_dir: str | Path | None =
     return out
 
 
+def _over(seeds: list[int], progress: bool):
+    if not progress:
+        return seeds
+    import sys
+
+    from tqdm import tqdm
+
+    return tqdm(seeds, unit="seed", file=sys.stderr, dynamic_ncols=True, desc="seeds")
+
+
+def _failed_run(world: World, seed: int, e: BootmapError) -> dict:
+    """A seed whose run failed, as a run record: every figure missing, every check false."""
+    return {"world": world.name, "seed": seed, "error": f"{type(e).__name__}: {e}", "images": 0, "views": None,
+            "map": {"error": str(e)}, "recognition": None, "checks": {c.id: False for c in CHECKS}, "timings": {}}
+
+
 # The figures compared across seeds; None where a run has no map.
 _FIGURES = {
-    "k by M": lambda r: r["views"]["k"],
-    "largest k with U = 1": lambda r: r["views"]["largest_k_with_U_1"],
+    "k by M": lambda r: (r["views"] or {}).get("k"),
+    "largest k with U = 1": lambda r: (r["views"] or {}).get("largest_k_with_U_1"),
     "dstates": lambda r: r["map"].get("dstates"),
     "places": lambda r: r["map"].get("places"),
     "paths": lambda r: r["map"].get("paths"),

@@ -10,6 +10,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from .. import arguments
 from ..errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_OK
 from ..errors import BootmapError, TableauError, WorldError
 
@@ -23,11 +24,11 @@ def register(subparsers) -> None:
     p.add_argument("world", help="world file, or the name of one in worlds/ (e.g. notched_rectangle)")
     p.add_argument("--policy", choices=("circuits", "explore"),
                    help="circuits of a room, or systematic exploration of a hallway (default: the world's)")
-    p.add_argument("--circuits", type=int, default=50, metavar="N", help="circuits to make (default 50)")
-    p.add_argument("--steps", type=int, metavar="N",
+    p.add_argument("--circuits", type=arguments.count("circuits"), default=50, metavar="N", help="circuits to make (default 50)")
+    p.add_argument("--steps", type=arguments.count("steps", 2), metavar="N",
                    help="record exactly N dstates (explore: keep wandering after exploring)")
     p.add_argument("--direction", choices=("cw", "ccw"), default="cw", help="direction of circuits")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0); same seed, same tableau")
+    p.add_argument("--seed", type=arguments.count("seed", 0), default=0, help="random seed (default 0); same seed, same tableau")
     p.add_argument("-o", "--output", metavar="FILE", help="write the tableau here (default: stdout)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(handler=cmd_simulate)

@@ -1,0 +1,64 @@
+"""Argument types of the ``bootmap`` command, shared by every sub-command (argparse ``type=`` callables):
+each turns a bad value into a message naming what was expected, and argparse exits 2 with it."""
+
+from __future__ import annotations
+
+import argparse
+
+
+def levels(text: str) -> list[str]:
+    """'causal,topological' -> the level names (checked against the axiom directory when it is loaded)."""
+    return [x.strip() for x in text.split(",") if x.strip()]
+
+
+def quantum(text: str) -> float:
+    """Degrees to round angles to: in (0, 180]."""
+    try:
+        q = float(text)
+    except ValueError:
+        q = float("nan")
+    if not 0 < q <= 180:
+        raise argparse.ArgumentTypeError(f"expected degrees in (0, 180], got {text!r}")
+    return q
+
+
+def seeds(text: str) -> list[int]:
+    """'1,2,3' or '1-5' -> a list of seeds (non-negative, each once)."""
+    hint = "expected seeds like 1,2,3 or 1-5 (non-negative integers)"
+    parts = [x.strip() for x in text.split(",")]
+    if any(not x for x in parts):
+        raise argparse.ArgumentTypeError(f"{hint}, got {text!r}: an empty seed between commas")
+    out: list[int] = []
+    for part in parts:
+        lo, _, hi = part.partition("-")
+        if not lo.isdigit() or (hi and not hi.isdigit()):
+            raise argparse.ArgumentTypeError(f"{hint}, got {text!r}")
+        first, last = int(lo), int(hi) if hi else int(lo)
+        if last < first:
+            raise argparse.ArgumentTypeError(f"the range {part!r} runs backwards: write {last}-{first}")
+        out += [x for x in range(first, last + 1) if x not in out]
+    return out
+
+
+def count(what: str, minimum: int = 1):
+    """An argparse type: an integer of at least ``minimum``."""
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a whole number ({what}), got {text!r}") from None
+        if value < minimum:
+            raise argparse.ArgumentTypeError(f"expected {what} >= {minimum}, got {value}")
+        return value
+    return parse
+
+
+def seconds(text: str) -> float:
+    """A time limit: finite and not negative."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not value >= 0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"expected seconds (a number >= 0), got {text!r}")
+    return value
