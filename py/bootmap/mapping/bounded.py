@@ -1,0 +1,79 @@
+"""A resolution that ends by its time limit for sure: in a child process, stopped if it runs over.
+
+The resolver keeps its own time limit between groundings and during solving, but clingo cannot interrupt
+a grounding, and a hostile or simply large tableau can ground for longer than the limit. So the command
+line resolves in a forked child and kills it ``grace_s`` after the limit, as the service kills its solver
+processes. The child's answer (a map, or the resolver's own time-out or inconsistency) comes back through
+a pipe as plain data.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import traceback
+
+from ..errors import BootmapError, InconsistentTableau, SolveTimeout
+from ..tableau import Tableau
+from .cogmap import CognitiveMap
+
+GRACE_S = 2.0  # beyond the limit: the resolver's own time-out usually lands first
+
+
+def resolve_within(resolver, tableau: Tableau, grace_s: float = GRACE_S) -> CognitiveMap:
+    """``resolver.resolve(tableau)``, stopped at ``resolver.time_limit + grace_s`` seconds at the latest.
+    Raises what the resolver raises; :class:`SolveTimeout` (stage ``"grounding"``) when it had to be
+    stopped."""
+    limit = resolver.time_limit
+    if limit is None or "fork" not in multiprocessing.get_all_start_methods():
+        return resolver.resolve(tableau)
+    ctx = multiprocessing.get_context("fork")  # the resolver and tableau are inherited, not pickled
+    receive, send = ctx.Pipe(duplex=False)
+    child = ctx.Process(target=_child, args=(send, resolver, tableau), name="bootmap-resolve", daemon=True)
+    child.start()
+    send.close()
+    try:
+        if not receive.poll(limit + grace_s):
+            child.kill()
+            raise SolveTimeout(f"time limit of {limit:g} s reached while grounding (clingo cannot interrupt a "
+                               f"grounding; stopped at {limit + grace_s:g} s); no map found",
+                               time_limit_s=limit, stage="grounding")
+        try:
+            reply = receive.recv()
+        except EOFError:
+            raise BootmapError(f"the resolver process died (exit code {child.exitcode})") from None
+    finally:
+        child.join(5)
+        receive.close()
+    return _outcome(reply)
+
+
+def _child(send, resolver, tableau: Tableau) -> None:
+    try:
+        send.send(("ok", resolver.resolve(tableau)))
+    except SolveTimeout as e:
+        send.send(("timeout", str(e), e.lower_bound, e.best_map, e.time_limit_s, e.stage))
+    except InconsistentTableau as e:
+        send.send(("inconsistent", str(e), e.levels, tuple(e.failing_levels), e.diagnosed))
+    except BootmapError as e:
+        send.send(("error", str(e), e.exit_code))
+    except BaseException:  # a bug: its traceback goes to the parent, which raises it
+        send.send(("crash", traceback.format_exc()))
+    finally:
+        send.close()
+
+
+def _outcome(reply: tuple) -> CognitiveMap:
+    kind, *rest = reply
+    if kind == "ok":
+        return rest[0]
+    if kind == "timeout":
+        message, lower, best, limit, stage = rest
+        raise SolveTimeout(message, lower_bound=lower, best_map=best, time_limit_s=limit, stage=stage)
+    if kind == "inconsistent":
+        message, levels, failing, diagnosed = rest
+        raise InconsistentTableau(message, levels=levels, failing_levels=failing, diagnosed=diagnosed)
+    if kind == "error":
+        error = BootmapError(rest[0])
+        error.exit_code = rest[1]
+        raise error
+    raise RuntimeError(f"the resolver process failed:\n{rest[0]}")
