@@ -266,3 +266,11 @@ def test_one_failing_seed_is_named_and_the_others_still_run(monkeypatch, tmp_pat
     assert values[1] is None and values[0] == out["runs"][0]["map"]["dstates"] and values[2] is not None
     assert (tmp_path / "seed_1" / "report.md").exists() and (tmp_path / "seed_3" / "report.md").exists()
     assert "on seed(s) 1, 2, 3" in (tmp_path / "summary.md").read_text()  # 2 circuits: too few images for 1-NN
+
+
+@pytest.mark.parametrize("seed", [0, 1000])
+def test_seeds_with_adjacent_dropouts_reproduce_the_paper(seed):
+    # Seeds 0, 1000 and 1010 of the notched rectangle hold two laser drop-outs side by side in one image,
+    # which the single-beam repair left: M chose 5 views and the map had 132 dstates or none.
+    r = run_experiment("notched_rectangle", seed=seed)
+    assert r["views"]["k"] == 4 and all(r["checks"].values()), r["checks"]

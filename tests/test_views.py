@@ -234,3 +234,25 @@ def test_notched_rectangle_m_picks_four_and_four_is_largest_k_with_u_one(notched
     _, _, model = notched
     assert model.k_ == 4
     assert model.largest_k_with_u1_ == 4
+
+
+def test_dropout_runs_are_filled_from_look_alikes_and_open_directions_kept():
+    # Four dstates seen ten times each; one image loses a run of three beams on a wall, another a run of
+    # five; every visit of dstate 2 is open (max range) over beams 40-60, which must stay open.
+    from bootmap.views import repair_dropouts
+
+    rng = np.random.default_rng(11)
+    shapes = rng.uniform(0.5, 4.0, (4, 90))
+    shapes[2, 40:60] = 8.0
+    images = np.repeat(shapes, 10, axis=0) + rng.normal(0, 0.01, (40, 90))
+    images[20:30, 40:60] = 8.0  # nothing within range: every beam reads the maximum
+    broken = images.copy()
+    broken[3, 10:13] = 8.0
+    broken[15, 70:75] = 8.0
+    fixed = repair_dropouts(broken, 8.0)
+    assert np.abs(fixed[3, 10:13] - shapes[0, 10:13]).max() < 0.05
+    assert np.abs(fixed[15, 70:75] - shapes[1, 70:75]).max() < 0.05
+    assert (fixed[20:30, 40:60] == 8.0).all()  # the open direction of every visit of dstate 2
+    untouched = np.ones(40, dtype=bool)
+    untouched[[3, 15]] = False
+    assert np.array_equal(fixed[untouched], np.minimum(broken, 8.0)[untouched])

@@ -124,13 +124,17 @@ def uncertainty_coefficient(views: Sequence[Hashable], dstates: Sequence[Hashabl
 
 
 def repair_dropouts(images, max_range: float) -> np.ndarray:
-    """Clip readings to ``max_range`` and fill in isolated drop-outs.
+    """Clip readings to ``max_range`` and fill in drop-outs, single beams and runs of any length.
 
     A laser beam that misses its return reads the maximum range. Clipping makes an open direction (nothing
-    within range) and a drop-out read the same value; a drop-out is then told from an open direction by its
-    width: a single beam at ``max_range`` whose neighbouring beams both read less is a drop-out and is
-    replaced by the mean of its two neighbours (an edge beam by its one neighbour). Runs of two or more
-    beams at ``max_range`` are left alone as open directions.
+    within range) and a drop-out read the same value; they are told apart in two ways:
+
+    1. A single beam at ``max_range`` whose neighbouring beams both read less is a drop-out and is replaced
+       by the mean of its two neighbours (an edge beam by its one neighbour).
+    2. A run of beams at ``max_range`` inside a surface the image sees (a beam read on either side) is an
+       open direction if any of the images most like this one (its three nearest) is open there too; where
+       all three see every beam of it, it is a drop-out, and takes their median reading. The robot comes back to its dstates, so an image with a drop-out has
+       look-alikes that read those beams: drop-outs do not repeat, open directions do.
 
     Clipping alone is not enough: one drop-out changes one reading by several metres, a squared distance
     larger than all the rest of the image's variation, and M (a mean of squared distances) then rewards
@@ -154,6 +158,12 @@ def repair_dropouts(images, max_range: float) -> np.ndarray:
     array([[1. , 1.5, 2. , 8. , 8. , 8. ]])
     >>> repair_dropouts([[8.0, 0.5, 0.5]], 8.0)
     array([[0.5, 0.5, 0.5]])
+
+    Three look-alikes read a wall at 3 m where the fourth has lost two beams:
+
+    >>> looks = [[3.0, 3.1, 3.0, 3.1], [3.0, 3.0, 3.1, 3.0], [3.1, 3.0, 3.0, 3.1], [3.0, 8.0, 8.0, 3.0]]
+    >>> repair_dropouts(looks, 8.0)[3]
+    array([3., 3., 3., 3.])
     """
     x = np.minimum(as_images(images), float(max_range))
     if x.shape[1] < 2:
@@ -170,7 +180,48 @@ def repair_dropouts(images, max_range: float) -> np.ndarray:
     right = np.empty_like(x)
     right[:, :-1] = x[:, 1:]
     right[:, -1] = x[:, -2]
-    return np.where(isolated, 0.5 * (left + right), x)
+    x = np.where(isolated, 0.5 * (left + right), x)
+    return _fill_from_lookalikes(x, x >= max_range)
+
+
+_LOOKALIKES = 3
+_BLOCK_ROWS = 512  # rows of the pairwise distance matrix computed at once
+
+
+def _fill_from_lookalikes(x: np.ndarray, at_max: np.ndarray) -> np.ndarray:
+    """Holes at the maximum range that all three of an image's nearest look-alikes read: their median
+    reading (see :func:`repair_dropouts`)."""
+    rows = np.flatnonzero(at_max.any(axis=1))
+    if len(rows) == 0 or len(x) <= _LOOKALIKES:
+        return x
+    out = x.copy()
+    for start in range(0, len(rows), _BLOCK_ROWS):
+        block = rows[start:start + _BLOCK_ROWS]
+        # Plain distances (clipped readings): a look-alike that is open where this image reads the maximum
+        # range pays nothing there, so the visits of one place, open in the same directions, come first.
+        d = _squared_distances(x[block], x)
+        d[np.arange(len(block)), block] = np.inf  # not its own look-alike
+        nearest = np.argsort(d, axis=1)[:, :_LOOKALIKES]
+        for i, near in zip(block, nearest):
+            sees = ~at_max[near]                     # (3, n_beams)
+            seen_by_all = sees.all(axis=0)
+            for a, b in _holes(at_max[i]):
+                if seen_by_all[a:b].all():
+                    masked = np.where(sees[:, a:b], x[near, a:b], np.nan)
+                    out[i, a:b] = np.nanmedian(masked, axis=0)
+    return out
+
+
+def _holes(at_max: np.ndarray) -> list[tuple[int, int]]:
+    """Runs [a, b) of beams at the maximum range with a beam read on both sides: holes in a surface the
+    image sees, not the edge of an open direction (whose extent moves with the robot's pose)."""
+    edges = np.diff(np.concatenate([[0], at_max.astype(int), [0]]))
+    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    return [(a, b) for a, b in zip(starts, ends) if a > 0 and b < len(at_max)]
+
+
+def _squared_distances(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.maximum((a * a).sum(axis=1)[:, None] - 2.0 * a @ b.T + (b * b).sum(axis=1)[None, :], 0.0)
 
 
 class ViewClusterer:
