@@ -242,7 +242,8 @@ def test_dropout_runs_are_filled_from_look_alikes_and_open_directions_kept():
     from bootmap.views import repair_dropouts
 
     rng = np.random.default_rng(11)
-    shapes = rng.uniform(0.5, 4.0, (4, 90))
+    beams = np.linspace(0, np.pi, 90)
+    shapes = np.array([2.5 + np.sin(3 * beams + phase) for phase in rng.uniform(0, 6, 4)])  # smooth walls
     shapes[2, 40:60] = 8.0
     images = np.repeat(shapes, 10, axis=0) + rng.normal(0, 0.01, (40, 90))
     images[20:30, 40:60] = 8.0  # nothing within range: every beam reads the maximum

@@ -133,7 +133,8 @@ def repair_dropouts(images, max_range: float) -> np.ndarray:
        by the mean of its two neighbours (an edge beam by its one neighbour).
     2. A run of beams at ``max_range`` inside a surface the image sees (a beam read on either side) is an
        open direction if any of the images most like this one (its three nearest) is open there too; where
-       all three see every beam of it, it is a drop-out, and takes their median reading. The robot comes back to its dstates, so an image with a drop-out has
+       all three see every beam of it, and what they see continues the surface on either side, well
+       within range, it is a drop-out, and takes their median reading. The robot comes back to its dstates, so an image with a drop-out has
        look-alikes that read those beams: drop-outs do not repeat, open directions do.
 
     Clipping alone is not enough: one drop-out changes one reading by several metres, a squared distance
@@ -181,14 +182,16 @@ def repair_dropouts(images, max_range: float) -> np.ndarray:
     right[:, :-1] = x[:, 1:]
     right[:, -1] = x[:, -2]
     x = np.where(isolated, 0.5 * (left + right), x)
-    return _fill_from_lookalikes(x, x >= max_range)
+    return _fill_from_lookalikes(x, x >= max_range, float(max_range))
 
 
 _LOOKALIKES = 3
+_SURFACE_M = 0.25  # how far a filled run may leave the line between the readings either side of it
+_WITHIN = 0.9      # a filled run reads at most this share of the laser's maximum range
 _BLOCK_ROWS = 512  # rows of the pairwise distance matrix computed at once
 
 
-def _fill_from_lookalikes(x: np.ndarray, at_max: np.ndarray) -> np.ndarray:
+def _fill_from_lookalikes(x: np.ndarray, at_max: np.ndarray, max_range: float) -> np.ndarray:
     """Holes at the maximum range that all three of an image's nearest look-alikes read: their median
     reading (see :func:`repair_dropouts`)."""
     rows = np.flatnonzero(at_max.any(axis=1))
@@ -207,8 +210,14 @@ def _fill_from_lookalikes(x: np.ndarray, at_max: np.ndarray) -> np.ndarray:
             seen_by_all = sees.all(axis=0)
             for a, b in _holes(at_max[i]):
                 if seen_by_all[a:b].all():
-                    masked = np.where(sees[:, a:b], x[near, a:b], np.nan)
-                    out[i, a:b] = np.nanmedian(masked, axis=0)
+                    fill = np.median(x[near, a:b], axis=0)
+                    # A drop-out on a surface: what the look-alikes read there continues the surface the
+                    # image reads on either side (an opening would not).
+                    across = np.interp(np.arange(a, b), [a - 1, b], [x[i, a - 1], x[i, b]])
+                    # ... and lies well within range (a wall at the range's edge flickers in and out of
+                    # it from visit to visit: that is the laser's reach, not a drop-out).
+                    if np.abs(fill - across).max() <= _SURFACE_M and fill.max() <= _WITHIN * max_range:
+                        out[i, a:b] = fill
     return out
 
 
