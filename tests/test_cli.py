@@ -129,3 +129,19 @@ def test_a_sub_command_is_hidden_only_when_a_third_party_package_is_missing(monk
     monkeypatch.setattr(importlib, "import_module", missing("bootmap.service.nowhere"))
     with pytest.raises(ModuleNotFoundError, match="bootmap.service.nowhere"):
         cli.build_parser()
+
+
+def test_map_of_images_names_a_view_with_a_single_image(tmp_path, capsys):
+    # One image of a run corrupted (a passer-by fills the scan): clustering gives it a view of its own,
+    # and `bootmap map` says which step it is, rather than leave the user with a map of too many dstates.
+    from bootmap.cli import main
+    from bootmap.sim import simulate
+    from bootmap.sim.world import load_world
+
+    run = simulate(load_world("notched_rectangle"), circuits=10, seed=3).to_dict()
+    run["steps"][37]["image"] = [0.3] * len(run["steps"][37]["image"])
+    path = tmp_path / "run.json"
+    path.write_text(json.dumps(run))
+    main(["map", str(path), "--levels", "causal", "--time-limit", "20"])
+    err = capsys.readouterr().err
+    assert "has only 1 image(s) of 80 (t37)" in err and "likely misread" in err

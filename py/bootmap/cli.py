@@ -50,11 +50,15 @@ def _with_views(tableau):
     """A tableau of images only (e.g. from `bootmap simulate`) gets its views by k-means, k chosen by M."""
     if tableau.labelled:
         return tableau  # nothing to cluster: spare the scikit-learn import (about a second)
-    from .views import tableau_with_views
+    from .views import rare_views, tableau_with_views
 
     tableau, k = tableau_with_views(tableau)
     if k is not None:
         print(f"bootmap: clustered {len(tableau)} images into {k} views (k chosen by M)", file=sys.stderr)
+        for view, times in rare_views(tableau.views).items():
+            print(f"bootmap: view {view} has only {len(times)} image(s) of {len(tableau)} "
+                  f"({', '.join(f't{t}' for t in times)}): likely misread images (a drop-out, a passer-by), "
+                  "which the map must explain as a dstate of their own", file=sys.stderr)
     return tableau
 
 
