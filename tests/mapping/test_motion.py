@@ -15,20 +15,7 @@ from bootmap.metrics import dstate_accuracy
 from bootmap.tableau import Step, Tableau, Travel, Turn
 from bootmap.testing.check import true_partition
 from bootmap.testing.gridworld import random_world, walk
-
-
-def noisy(tableau: Tableau, turn_sd: float, drift_sd: float, rng: np.random.Generator) -> Tableau:
-    """The tableau as a real robot's odometry would read it: every turn off by N(0, turn_sd), every travel's
-    heading change by N(0, drift_sd)."""
-    steps = []
-    for s in tableau.steps:
-        a = s.action
-        if isinstance(a, Turn):
-            a = Turn(a.angle_deg + float(rng.normal(0, turn_sd)))
-        elif isinstance(a, Travel):
-            a = Travel(a.distance_m, a.heading_change_deg + float(rng.normal(0, drift_sd)))
-        steps.append(Step(s.view, a, s.image, s.truth, s.pose))
-    return Tableau(tuple(steps), tableau.world, dict(tableau.meta))
+from bootmap.testing.noise import with_odometry_noise
 
 
 @settings(max_examples=60, deadline=None)
@@ -52,7 +39,7 @@ def test_turn_noise_up_to_10_degrees_does_not_change_the_map(seed, turn_sd, drif
     rng = np.random.default_rng(seed)
     world = random_world(rng, 4, 3, extra_edges=2, landmarks=0.4)
     clean = walk(world, 300, rng, policy="explore")
-    tableau = noisy(clean, turn_sd, drift_sd, rng)
+    tableau = with_odometry_noise(clean, turn_sd, drift_sd, rng)
     truth = true_partition(tableau)
     cmap = Resolver(time_limit=60).resolve(tableau)
     assert cmap.n_dstates == len(set(truth)) and dstate_accuracy(truth, cmap.dstate_of) == 1.0
@@ -77,7 +64,7 @@ def test_a_fixed_quantum_breaks_where_learned_types_do_not():
 
 def test_bootmap_map_names_the_action_types_and_refuses_a_bad_quantum(tmp_path, capsys):
     rng = np.random.default_rng(5)
-    tableau = noisy(walk(random_world(rng, 3, 3, landmarks=0.4), 60, rng), 5, 2, rng)
+    tableau = with_odometry_noise(walk(random_world(rng, 3, 3, landmarks=0.4), 60, rng), 5, 2, rng)
     path = tmp_path / "t.json"
     path.write_text(tableau.dumps())
     assert main(["map", str(path)]) == 0
