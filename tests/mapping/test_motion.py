@@ -76,3 +76,22 @@ def test_bootmap_map_names_the_action_types_and_refuses_a_bad_quantum(tmp_path, 
     with pytest.raises(SystemExit) as e:
         main(["map", str(path), "--quantum", "0"])
     assert e.value.code == 2 and "expected degrees in (0, 180]" in capsys.readouterr().err
+
+
+def test_travel_lengths_tell_look_alike_dstates_apart_and_odometry_error_does_not():
+    # t0 and t3 look alike (view A, heading 0) and both travel on to a look-alike B (heading 0): three
+    # dstates (A, B, C), unless the travel from t0 is 15 m and from t3 4 m, which the same travel from one
+    # dstate cannot be: then A is two dstates.
+    def tableau(first, second):
+        return Tableau((Step("A", Travel(first)), Step("B", Turn(-90.0)), Step("C", Turn(90.0)),
+                        Step("A", Travel(second)), Step("B")))
+
+    causal_metrical = Resolver(levels=["causal", "metrical"])
+    assert causal_metrical.resolve(tableau(15.0, 4.0)).n_dstates == 4
+    assert causal_metrical.resolve(tableau(4.1, 3.9)).n_dstates == 3  # within odometry error: one length
+    assert Resolver(levels=["causal"]).resolve(tableau(15.0, 4.0)).n_dstates == 3  # lengths are metrical
+    from bootmap.mapping import Explainer
+
+    e = Explainer(levels=["causal", "metrical"]).explain(tableau(15.0, 4.0), 0, 3)
+    assert e.verdict == "different" and "length_is_feature" in e.rules_cited()
+    assert "the travel from t0 was 150 dm long" in e.to_text()

@@ -17,9 +17,9 @@ from typing import Iterable, Sequence
 import clingo
 from clingo import Function, Number, String, Symbol
 
-from ..tableau import Action, Tableau, Turn
-from .motion import MotionPrimitives, measured_angle
-from .vocabulary import QUANTUM_DEG, RESUME, TRAVEL, TURN, VIEW, action_term
+from ..tableau import Action, Tableau, Travel, Turn
+from .motion import MotionPrimitives, length_types, measured_angle
+from .vocabulary import LENGTH, QUANTUM_DEG, RESUME, TRAVEL, TURN, VIEW, action_term
 
 
 def quantise(angle_deg: float, quantum_deg: float = QUANTUM_DEG) -> int:
@@ -63,7 +63,8 @@ def tableau_facts(tableau: Tableau, quantum_deg: float | None = None,
     numbers: dict[int, Symbol] = {}
     out: list[Symbol] = []
     # The vocabulary's names, with clingo's constructors called directly: this loop runs per step.
-    view_name, turn_name, travel_name = VIEW.name, TURN.name, TRAVEL.name
+    view_name, turn_name, travel_name, length_name = VIEW.name, TURN.name, TRAVEL.name, LENGTH.name
+    lengths = travel_lengths(tableau)
     for t, step in enumerate(tableau.steps):
         time = Number(t)
         view = strings.get(step.view) or strings.setdefault(step.view, String(step.view))  # type: ignore[arg-type]
@@ -72,7 +73,16 @@ def tableau_facts(tableau: Tableau, quantum_deg: float | None = None,
             name = turn_name if isinstance(step.action, Turn) else travel_name
             angle = angles[t]
             out.append(Function(name, [time, numbers.get(angle) or numbers.setdefault(angle, Number(angle))]))
+            if t in lengths:
+                out.append(Function(length_name, [time, Number(lengths[t])]))
     return out
+
+
+def travel_lengths(tableau: Tableau) -> dict[int, int]:
+    """The length type (decimetres) of each travel, by its time point (:func:`.motion.length_types`)."""
+    travels = [t for t, s in enumerate(tableau.steps) if isinstance(s.action, Travel)]
+    types = length_types([tableau.steps[t].action.distance_m for t in travels])  # type: ignore[union-attr]
+    return dict(zip(travels, types))
 
 
 def add_facts(ctl: clingo.Control, facts: Iterable[Symbol]) -> None:

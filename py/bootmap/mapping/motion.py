@@ -211,3 +211,31 @@ def _snap(angle: float, q: int) -> int:
     a = int(round(angle / q) * q)
     a = (a + 180) % 360 - 180
     return 180 if a == -180 else a
+
+
+#: Two travels whose distances differ by more than this factor are of different lengths (odometry reads a
+#: travel's length to a few per cent; where the robot stops varies by a few centimetres).
+LENGTH_RATIO = 1.25
+
+
+def length_types(distances: Sequence[float]) -> list[int]:
+    """The length type of each travel, in decimetres (the mean of its type): travels are sorted by length
+    and split wherever the next is more than :data:`LENGTH_RATIO` times longer; lengths that repeat
+    exactly (clean experience) are each a type.
+
+    >>> length_types([4.02, 1.98, 3.95, 2.03, 12.1, 4.0])
+    [40, 20, 40, 20, 121, 40]
+    >>> length_types([2.0, 2.2, 2.0, 2.2])
+    [20, 22, 20, 22]
+    """
+    d = np.asarray(distances, dtype=float)
+    if d.size == 0:
+        return []
+    order = np.argsort(d)
+    v = np.log(np.maximum(d[order], 1e-3))
+    exact = len(np.unique(np.round(d, 6))) <= len(d) / 2
+    splits = np.flatnonzero(np.diff(v) > (1e-6 if exact else np.log(LENGTH_RATIO))) + 1
+    out = np.empty(len(d), dtype=int)
+    for part in np.split(order, splits):
+        out[part] = int(round(float(d[part].mean()) * 10))
+    return out.tolist()

@@ -103,6 +103,7 @@ def _term(x: int | str | Symbol) -> Symbol:
 VIEW = Predicate("view", 2, "tableau", "at t{0} the robot saw view {1}")
 TURN = Predicate("turn", 2, "tableau", "at t{0} it turned {1} degrees")
 TRAVEL = Predicate("travel", 2, "tableau", "at t{0} it travelled along the path (net heading change {1} degrees)")
+LENGTH = Predicate("length", 2, "tableau", "the travel from t{0} was {1} dm long")
 RESUME = Predicate("resume", 1, "tableau", "the evidence resumes at t{0} after a gap (headings start afresh)")
 
 # --------------------------------------------------------------------------------------------------

@@ -25,7 +25,7 @@ from typing import Hashable, Iterable, Sequence
 
 from ..mapping.facts import quantise
 from ..mapping.vocabulary import QUANTUM_DEG
-from ..tableau import Tableau, Turn
+from ..tableau import Tableau, Travel, Turn
 
 LEVELS = ("causal", "topological", "metrical")
 TRAVEL = "travel"
@@ -80,7 +80,7 @@ def check_map(tableau: Tableau, dstate_of: Sequence[Hashable],
     exp = Experience.build(tableau, [str(d) for d in dstate_of], quantum_deg, times)
     out = _one_view(exp) + _deterministic(exp)
     if "metrical" in levels:
-        out += _one_heading(exp)
+        out += _one_heading(exp) + _one_length(exp)
     if "topological" in levels:
         out += Topology.build(exp).violations()
     return out
@@ -100,6 +100,7 @@ class Experience:
     views: list[str]
     actions: list[object]               # "travel" or a quantised turn angle (int), or None
     changes: list[int | None]           # quantised heading change of each action
+    lengths: list[int | None]           # a kept travel's length in decimetres, else None
     next: dict[tuple[str, object], dict[str, int]] = field(default_factory=dict)
 
     @classmethod
@@ -112,7 +113,8 @@ class Experience:
         changes = [None if a is None else _heading_change(a, quantum_deg) for a in linked]
         # A turn is named by its quantised angle (which is also its heading change), a travel by "travel".
         actions = [None if a is None else c if isinstance(a, Turn) else TRAVEL for a, c in zip(linked, changes)]
-        exp = cls(times, dstate_of, [s.view for s in steps], actions, changes)   # type: ignore[arg-type]
+        lengths = [round(a.distance_m * 10) if isinstance(a, Travel) else None for a in linked]
+        exp = cls(times, dstate_of, [s.view for s in steps], actions, changes, lengths)   # type: ignore[arg-type]
         for i, a in enumerate(actions):
             if a is not None:
                 # Remember the first time each transition was made, to cite it.
@@ -190,6 +192,14 @@ def _accumulate(changes: Iterable[int]) -> list[int]:
 def _one_heading(exp: Experience) -> list[str]:
     """heading_is_feature + one_value_per_feature: a dstate faces one way (metrical level), in each frame."""
     return _feature_clash(exp, headings(exp), "heading", "heading_is_feature")
+
+
+def _one_length(exp: Experience) -> list[str]:
+    """length_is_feature + one_value_per_feature: travelling on from a dstate covers one distance (the
+    checker compares lengths to the decimetre; the resolver groups noisy ones into types first)."""
+    kept = [i for i, n in enumerate(exp.lengths) if n is not None]
+    sub = Experience([exp.times[i] for i in kept], [exp.dstate_of[i] for i in kept], [], [], [], [])
+    return _feature_clash(sub, [("length", exp.lengths[i]) for i in kept], "length (dm)", "length_is_feature")
 
 
 def _deterministic(exp: Experience) -> list[str]:
