@@ -86,13 +86,14 @@ def cmd_axioms(args: argparse.Namespace) -> int:
 
 
 def cmd_why(args: argparse.Namespace) -> int:
+    from .mapping.bounded import run_within
     from .mapping.explain import Explainer
     from .tableau import load
 
     tableau = _with_views(load(args.tableau))
     explainer = Explainer(axioms=args.axioms, levels=args.levels, quantum_deg=args.quantum,
                           time_limit=args.time_limit)
-    explanation = explainer.explain(tableau, args.a, args.b)
+    explanation = run_within(lambda: explainer.explain(tableau, args.a, args.b), args.time_limit)
     print(json.dumps(explanation.to_dict(), indent=1) if args.format == "json" else explanation.to_text())
     return EXIT_OK
 

@@ -59,3 +59,18 @@ def test_answers_come_back_from_the_child_as_they_are():
     with pytest.raises(SolveTimeout) as t:
         resolve_within(Resolver(levels=["causal", "topological"], time_limit=0.0), notched_rectangle(50))
     assert t.value.lower_bound >= 4 and t.value.stage
+
+
+def test_any_work_is_stopped_the_same_way_and_bootmap_why_uses_it(tmp_path, capsys):
+    from bootmap.cli import main
+    from bootmap.mapping.bounded import run_within
+
+    start = time.monotonic()
+    with pytest.raises(SolveTimeout, match="stopped at 0.6 s"):
+        run_within(lambda: time.sleep(60), 0.3, grace_s=0.3)
+    assert time.monotonic() - start < 2
+    assert run_within(lambda: {"answer": 42}, 5) == {"answer": 42}
+    path = tmp_path / "paper.json"
+    path.write_text(notched_rectangle(3).dumps())
+    assert main(["why", str(path), "S0", "S4", "--levels", "causal,topological", "--time-limit", "30"]) == 0
+    assert "on_path_no_side" in capsys.readouterr().out

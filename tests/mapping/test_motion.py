@@ -95,3 +95,17 @@ def test_travel_lengths_tell_look_alike_dstates_apart_and_odometry_error_does_no
     e = Explainer(levels=["causal", "metrical"]).explain(tableau(15.0, 4.0), 0, 3)
     assert e.verdict == "different" and "length_is_feature" in e.rules_cited()
     assert "the travel from t0 was 150 dm long" in e.to_text()
+
+
+@settings(max_examples=12, deadline=None)
+@given(seed=st.integers(0, 2**31), width=st.integers(3, 5), turn_sd=st.floats(0, 10), drift_sd=st.floats(0, 4))
+def test_property_noisy_walks_of_random_worlds_resolve_to_the_truth(seed, width, turn_sd, drift_sd):
+    # A random world, explored for 240 steps, read with random odometry noise within the bounds
+    # (turns up to sd 10 degrees, travel drift up to sd 4): the map is the truth.
+    rng = np.random.default_rng(seed)
+    world = random_world(rng, width, 3, extra_edges=2, landmarks=0.4)
+    tableau = with_odometry_noise(walk(world, 240, rng, policy="explore"), turn_sd, drift_sd, rng)
+    truth = true_partition(tableau)
+    cmap = Resolver(time_limit=60).resolve(tableau)
+    assert cmap.n_dstates == len(set(truth)) and dstate_accuracy(truth, cmap.dstate_of) == 1.0, \
+        [str(t) for t in cmap.action_types]

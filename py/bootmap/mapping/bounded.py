@@ -1,4 +1,5 @@
-"""A resolution that ends by its time limit for sure: in a child process, stopped if it runs over.
+"""A resolution (or explanation) that ends by its time limit for sure: in a child process, stopped if it
+runs over.
 
 The resolver keeps its own time limit between groundings and during solving, but clingo cannot interrupt
 a grounding, and a hostile or simply large tableau can ground for longer than the limit. So the command
@@ -11,45 +12,51 @@ from __future__ import annotations
 
 import multiprocessing
 import traceback
+from typing import Callable, TypeVar
 
 from ..errors import BootmapError, InconsistentTableau, SolveTimeout
 from ..tableau import Tableau
 from .cogmap import CognitiveMap
 
 GRACE_S = 2.0  # beyond the limit: the resolver's own time-out usually lands first
+T = TypeVar("T")
 
 
 def resolve_within(resolver, tableau: Tableau, grace_s: float = GRACE_S) -> CognitiveMap:
     """``resolver.resolve(tableau)``, stopped at ``resolver.time_limit + grace_s`` seconds at the latest.
     Raises what the resolver raises; :class:`SolveTimeout` (stage ``"grounding"``) when it had to be
     stopped."""
-    limit = resolver.time_limit
+    return run_within(lambda: resolver.resolve(tableau), resolver.time_limit, grace_s)
+
+
+def run_within(work: Callable[[], T], limit: float | None, grace_s: float = GRACE_S) -> T:
+    """``work()`` (a resolution, an explanation) in a forked child, stopped ``grace_s`` after ``limit``."""
     if limit is None or "fork" not in multiprocessing.get_all_start_methods():
-        return resolver.resolve(tableau)
-    ctx = multiprocessing.get_context("fork")  # the resolver and tableau are inherited, not pickled
+        return work()
+    ctx = multiprocessing.get_context("fork")  # the work is inherited, not pickled
     receive, send = ctx.Pipe(duplex=False)
-    child = ctx.Process(target=_child, args=(send, resolver, tableau), name="bootmap-resolve", daemon=True)
+    child = ctx.Process(target=_child, args=(send, work), name="bootmap-solve", daemon=True)
     child.start()
     send.close()
     try:
         if not receive.poll(limit + grace_s):
             child.kill()
             raise SolveTimeout(f"time limit of {limit:g} s reached while grounding (clingo cannot interrupt a "
-                               f"grounding; stopped at {limit + grace_s:g} s); no map found",
+                               f"grounding; stopped at {limit + grace_s:g} s); no answer found",
                                time_limit_s=limit, stage="grounding")
         try:
             reply = receive.recv()
         except EOFError:
-            raise BootmapError(f"the resolver process died (exit code {child.exitcode})") from None
+            raise BootmapError(f"the solver process died (exit code {child.exitcode})") from None
     finally:
         child.join(5)
         receive.close()
     return _outcome(reply)
 
 
-def _child(send, resolver, tableau: Tableau) -> None:
+def _child(send, work) -> None:
     try:
-        send.send(("ok", resolver.resolve(tableau)))
+        send.send(("ok", work()))
     except SolveTimeout as e:
         send.send(("timeout", str(e), e.lower_bound, e.best_map, e.time_limit_s, e.stage))
     except InconsistentTableau as e:
@@ -62,7 +69,7 @@ def _child(send, resolver, tableau: Tableau) -> None:
         send.close()
 
 
-def _outcome(reply: tuple) -> CognitiveMap:
+def _outcome(reply: tuple):
     kind, *rest = reply
     if kind == "ok":
         return rest[0]
