@@ -22,8 +22,7 @@ from clingo import Symbol
 from .facts import add_facts
 from .theory import Theory
 from .trace import Instrumented, load_instrumented
-from .vocabulary import (CLASS_KEY, DSTATE_BOUND, FEATURE, FUTURE_DEPTH_CONST, PREV_IN_CLASS, SHOWN_BY_ALL,
-                         SLOTS)
+from .vocabulary import CLASS_KEY, DSTATE_BOUND, FEATURE, FUTURE_DEPTH_CONST, PREV_IN_CLASS, SHOWN_BY_ALL, SLOTS
 
 
 @dataclass(frozen=True)

@@ -43,8 +43,8 @@ from ..tableau import Tableau
 from .cogmap import CognitiveMap, SolveStats, Try, build_map
 from .diagnosis import diagnosed
 from .facts import action_angles, tableau_facts
-from .motion import action_types
 from .grounding import Classes, Deadline, Grounding, prepass
+from .motion import action_types
 from .theory import Theory, load_theory
 from .vocabulary import FUTURE_DEPTH, MINIMISE_DSTATES, ONE_PER_CLASS
 

@@ -32,8 +32,8 @@ def register(subparsers) -> None:
 def cmd_serve(args: argparse.Namespace) -> int:
     from pydantic import ValidationError
 
-    from ..mapping.theory import load_theory
     from ..errors import AxiomError
+    from ..mapping.theory import load_theory
     from .settings import Settings
 
     given = {"host": args.host, "port": args.port, "db": args.db, "data_dir": args.data_dir,

@@ -13,7 +13,6 @@ from pydantic import Field
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 
-
 def default_data_dir() -> Path:
     """``$XDG_DATA_HOME/bootmap``, else ``~/.local/share/bootmap``."""
     base = os.environ.get("XDG_DATA_HOME") or str(Path.home() / ".local" / "share")

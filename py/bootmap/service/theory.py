@@ -18,8 +18,8 @@ from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from pathlib import Path
 
-from ..mapping.theory import Theory, default_axioms_dir, load_theory
 from ..errors import AxiomError
+from ..mapping.theory import Theory, default_axioms_dir, load_theory
 
 
 @dataclass(frozen=True)

@@ -11,8 +11,7 @@ import sys
 from pathlib import Path
 
 from .. import arguments
-from ..errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_OK
-from ..errors import BootmapError, TableauError, WorldError
+from ..errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_OK, BootmapError, TableauError, WorldError
 
 
 def register(subparsers) -> None:
@@ -45,8 +44,8 @@ def register(subparsers) -> None:
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
-    from .world import load_world
     from .simulation import SimulationError, run
+    from .world import load_world
 
     try:
         world = load_world(args.world)
@@ -76,8 +75,8 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
 
 def cmd_render(args: argparse.Namespace) -> int:
-    from .render import render
     from ..tableau import load
+    from .render import render
     from .world import load_world
 
     try:

@@ -21,10 +21,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..tableau import Action, Travel as TravelAction, Turn as TurnAction
+from ..tableau import Action
+from ..tableau import Travel as TravelAction
+from ..tableau import Turn as TurnAction
 from .perception import Percept, Perception
 from .physics import Odometry
-
 
 NEAR_EDGE_WATCH = 1.0  # m: the end of the wall beside the robot is watched for this far ahead
 NEAR_EDGE_SLACK = 0.3  # m: a sighting of the edge further than this from where the side opened is stale

@@ -18,8 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 import pymunk
 
-from .world import World
 from .laser import Scene
+from .world import World
 
 ROBOT_CATEGORY = 0b10  # the laser's shape filter leaves the robot's own body out
 MASS = 20.0  # kg, about an RWI Magellan's

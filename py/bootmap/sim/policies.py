@@ -21,7 +21,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..tableau import Action, Travel as TravelAction, Turn as TurnAction
+from ..tableau import Action
+from ..tableau import Travel as TravelAction
+from ..tableau import Turn as TurnAction
 from .perception import Percept
 
 HEADINGS = np.array([[1, 0], [0, 1], [-1, 0], [0, -1]], dtype=float)  # quarter turns, counter-clockwise

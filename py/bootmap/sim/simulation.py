@@ -22,12 +22,12 @@ import numpy as np
 
 from ..errors import BootmapError
 from ..tableau import Action, Step, Tableau
-from .world import World, load_world
 from .control import ControlLaw, Limits, Travel, Turn
 from .laser import Laser, Scene
 from .perception import Perception
 from .physics import PhysicalRobot
 from .policies import Circuits, Decision, Explore, Observation
+from .world import World, load_world
 
 DSTATES_PER_CIRCUIT = 8  # a room has four corners, and a dstate before and after each turn
 MOVE_PROBABILITY = 0.2  # chance that a jittery clutter object has moved when the robot reaches a dstate

@@ -8,8 +8,8 @@ from typing import Annotated
 from fastapi import APIRouter, Query
 from fastapi.concurrency import run_in_threadpool
 
-from ...mapping.theory import select_levels
 from ...errors import AxiomError
+from ...mapping.theory import select_levels
 from ..deps import ServicesDep, TableauId
 from ..models import ExplanationOut
 from ..problems import JSONRoute, invalid, openapi_responses

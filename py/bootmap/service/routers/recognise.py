@@ -9,7 +9,7 @@ from fastapi.concurrency import run_in_threadpool
 
 from ...tableau import Tableau
 from ..deps import Services, ServicesDep, TableauId
-from ..models import Recognition, RecogniseIn
+from ..models import RecogniseIn, Recognition
 from ..problems import JSONRoute, Problem, invalid, openapi_responses
 
 router = APIRouter(prefix="/tableaux/{tableau_id}", tags=["recognition"], route_class=JSONRoute)
