@@ -17,7 +17,9 @@ different. Concretely:
 
 In every step each class gets only the candidate dstates ("slots", numbered by first appearance in
 core/partition.lp) that the bound leaves it, so the ground program stays small when the lower bound is
-tight.
+tight. Each step is one :class:`~.grounding.Grounding`, solved by the resolution's
+:class:`~.grounding.Deadline`; the tableau's actions reach the axioms as the robot's learned action
+types (:mod:`.motion`) unless a fixed quantum is asked for.
 
 Example
 -------
