@@ -274,3 +274,14 @@ def test_seeds_with_adjacent_dropouts_reproduce_the_paper(seed):
     # which the single-beam repair left: M chose 5 views and the map had 132 dstates or none.
     r = run_experiment("notched_rectangle", seed=seed)
     assert r["views"]["k"] == 4 and all(r["checks"].values()), r["checks"]
+
+
+def test_the_experiment_can_round_angles_to_a_fixed_quantum(tmp_path):
+    # --quantum reaches the resolver: rounded to 180 degrees, a right turn reads as no turn at all, and the
+    # room folds into two places; learned (the default), it is the paper's four.
+    from bootmap.cli import main
+
+    assert main(["experiment", "notched_rectangle", "--circuits", "15", "--seed", "1", "--quantum", "180",
+                 "-o", str(tmp_path)]) == 1
+    r = json.loads((tmp_path / "results.json").read_text())
+    assert (r["map"]["places"], r["map"]["paths"]) == (2, 2)

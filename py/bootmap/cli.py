@@ -110,14 +110,15 @@ def cmd_experiment(args: argparse.Namespace) -> int:
 
     if args.seeds:
         out = run_seeds(args.world, args.seeds, out_dir=args.output, circuits=args.circuits, steps=args.steps,
-                        k_max=args.k_max, time_limit=args.time_limit, progress=True)
+                        k_max=args.k_max, time_limit=args.time_limit, quantum_deg=args.quantum, progress=True)
         runs = out["runs"]
         for r in runs:
             _print_summary(r)
         print(f"summary over seeds: {args.output}/summary.md")
     else:
         runs = [run_experiment(args.world, circuits=args.circuits, steps=args.steps, seed=args.seed,
-                               out_dir=args.output, k_max=args.k_max, progress=True, time_limit=args.time_limit)]
+                               out_dir=args.output, k_max=args.k_max, progress=True, time_limit=args.time_limit,
+                               quantum_deg=args.quantum)]
         _print_summary(runs[0])
         print(f"report: {args.output}/report.md")
     # A run that did not show what the paper's experiment must show (no map, a map not proved minimal,
@@ -249,6 +250,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--k-max", type=arguments.count("views"), default=12, metavar="K",
                    help="largest number of views tried (default 12)")
     p.add_argument("--time-limit", type=arguments.seconds, default=60.0, metavar="S", help="seconds for the map (default 60)")
+    p.add_argument("--quantum", type=arguments.quantum, metavar="DEG",
+                   help="round the actions' angles to this many degrees instead of learning the robot's action "
+                        "types (the default)")
     p.add_argument("-o", "--output", default="out", metavar="DIR", help="output directory (default out/)")
     p.set_defaults(handler=cmd_experiment)
 

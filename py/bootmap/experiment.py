@@ -41,11 +41,13 @@ NN_TARGET = 0.85  # nearest neighbour after 90 images: the paper reports about 9
 
 def run_experiment(world: str | World, circuits: int | None = None, steps: int | None = None, seed: int = 0,
                    out_dir: str | Path | None = None, k_max: int = 12, progress: bool = False,
-                   time_limit: float = 60.0, levels: list[str] | None = None) -> dict:
+                   time_limit: float = 60.0, levels: list[str] | None = None,
+                   quantum_deg: float | None = None) -> dict:
     """Run the experiment on one world; see the module docstring.
 
     The run length defaults to the paper's: 50 circuits of a room (``circuits`` policy), 100 dstates of
-    an explored hallway (``explore`` policy). ``levels`` restricts the map's axioms (default: all).
+    an explored hallway (``explore`` policy). ``levels`` restricts the map's axioms (default: all);
+    ``quantum_deg`` rounds the actions' angles instead of learning the robot's action types.
     A map that is not proved minimal in ``time_limit`` seconds is reported as such (with the best map
     found, if any) rather than raised: the report says what was and was not achieved.
     """
@@ -73,7 +75,8 @@ def run_experiment(world: str | World, circuits: int | None = None, steps: int |
     views = view_labels(clusterer.labels_)
     lap("views_s")
     try:
-        cmap, map_note = Resolver(time_limit=time_limit, levels=levels).resolve(tableau.with_views(views)), None
+        resolver = Resolver(time_limit=time_limit, levels=levels, quantum_deg=quantum_deg)
+        cmap, map_note = resolver.resolve(tableau.with_views(views)), None
     except SolveTimeout as e:
         cmap, map_note = e.best_map, str(e)
     lap("map_s")
