@@ -287,6 +287,10 @@ class SolverPool:
             self.busy += 1
         try:
             reply = worker.run(job, job.time_limit_s + self.kill_grace_s)
+            if reply[0] == "memory":
+                # After clingo's bad_alloc the process's heap is full and fragmented: whether it can start
+                # its next solve's thread depends on where the allocation failed. A fresh solver can.
+                worker.stop()
         finally:
             with self._lock:
                 self.busy -= 1
