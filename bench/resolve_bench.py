@@ -22,7 +22,7 @@ import numpy as np
 
 from bootmap import examples
 from bootmap.errors import SolveTimeout
-from bootmap.mapping.facts import quantise
+from bootmap.mapping.motion import quantise
 from bootmap.metrics import dstate_accuracy
 from bootmap.mapping.resolver import Resolver
 from bootmap.tableau import Tableau, Turn

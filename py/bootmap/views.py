@@ -188,7 +188,6 @@ def repair_dropouts(images, max_range: float) -> np.ndarray:
 _LOOKALIKES = 3
 _SURFACE_M = 0.25  # how far a filled run may leave the line between the readings either side of it
 _WITHIN = 0.9      # a filled run reads at most this share of the laser's maximum range
-_BLOCK_ROWS = 512  # rows of the pairwise distance matrix computed at once
 
 
 def _fill_from_lookalikes(x: np.ndarray, at_max: np.ndarray, max_range: float) -> np.ndarray:
@@ -197,27 +196,33 @@ def _fill_from_lookalikes(x: np.ndarray, at_max: np.ndarray, max_range: float) -
     rows = np.flatnonzero(at_max.any(axis=1))
     if len(rows) == 0 or len(x) <= _LOOKALIKES:
         return x
+    from sklearn.neighbors import NearestNeighbors
+
+    # Plain distances (clipped readings): a look-alike that is open where this image reads the maximum
+    # range pays nothing there, so the visits of one place, open in the same directions, come first.
+    _, found = NearestNeighbors(n_neighbors=_LOOKALIKES + 1).fit(x).kneighbors(x[rows])
     out = x.copy()
-    for start in range(0, len(rows), _BLOCK_ROWS):
-        block = rows[start:start + _BLOCK_ROWS]
-        # Plain distances (clipped readings): a look-alike that is open where this image reads the maximum
-        # range pays nothing there, so the visits of one place, open in the same directions, come first.
-        d = _squared_distances(x[block], x)
-        d[np.arange(len(block)), block] = np.inf  # not its own look-alike
-        nearest = np.argsort(d, axis=1)[:, :_LOOKALIKES]
-        for i, near in zip(block, nearest):
-            sees = ~at_max[near]                     # (3, n_beams)
-            seen_by_all = sees.all(axis=0)
-            for a, b in _holes(at_max[i]):
-                if seen_by_all[a:b].all():
-                    fill = np.median(x[near, a:b], axis=0)
-                    # A drop-out on a surface: what the look-alikes read there continues the surface the
-                    # image reads on either side (an opening would not).
-                    across = np.interp(np.arange(a, b), [a - 1, b], [x[i, a - 1], x[i, b]])
-                    # ... and lies well within range (a wall at the range's edge flickers in and out of
-                    # it from visit to visit: that is the laser's reach, not a drop-out).
-                    if np.abs(fill - across).max() <= _SURFACE_M and fill.max() <= _WITHIN * max_range:
-                        out[i, a:b] = fill
+    for i, candidates in zip(rows, found):
+        near = [j for j in candidates if j != i][:_LOOKALIKES]  # not its own look-alike
+        out[i] = _filled(x[i], at_max[i], x[near], at_max[near], max_range)
+    return out
+
+
+def _filled(image: np.ndarray, at_max: np.ndarray, looks: np.ndarray, looks_at_max: np.ndarray,
+            max_range: float) -> np.ndarray:
+    """One image with its holes filled from its look-alikes, where they are drop-outs."""
+    out = image.copy()
+    seen_by_all = ~looks_at_max.any(axis=0)
+    for a, b in _holes(at_max):
+        if not seen_by_all[a:b].all():
+            continue  # a look-alike is open there too: an open direction
+        fill = np.median(looks[:, a:b], axis=0)
+        # A drop-out on a surface: what the look-alikes read there continues the surface the image reads
+        # on either side (an opening would not), and lies well within range (a wall at the range's edge
+        # flickers in and out of it from visit to visit: that is the laser's reach, not a drop-out).
+        across = np.interp(np.arange(a, b), [a - 1, b], [image[a - 1], image[b]])
+        if np.abs(fill - across).max() <= _SURFACE_M and fill.max() <= _WITHIN * max_range:
+            out[a:b] = fill
     return out
 
 
@@ -227,10 +232,6 @@ def _holes(at_max: np.ndarray) -> list[tuple[int, int]]:
     edges = np.diff(np.concatenate([[0], at_max.astype(int), [0]]))
     starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
     return [(a, b) for a, b in zip(starts, ends) if a > 0 and b < len(at_max)]
-
-
-def _squared_distances(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return np.maximum((a * a).sum(axis=1)[:, None] - 2.0 * a @ b.T + (b * b).sum(axis=1)[None, :], 0.0)
 
 
 class ViewClusterer:

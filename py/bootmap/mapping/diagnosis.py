@@ -44,7 +44,7 @@ def failing_levels(resolver: "Resolver", tableau: Tableau, deadline: Deadline) -
 def diagnosed(e: InconsistentTableau, resolver: "Resolver", tableau: Tableau,
               deadline: Deadline) -> InconsistentTableau:
     """``e`` with the failing levels found, in its fields and its message."""
-    if len(resolver.theory.levels) == 1:
+    if len(resolver.theory.levels) == 1:  # the causal level alone just failed: no need to solve it again
         failing, complete = list(resolver.theory.levels), True
     else:
         failing, complete = failing_levels(resolver, tableau, deadline)

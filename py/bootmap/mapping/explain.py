@@ -41,7 +41,7 @@ from clingo import Symbol
 from ..errors import ExplainError, SolveTimeout
 from ..tableau import Tableau
 from .cogmap import CognitiveMap, action_text
-from .facts import action_angles, action_symbol, excerpt_facts, tableau_facts
+from .facts import action_symbol, excerpt_facts, read_actions, tableau_facts
 from .grounding import Deadline, Grounding, prepass
 from .proof import Failure, Names, ProofNode, merged, node, rule_dict
 from .resolver import Resolver
@@ -180,7 +180,7 @@ class _Question:
         self.explainer, self.tableau, self.deadline = explainer, tableau, deadline
         self.theory = explainer.resolver.theory
         self.depth = explainer.resolver.future_depth
-        self.angles = action_angles(tableau, explainer.quantum_deg)
+        self.angles, _ = read_actions(tableau, explainer.quantum_deg)
         self.facts = tableau_facts(tableau, angles=self.angles)
 
     # ---------------------------------------------------------------------------------------------

@@ -18,30 +18,22 @@ import clingo
 from clingo import Function, Number, String, Symbol
 
 from ..tableau import Action, Tableau, Travel, Turn
-from .motion import MotionPrimitives, length_types, measured_angle
-from .vocabulary import LENGTH, QUANTUM_DEG, RESUME, TRAVEL, TURN, VIEW, action_term
+from .motion import ActionType, MotionPrimitives, action_types, length_types, measured_angle, quantise
+from .vocabulary import LENGTH, RESUME, TRAVEL, TURN, VIEW, action_term
 
 
-def quantise(angle_deg: float, quantum_deg: float = QUANTUM_DEG) -> int:
-    """Round an angle to the quantum and wrap it into (-180, 180]; -180 becomes 180 (turn-around).
-    Noise beyond half a quantum rounds to the neighbouring angle (-98 is not a right turn at 15 degrees).
-
-    >>> quantise(-97), quantise(-98), quantise(-180), quantise(7.4), quantise(7.6)
-    (-90, -105, 180, 0, 15)
-    """
-    q = round(angle_deg / quantum_deg) * quantum_deg
-    a = int(round(((q + 180.0) % 360.0) - 180.0))
-    return 180 if a == -180 else a
-
-
-def action_angles(tableau: Tableau, quantum_deg: float | None = None) -> list[int]:
+def read_actions(tableau: Tableau, quantum_deg: float | None = None) -> tuple[list[int], list[ActionType]]:
     """The angle the axioms see for each action of the tableau (a turn's angle, a travel's net heading
-    change): the angle of its learned type (:mod:`.motion`), or, given a quantum, the measurement rounded
-    to it."""
+    change), and the action types: learned (:mod:`.motion`), or, given a quantum, the measurements
+    rounded to it."""
     actions = tableau.actions
     if quantum_deg is None:
-        return MotionPrimitives().fit(actions).angles_ if actions else []
-    return [quantise(measured_angle(a), quantum_deg) for a in actions]
+        if not actions:
+            return [], []
+        learned = MotionPrimitives().fit(actions)
+        return learned.angles_, learned.types_
+    angles = [quantise(measured_angle(a), quantum_deg) for a in actions]
+    return angles, action_types(actions, angles)
 
 
 def action_symbol(action: Action | None, angle: int) -> Symbol | None:
@@ -54,10 +46,10 @@ def action_symbol(action: Action | None, angle: int) -> Symbol | None:
 def tableau_facts(tableau: Tableau, quantum_deg: float | None = None,
                   angles: Sequence[int] | None = None) -> list[Symbol]:
     """The tableau as ground facts (symbols). Requires every step to have a view label. ``angles`` are
-    the actions' angles when already known (:func:`action_angles`)."""
+    the actions' angles when already known (:func:`read_actions`)."""
     tableau.require_views()
     if angles is None:
-        angles = action_angles(tableau, quantum_deg)
+        angles, _ = read_actions(tableau, quantum_deg)
     # Views and angles repeat: build each symbol once (every constructor is a call into clingo).
     strings: dict[str, Symbol] = {}
     numbers: dict[int, Symbol] = {}

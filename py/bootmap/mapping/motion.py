@@ -112,7 +112,7 @@ class MotionPrimitives:
                     if n >= max(3, MIN_SHARE * total) or (n >= 2 and sd < EXACT_DEG) or pooled < EXACT_DEG]
             common += keep or [(m, pooled) for m, _, _ in mine]
         self.grid_deg_ = _coarsest_grid(common, self.grids)
-        snapped = [_snap(m, self.grid_deg_) for m in means]
+        snapped = [quantise(m, self.grid_deg_) for m in means]
         self.angles_ = [0] * len(actions)
         for (_, idx), angle in zip(clusters, snapped):
             for i in idx:
@@ -156,10 +156,8 @@ def _cluster(values: np.ndarray) -> list[np.ndarray]:
     start = (int(np.argmax(gaps)) + 1) % len(v)
     order = np.concatenate([order[start:], order[:start]])
     v = np.concatenate([v[start:], v[:start] + 360.0])
-    # Readings that repeat exactly (a hand-written tableau, a simulator without odometry noise) are as many
-    # types as values: noisy readings never repeat to a millionth of a degree.
-    exact = len(np.unique(np.round(v, 6))) <= len(v) / 2
-    splits = np.flatnonzero(np.diff(v) > (EXACT_DEG if exact else BIAS_DEG)) + 1
+    # Readings that repeat exactly are as many types as values.
+    splits = np.flatnonzero(np.diff(v) > (EXACT_DEG if _repeats_exactly(v) else BIAS_DEG)) + 1
     parts = np.split(np.arange(len(v)), splits)
     # A gap that noise opened inside one type: neighbours less than twice the bias apart, one of them
     # spread over more than a quarter of the distance, are one type (exact angles 15 apart stay two).
@@ -202,15 +200,27 @@ def _coarsest_grid(types: Sequence[tuple[float, float]], grids: Sequence[int]) -
     """The coarsest grid near every type: its mean within three spreads (sd, the noise of its kind), or
     :data:`BIAS_DEG` for tight readings, of a grid angle, and less than a third of a step away."""
     for q in grids:
-        if all(abs(_wrap(np.array([m - _snap(m, q)]))[0]) < min(q / 3, max(3 * sd, BIAS_DEG)) for m, sd in types):
+        if all(abs(_wrap(np.array([m - quantise(m, q)]))[0]) < min(q / 3, max(3 * sd, BIAS_DEG)) for m, sd in types):
             return q
     return grids[-1]
 
 
-def _snap(angle: float, q: int) -> int:
-    a = int(round(angle / q) * q)
-    a = (a + 180) % 360 - 180
+def quantise(angle_deg: float, quantum_deg: float) -> int:
+    """Round an angle to the quantum and wrap it into (-180, 180]; -180 becomes 180 (turn-around).
+    Noise beyond half a quantum rounds to the neighbouring angle (-98 is not a right turn at 15 degrees).
+
+    >>> quantise(-97, 15), quantise(-98, 15), quantise(-180, 15), quantise(7.4, 15), quantise(7.6, 15)
+    (-90, -105, 180, 0, 15)
+    """
+    q = round(angle_deg / quantum_deg) * quantum_deg
+    a = int(round(((q + 180.0) % 360.0) - 180.0))
     return 180 if a == -180 else a
+
+
+def _repeats_exactly(values: np.ndarray) -> bool:
+    """Readings that repeat exactly (a hand-written tableau, a simulator without odometry noise): noisy
+    readings never repeat to a millionth."""
+    return len(np.unique(np.round(values, 6))) <= len(values) / 2
 
 
 #: Two travels whose distances differ by more than this factor are of different lengths (odometry reads a
@@ -233,8 +243,7 @@ def length_types(distances: Sequence[float]) -> list[int]:
         return []
     order = np.argsort(d)
     v = np.log(np.maximum(d[order], 1e-3))
-    exact = len(np.unique(np.round(d, 6))) <= len(d) / 2
-    splits = np.flatnonzero(np.diff(v) > (1e-6 if exact else np.log(LENGTH_RATIO))) + 1
+    splits = np.flatnonzero(np.diff(v) > (1e-6 if _repeats_exactly(d) else np.log(LENGTH_RATIO))) + 1
     out = np.empty(len(d), dtype=int)
     for part in np.split(order, splits):
         out[part] = int(round(float(d[part].mean()) * 10))

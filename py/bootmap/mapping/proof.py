@@ -19,7 +19,7 @@ from clingo import Symbol
 
 from .cogmap import CognitiveMap
 from .trace import Derivations, Instrumented, RuleRef
-from .vocabulary import IS, PLACE_OF, QUIET, predicate
+from .vocabulary import IS, PLACE_OF, QUIET, action_word, predicate
 
 
 @dataclass
@@ -122,7 +122,7 @@ class Names:
         if term.type == clingo.SymbolType.String:
             return repr(term.string)
         if term.type == clingo.SymbolType.Function and term.name == "turn" and len(term.arguments) == 1:
-            return f"turn {term.arguments[0]}"
+            return action_word(term)
         return str(term)
 
     def place(self, term: Symbol) -> str:

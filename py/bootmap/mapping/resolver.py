@@ -44,9 +44,8 @@ from ..errors import InconsistentTableau, SolveTimeout
 from ..tableau import Tableau
 from .cogmap import CognitiveMap, SolveStats, Try, build_map
 from .diagnosis import diagnosed
-from .facts import action_angles, tableau_facts
+from .facts import read_actions, tableau_facts
 from .grounding import Classes, Deadline, Grounding, prepass
-from .motion import action_types
 from .theory import Theory, load_theory
 from .vocabulary import FUTURE_DEPTH, MINIMISE_DSTATES, ONE_PER_CLASS
 
@@ -129,8 +128,8 @@ class _Search:
     def __init__(self, resolver: Resolver, tableau: Tableau, deadline: Deadline):
         self.resolver, self.tableau, self.deadline = resolver, tableau, deadline
         self.start = time.perf_counter()
-        self.angles = action_angles(tableau, resolver.quantum_deg)
-        self.facts = tableau_facts(tableau, angles=self.angles)
+        angles, self.action_types = read_actions(tableau, resolver.quantum_deg)
+        self.facts = tableau_facts(tableau, angles=angles)
         self.depth = 0  # futures only matter once one dstate per class has failed
         self.classes: Classes | None = None  # known after the first try
         self.proved = 1  # dstates proved necessary so far
@@ -202,10 +201,7 @@ class _Search:
     def _map(self, outcome: "_Outcome", minimal: bool = True) -> CognitiveMap:
         models = outcome.models if minimal else outcome.models[:1]
         return build_map(self.tableau, models, minimal and outcome.exhausted, self.resolver.theory.levels,
-                         self._stats(), minimal=minimal, action_types=self._types())
-
-    def _types(self):
-        return action_types(self.tableau.actions, self.angles)
+                         self._stats(), minimal=minimal, action_types=self.action_types)
 
     def _stats(self) -> SolveStats:
         """The figures so far, as a snapshot: each map keeps its own."""
@@ -248,7 +244,7 @@ class _Search:
     def _timed_out(self, what: str, improving: list) -> SolveTimeout:
         if improving:  # the optimiser's last (smallest) model so far
             self.best = build_map(self.tableau, improving[-1:], False, self.resolver.theory.levels,
-                                  self._stats(), minimal=False, action_types=self._types())
+                                  self._stats(), minimal=False, action_types=self.action_types)
         found = (f"best map so far: {self.best.n_dstates} dstates, not proved minimal" if self.best
                  else "no map found yet")
         limit = self.deadline.limit_s

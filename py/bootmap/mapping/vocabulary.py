@@ -28,7 +28,7 @@ import clingo
 from clingo import Function, Number, String, Symbol, ast
 
 #: A fixed quantum in degrees (`--quantum 15`), the independent checker's rounding (bootmap.testing.check); the
-#: resolver learns the robot's action types instead unless it is given one (see motion.py, facts.quantise).
+#: resolver learns the robot's action types instead unless it is given one (see motion.py, motion.quantise).
 QUANTUM_DEG = 15.0
 #: How many actions ahead the causal level compares what time points saw (``#const future_depth``).
 FUTURE_DEPTH = 8

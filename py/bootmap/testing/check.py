@@ -23,7 +23,7 @@ from collections import defaultdict
 from dataclasses import dataclass, field
 from typing import Hashable, Iterable, Sequence
 
-from ..mapping.facts import quantise
+from ..mapping.motion import quantise
 from ..mapping.vocabulary import QUANTUM_DEG
 from ..tableau import Tableau, Travel, Turn
 
@@ -137,10 +137,13 @@ def action_name(a: object) -> str:
 
 def _feature_clash(exp: Experience, values: list, what: str, rule: str) -> list[str]:
     """one_value_per_feature: the first two different values a dstate shows, with their times. A value
-    is a (feature, value) pair; only values of one feature clash."""
+    is a (feature, value) pair, or None where a time point does not show it; only values of one feature
+    clash."""
     first: dict[tuple, dict] = defaultdict(dict)
-    for t, d, (feature, v) in zip(exp.times, exp.dstate_of, values):
-        first[(d, feature)].setdefault(v, t)
+    for t, d, value in zip(exp.times, exp.dstate_of, values):
+        if value is not None:  # a time point that does not show the feature
+            feature, v = value
+            first[(d, feature)].setdefault(v, t)
     out = []
     for d, feature in sorted(first, key=lambda k: (_natural(k[0]), str(k[1]))):
         shown = first[(d, feature)]
@@ -197,9 +200,8 @@ def _one_heading(exp: Experience) -> list[str]:
 def _one_length(exp: Experience) -> list[str]:
     """length_is_feature + one_value_per_feature: travelling on from a dstate covers one distance (the
     checker compares lengths to the decimetre; the resolver groups noisy ones into types first)."""
-    kept = [i for i, n in enumerate(exp.lengths) if n is not None]
-    sub = Experience([exp.times[i] for i in kept], [exp.dstate_of[i] for i in kept], [], [], [], [])
-    return _feature_clash(sub, [("length", exp.lengths[i]) for i in kept], "length (dm)", "length_is_feature")
+    lengths = [None if n is None else ("length", n) for n in exp.lengths]
+    return _feature_clash(exp, lengths, "length (dm)", "length_is_feature")
 
 
 def _deterministic(exp: Experience) -> list[str]:
