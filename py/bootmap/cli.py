@@ -34,7 +34,7 @@ def cmd_map(args: argparse.Namespace) -> int:
 
     tableau = _with_views(load(args.tableau))
     resolver = Resolver(axioms=args.axioms, levels=args.levels, quantum_deg=args.quantum,
-                        time_limit=args.time_limit, max_models=args.max_models)
+                        time_limit=args.time_limit, max_models=args.max_models, misreads=args.misreads)
     try:
         cmap = resolve_within(resolver, tableau)  # stopped for sure a little after --time-limit
     except SolveTimeout as e:
@@ -50,15 +50,11 @@ def _with_views(tableau):
     """A tableau of images only (e.g. from `bootmap simulate`) gets its views by k-means, k chosen by M."""
     if tableau.labelled:
         return tableau  # nothing to cluster: spare the scikit-learn import (about a second)
-    from .views import rare_views, tableau_with_views
+    from .views import tableau_with_views
 
     tableau, k = tableau_with_views(tableau)
     if k is not None:
         print(f"bootmap: clustered {len(tableau)} images into {k} views (k chosen by M)", file=sys.stderr)
-        for view, times in rare_views(tableau.views).items():
-            print(f"bootmap: view {view} has only {len(times)} image(s) of {len(tableau)} "
-                  f"({', '.join(f't{t}' for t in times)}): likely misread images (a drop-out, a passer-by), "
-                  "which the map must explain as a dstate of their own", file=sys.stderr)
     return tableau
 
 
@@ -93,7 +89,10 @@ def cmd_why(args: argparse.Namespace) -> int:
     tableau = _with_views(load(args.tableau))
     explainer = Explainer(axioms=args.axioms, levels=args.levels, quantum_deg=args.quantum,
                           time_limit=args.time_limit)
-    explanation = run_within(lambda: explainer.explain(tableau, args.a, args.b), args.time_limit)
+    if args.b is None:  # one time point: is its view read as seen, or as a misread?
+        explanation = run_within(lambda: explainer.explain_step(tableau, args.a), args.time_limit)
+    else:
+        explanation = run_within(lambda: explainer.explain(tableau, args.a, args.b), args.time_limit)
     print(json.dumps(explanation.to_dict(), indent=1) if args.format == "json" else explanation.to_text())
     return EXIT_OK
 
@@ -203,6 +202,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--time-limit", type=arguments.seconds, default=60.0, metavar="S", help="seconds for the search (default 60); it ends within 2 s more whatever the tableau")
     p.add_argument("--max-models", type=arguments.count("maps"), default=10, metavar="N",
                    help="minimal maps to enumerate before calling the count capped (default 10)")
+    p.add_argument("--no-misreads", dest="misreads", action="store_false",
+                   help="read every view as seen; by default a few suspect views may be taken as misclustered "
+                        "images when that explains the experience with far fewer dstates (listed as "
+                        "suspect_steps)")
     _add_theory_options(p)
     p.set_defaults(handler=cmd_map)
 
@@ -221,7 +224,8 @@ def build_parser() -> argparse.ArgumentParser:
                                    "fails. If they are the same: why (minimality) and what experience would test it.")
     p.add_argument("tableau", help="tableau JSON file")
     p.add_argument("a", help="a time point (t0 or 0) or a dstate name (S0)")
-    p.add_argument("b", help="a time point or a dstate name")
+    p.add_argument("b", nargs="?", help="a time point or a dstate name; without it, say whether the view seen "
+                                        "at time point a is read as seen or as a misread, and why")
     p.add_argument("--format", choices=["text", "json"], default="text")
     p.add_argument("--time-limit", type=arguments.seconds, default=60.0, metavar="S", help="seconds for the map (default 60)")
     _add_theory_options(p)

@@ -20,7 +20,7 @@ from sklearn.utils import check_random_state
 
 from .images import as_images
 
-__all__ = ["ViewClusterer", "internal_measure", "rare_views", "repair_dropouts", "uncertainty_coefficient",
+__all__ = ["ViewClusterer", "internal_measure", "repair_dropouts", "uncertainty_coefficient",
            "view_labels", "view_table"]
 
 
@@ -459,22 +459,6 @@ def tableau_with_views(tableau):
     clusterer = ViewClusterer(random_state=0, max_range=_range_max(tableau.meta))
     clusterer.fit(np.array([s.image for s in tableau.steps]))
     return tableau.with_views(view_labels(clusterer.labels_)), clusterer.k_
-
-
-def rare_views(views: Sequence[Hashable], at_most: int = 2, typical: int = 5) -> dict:
-    """Views with at most ``at_most`` images in a tableau whose views have ``typical`` or more on average:
-    view -> its time points. Such a view is as likely a misread image (a drop-out left unrepaired, a
-    passer-by) as a place, and the exact map must explain it as a dstate of its own.
-
-    >>> rare_views(["V0", "V1"] * 10 + ["V2"])
-    {'V2': [20]}
-    """
-    at: dict = {}
-    for t, v in enumerate(views):
-        at.setdefault(v, []).append(t)
-    if len(views) < typical * len(at):
-        return {}
-    return {v: ts for v, ts in at.items() if len(ts) <= at_most}
 
 
 def _range_max(meta: dict) -> float | None:

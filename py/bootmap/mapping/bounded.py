@@ -49,6 +49,9 @@ def run_within(work: Callable[[], T], limit: float | None, grace_s: float = GRAC
         except EOFError:
             raise BootmapError(f"the solver process died (exit code {child.exitcode})") from None
     finally:
+        # Once it has answered, the child has nothing left to do but free its groundings, which can take
+        # seconds after a large one: it is stopped rather than waited for.
+        child.kill()
         child.join(5)
         receive.close()
     return _outcome(reply)

@@ -13,7 +13,7 @@ from clingo import Symbol
 
 from ..tableau import Tableau, Turn
 from .motion import ActionType
-from .vocabulary import AHEAD, HEADING_OF, IS, LEFT, PATH_OF, PLACE_OF, RIGHT, VIEW_OF, Atoms
+from .vocabulary import AHEAD, HEADING_OF, IS, LEFT, MISREAD, PATH_OF, PLACE_OF, RIGHT, VIEW_OF, Atoms
 
 
 @dataclass(frozen=True)
@@ -32,13 +32,15 @@ class SolveStats:
 
     classes: int = 0
     lower_bound: int = 0
+    as_seen_lower_bound: int | None = None  # dstates proved necessary reading every view as seen (misreads)
     ground_s: float = 0.0
     solve_s: float = 0.0
     total_s: float = 0.0
     bounds: tuple[Try, ...] = ()
 
     def to_dict(self) -> dict:
-        return {"classes": self.classes, "lower_bound": self.lower_bound, "ground_s": self.ground_s,
+        return {"classes": self.classes, "lower_bound": self.lower_bound,
+                "as_seen_lower_bound": self.as_seen_lower_bound, "ground_s": self.ground_s,
                 "solve_s": self.solve_s, "total_s": self.total_s,
                 "bounds": [{"dstates": b.dstates, "result": b.result} for b in self.bounds]}
 
@@ -68,6 +70,9 @@ class CognitiveMap:
         The dstate of each time point in the other minimal maps.
     action_types : list of ActionType
         The robot's action types the axioms saw (learned, or the measurements rounded to a quantum).
+    suspect_steps : list of dict
+        The time points whose views the map takes as misreads: ``t``, the view ``observed``, the view
+        its dstate shows (``expected``) and what calling it a misread cost (a dstate costs 4).
     stats : SolveStats
         Solver figures: classes, the bound proved, ground_s, solve_s, total_s, the groundings tried.
     """
@@ -92,6 +97,7 @@ class CognitiveMap:
     stats: SolveStats = field(default_factory=SolveStats)
     minimal: bool = True
     action_types: list[ActionType] = field(default_factory=list)
+    suspect_steps: list[dict] = field(default_factory=list)
 
     @property
     def n_dstates(self) -> int:
@@ -127,6 +133,7 @@ class CognitiveMap:
             "left_of": [list(x) for x in self.left_of],
             "alternatives": self.alternatives,
             "action_types": [a.to_dict() for a in self.action_types],
+            "suspect_steps": self.suspect_steps,
             "stats": self.stats.to_dict(),
         }
 
@@ -147,6 +154,9 @@ class CognitiveMap:
         lines.append("")
         if self.action_types:
             lines.append("action types: " + "; ".join(str(a) for a in self.action_types))
+        if self.suspect_steps:
+            lines.append("views taken as misreads: " + "; ".join(
+                f"t{s['t']} saw {s['observed']}, its dstate shows {s['expected']}" for s in self.suspect_steps))
         for pa, places in self.paths.items():
             lines.append(f"{pa}: {' -> '.join(places)} (pos)")
         for p, pa in self.right_of:
@@ -176,9 +186,11 @@ def _number_dstates(is_atoms, n: int) -> tuple[dict[Symbol, int], list[int]]:
 
 
 def build_map(tableau: Tableau, models: list[list[Symbol]], exhausted: bool, levels, stats: SolveStats,
-              minimal: bool = True, action_types: list[ActionType] | None = None) -> CognitiveMap:
+              minimal: bool = True, action_types: list[ActionType] | None = None,
+              misread_costs: dict[int, int] | None = None) -> CognitiveMap:
     """The map of the first model, named as the paper names it; the other models are alternatives.
-    ``exhausted``: clingo enumerated every minimal model (so one model means a unique map)."""
+    ``exhausted``: clingo enumerated every minimal model (so one model means a unique map);
+    ``misread_costs``: what taking each suspect view as a misread cost."""
     n = len(tableau)
     atoms = Atoms(models[0])
     ids, seq = _number_dstates(atoms[IS], n)
@@ -228,8 +240,11 @@ def build_map(tableau: Tableau, models: list[list[Symbol]], exhausted: bool, lev
     for m in models[1:]:
         _, alt = _number_dstates(IS.args(m), n)
         alternatives.append([f"S{i}" for i in alt])
+    misread = sorted(t.number for (t,) in atoms[MISREAD])
+    suspect_steps = [{"t": t, "observed": tableau.steps[t].view, "expected": views[S[seq[t]]],
+                      "cost": (misread_costs or {}).get(t)} for t in misread]
     return CognitiveMap(
-        steps=steps, dstate_of=[S[i] for i in seq], views=dict(sorted(views.items(), key=_natural1)),
+        suspect_steps=suspect_steps, steps=steps, dstate_of=[S[i] for i in seq], views=dict(sorted(views.items(), key=_natural1)),
         headings=headings, place_of=place_of, path_of=path_of, places=places, paths=paths, on=on,
         order=order, right_of=sorted(sides["right"], key=_natural), left_of=sorted(sides["left"], key=_natural),
         n_models=len(models) if minimal else 0, unique=minimal and len(models) == 1 and exhausted,

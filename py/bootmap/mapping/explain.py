@@ -43,6 +43,7 @@ from ..tableau import Tableau
 from .cogmap import CognitiveMap, action_text
 from .facts import action_symbol, excerpt_facts, read_actions, tableau_facts
 from .grounding import Deadline, Grounding, prepass
+from .misreads import find_suspects
 from .proof import Failure, Names, ProofNode, merged, node, rule_dict
 from .resolver import Resolver
 from .trace import Derivations, Instrumented, RuleRef
@@ -108,6 +109,61 @@ class Explanation:
 
 
 @dataclass(frozen=True)
+class StepExplanation:
+    """Why the map reads (or does not read) the view seen at one time point as a misread.
+
+    Attributes
+    ----------
+    t : int
+        The time point.
+    view, dstate, dstate_view : str
+        The view seen at t, the dstate the map puts t at, and that dstate's view.
+    misread : bool
+        The map takes the view seen at t as a misread.
+    cost : int or None
+        What that cost (a dstate costs 4), when it is one.
+    reason : str or None
+        Why the view was suspect before the search, if it was.
+    evidence : tuple of str
+        What the experience around t showed, side by side.
+    dstates, as_seen_lower_bound : int
+        Dstates of the map, and dstates proved necessary reading every view as seen.
+    """
+
+    t: int
+    view: str
+    dstate: str
+    dstate_view: str
+    misread: bool
+    cost: int | None
+    reason: str | None
+    evidence: tuple[str, ...]
+    dstates: int
+    as_seen_lower_bound: int | None
+
+    def to_dict(self) -> dict:
+        return {"t": self.t, "view": self.view, "dstate": self.dstate, "dstate_view": self.dstate_view,
+                "misread": self.misread, "cost": self.cost, "reason": self.reason, "evidence": list(self.evidence),
+                "dstates": self.dstates, "as_seen_lower_bound": self.as_seen_lower_bound}
+
+    def to_text(self) -> str:
+        if self.misread:
+            out = [f"t{self.t} saw view {self.view}, but the map puts it at {self.dstate}, whose view is "
+                   f"{self.dstate_view}: it takes what was seen as a misread (cost {self.cost}; a dstate costs 4)."]
+        else:
+            out = [f"t{self.t} saw view {self.view}, and the map reads it as seen: {self.dstate} shows "
+                   f"{self.dstate_view}."]
+        if self.reason:
+            out += [f"The view was suspect: {self.reason}."] + [f"  {e}" for e in self.evidence]
+        if self.misread and self.as_seen_lower_bound:
+            out.append(f"Reading every view as seen needs at least {self.as_seen_lower_bound} dstates (proved); "
+                       f"with its misreads the map has {self.dstates}.")
+        elif self.reason:
+            out.append("Reading it as a misread would not save dstates enough to pay for it.")
+        return "\n".join(out)
+
+
+@dataclass(frozen=True)
 class Explainer:
     """Explain pairs of time points of a tableau. Its settings are fixed when it is made; each question
     gets its own deadline.
@@ -159,6 +215,19 @@ class Explainer:
                                   "apart. More experience is needed to decide."}
         return Explanation(a, b, names, levels=list(self.resolver.theory.levels),
                            total_s=round(time.perf_counter() - start, 4), **answer)
+
+    def explain_step(self, tableau: Tableau, t: int | str, deadline: Deadline | None = None) -> StepExplanation:
+        """Why the map reads the view seen at ``t`` as seen, or as a misread."""
+        cmap = self.resolver.resolve(tableau, deadline or Deadline.after(self.time_limit))
+        t, _ = _time_points(cmap, t, t)
+        angles, _ = read_actions(tableau, self.quantum_deg)
+        actions = [action_symbol(s.action, a) for s, a in zip(tableau.steps, angles)]
+        suspect = {s.t: s for s in find_suspects(tableau.views, actions)}.get(t)
+        taken = {s["t"]: s for s in cmap.suspect_steps}.get(t)
+        d = cmap.dstate_of[t]
+        return StepExplanation(t, tableau.steps[t].view, d, cmap.views[d], taken is not None,
+                               taken and taken["cost"], suspect and suspect.reason,
+                               suspect.evidence if suspect else (), cmap.n_dstates, cmap.stats.as_seen_lower_bound)
 
     def can_be_same(self, tableau: Tableau, a: int, b: int, keep: Sequence[int] | None = None,
                     deadline: Deadline | None = None) -> bool:

@@ -14,7 +14,7 @@ from __future__ import annotations
 import time
 from collections import defaultdict
 from dataclasses import dataclass
-from typing import Callable, Sequence
+from typing import Callable, Collection, Sequence
 
 import clingo
 from clingo import Symbol
@@ -42,6 +42,13 @@ class Deadline:
 
     def passed(self) -> bool:
         return self.at is not None and time.perf_counter() >= self.at
+
+    def share(self, fraction: float, at_most_s: float) -> "Deadline":
+        """A deadline for part of the work: ``fraction`` of the time left, at most ``at_most_s`` seconds
+        (the limit messages name stays the caller's)."""
+        left = self.remaining()
+        span = at_most_s if left is None else min(at_most_s, fraction * left)
+        return Deadline(time.perf_counter() + span, self.limit_s)
 
 
 class Grounding:
@@ -116,9 +123,10 @@ class Grounding:
             last[c] = t
         return Classes(keys, list(times), of_time, sizes, prev, [1] * len(sizes))
 
-    def lower_bounds(self, classes: "Classes") -> list[int]:
+    def lower_bounds(self, classes: "Classes", leave_out: Collection[int] = ()) -> list[int]:
         """Per class, a set of time points that pairwise disagree on a feature only some of them show
-        (e.g. the view seen after the same actions): no two of them can share a dstate."""
+        (e.g. the view seen after the same actions): no two of them can share a dstate. Time points
+        ``left_out`` (suspect views, which may be at a dstate of another class) are not counted."""
         grouping = {args[0] for args in SHOWN_BY_ALL.facts_in(self.control)}
         ids: dict[Symbol, int] = {}  # small ints: comparing clingo symbols costs a C call each
         partial: dict[int, dict[int, set[int]]] = {t: defaultdict(set) for t in classes.times}
@@ -127,7 +135,8 @@ class Grounding:
                 partial[t.number][ids.setdefault(key, len(ids))].add(ids.setdefault(value, len(ids)))
         members: list[list[int]] = [[] for _ in classes.sizes]
         for t, c in zip(classes.times, classes.of_time):
-            members[c].append(t)
+            if t not in leave_out:
+                members[c].append(t)
         return [_apart_clique(ts, partial) for ts in members]
 
 
@@ -187,8 +196,9 @@ def _apart(a: dict, b: dict) -> bool:
 
 
 def _apart_clique(times: list[int], partial: dict[int, dict]) -> int:
-    """Size of a set of time points that pairwise disagree (greedy, forwards and backwards; at least 1)."""
-    best = 1
+    """Size of a set of time points that pairwise disagree (greedy, forwards and backwards; at least 1
+    unless there are none)."""
+    best = min(1, len(times))
     for order in (times, times[::-1]):
         clique: list[int] = []
         for t in order:

@@ -38,16 +38,24 @@ from pathlib import Path
 from typing import Sequence
 
 import clingo
-from clingo import Symbol
+import numpy as np
+from clingo import Function, String, Symbol
 
 from ..errors import InconsistentTableau, SolveTimeout
+from ..images import as_images
 from ..tableau import Tableau
 from .cogmap import CognitiveMap, SolveStats, Try, build_map
 from .diagnosis import diagnosed
-from .facts import read_actions, tableau_facts
+from .facts import action_symbol, read_actions, tableau_facts
 from .grounding import Classes, Deadline, Grounding, prepass
 from .theory import Theory, load_theory
-from .vocabulary import FUTURE_DEPTH, MINIMISE_DSTATES, ONE_PER_CLASS
+from .misreads import DSTATE_COST, RARE_VIEW, Suspect, find_suspects
+from .vocabulary import FUTURE_DEPTH, MAY_BE, MINIMISE_DSTATES, ONE_PER_CLASS, SUSPECT
+
+
+#: The share of the time left (and at most so many seconds) spent checking that reading every view as
+#: seen does not explain the experience more cheaply than the misreads do, when the bounds do not say.
+VERIFY_SHARE, VERIFY_MAX_S = 0.25, 10.0
 
 
 @dataclass(frozen=True)
@@ -77,6 +85,11 @@ class Resolver:
     diagnose : bool
         When no map satisfies the axioms, find which levels fail (:mod:`.diagnosis`), within the
         same deadline.
+    misreads : bool
+        Allow a few views to be misreads (:mod:`.misreads`) when one dstate per class does not
+        explain the experience and some views are suspect: the map then has the fewest dstates plus
+        the cost of its misreads, and lists them (``suspect_steps``). With no misread in the best
+        map, that map is the exact minimal map.
 
     Attributes
     ----------
@@ -91,6 +104,7 @@ class Resolver:
     max_models: int = 10
     future_depth: int = FUTURE_DEPTH
     diagnose: bool = True
+    misreads: bool = True
     theory: Theory = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -130,6 +144,9 @@ class _Search:
         self.start = time.perf_counter()
         angles, self.action_types = read_actions(tableau, resolver.quantum_deg)
         self.facts = tableau_facts(tableau, angles=angles)
+        self.action_keys = [action_symbol(s.action, a) for s, a in zip(tableau.steps, angles)]
+        self.suspects: dict[int, Suspect] = {}  # views the search may take as misreads (robust only)
+        self.as_seen: int | None = None  # dstates proved necessary reading every view as seen
         self.depth = 0  # futures only matter once one dstate per class has failed
         self.classes: Classes | None = None  # known after the first try
         self.proved = 1  # dstates proved necessary so far
@@ -139,24 +156,121 @@ class _Search:
 
     def run(self) -> CognitiveMap:
         found = self.one_per_class()
-        if found:
+        suspects = self._suspects(found)
+        if found and not suspects:
             return found
+        if suspects:
+            return self.robust(suspects, found)
         self.bound_classes_from_below()
+        return self.exact()
+
+    def exact(self) -> CognitiveMap:
+        """The minimal maps reading every view as seen, once the classes' lower bounds are known."""
         if self.classes.lower_bound > self.classes.count:
             found = self.bounded(self.classes.lower_bound)
             if found:
                 return found
         return self.optimise(self.some_map())
 
+    def robust(self, suspects: list[Suspect], exact: CognitiveMap | None = None) -> CognitiveMap:
+        """The better of two explanations, when some views are suspect: read as seen (the exact minimal
+        map), or with some suspects taken as misreads (the fewest dstates any such map needs, then the
+        fewest misread costs). A misread map is chosen only when it needs fewer dstates than reading every
+        view as seen by more than its misreads cost (a dstate costs ``DSTATE_COST``): proved by the exact
+        lower bound where that suffices, else by asking for an exact map within the difference."""
+        exact_facts = self.facts
+        self.bound_classes_from_below()
+        exact_lower = self.classes.lower
+        if exact is not None:  # one dstate per class: the exact map is known and minimal
+            exact_lower = [1] * self.classes.count
+        self.as_seen = sum(exact_lower)
+        # First the clear suspects; if they do not reach the bound they set, every suspect.
+        clear = [s for s in suspects if s.clear]
+        fewest = self._allow_misreads(exact_facts, clear or suspects)
+        misread = self.optimise(None, fewest)
+        if misread is None and clear and len(clear) < len(suspects):
+            # The layout stays the one the clear suspects set: the others may join their classes'
+            # dstates, but each class keeps its dstates (a small search, where misreads are few).
+            planned = self.classes.lower
+            self._allow_misreads(exact_facts, suspects)
+            self.classes.lower = planned
+            misread = self.optimise(None, fewest)
+        while misread is None and fewest < sum(exact_lower):
+            fewest += 1
+            self.proved = max(self.proved, fewest)
+            misread = self.optimise(None, fewest)
+        if misread is None:  # the misreads save nothing: read every view as seen
+            self.facts, self.suspects, self.classes.lower = exact_facts, {}, exact_lower
+            return exact or self.exact()
+        cost = sum(self.suspects[s["t"]].cost for s in misread.suspect_steps)
+        saved = sum(exact_lower) - fewest  # at least this many more dstates without the misreads
+        if not misread.suspect_steps or DSTATE_COST * saved > cost:
+            return misread
+        if exact is not None:  # the exact map has exactly the bound's dstates: the misreads are not worth it
+            return exact
+        # Not proved by the bound: is there a map reading every view as seen within the misreads' cost?
+        # Looked for in a share of the time left: where reading misreads as seen is hard to explain, the
+        # search for it is hard too, and the misread map is kept (the tries say the check timed out).
+        suspects = self.suspects
+        self.facts, self.suspects, self.classes.lower = exact_facts, {}, exact_lower
+        full = self.deadline
+        self.deadline = full.share(VERIFY_SHARE, VERIFY_MAX_S)
+        try:
+            for bound in range(sum(exact_lower), fewest + cost // DSTATE_COST + 1):
+                found = self.bounded(bound)
+                if found:
+                    return found
+        except SolveTimeout:
+            pass
+        finally:
+            self.deadline, self.suspects = full, suspects
+        return misread
+
+    def _allow_misreads(self, exact_facts: list[Symbol], suspects: list[Suspect]) -> int:
+        """Let these suspects be misreads from now on; the classes' lower bounds without them, and what
+        that proves. Returns the dstates the search aims at: the bound the suspects leave."""
+        self.suspects = {s.t: s for s in suspects}
+        self.facts = exact_facts + [SUSPECT(s.t, s.cost) for s in suspects] + self._may_be(suspects)
+        grounded = prepass(self.resolver.theory, self.facts, self.depth)
+        self.ground_s += grounded.ground_s
+        self.classes.lower = grounded.lower_bounds(self.classes, leave_out=self.suspects)
+        self.proved = self.classes.lower_bound  # no explanation, misreads or not, needs fewer dstates
+        return self.proved
+
+    def _may_be(self, suspects: list[Suspect]) -> list[Symbol]:
+        """For each suspect, the classes it may have been misread from: those of the views the
+        experience around it expects (any other view when it expects none), with every other feature
+        of its own class (its heading)."""
+        index = {key: c for c, key in enumerate(self.classes.keys) if key is not None}
+        views = sorted({v for v in self.tableau.views}, key=str)
+        out = []
+        for s in suspects:
+            own = self.classes.keys[self.classes.of_time[s.t]]
+            if own is None:
+                continue
+            for view in s.expected or views:
+                key = _with_view(own, String(view))
+                if key != own and key in index:
+                    out.append(MAY_BE(s.t, key))
+        return out
+
     def one_per_class(self) -> CognitiveMap | None:
         """The first try, in one grounding: one dstate per class. If it fails, learn the classes from it."""
         outcome = self._solve([ONE_PER_CLASS()], "one dstate per class", keep=True)
+        self.classes = outcome.grounding.classes(range(len(self.tableau)))
         if outcome.models:  # every class holds its one dstate: as many classes as dstates
             cmap = self._map(outcome)
             return replace(cmap, stats=replace(cmap.stats, classes=cmap.n_dstates, lower_bound=cmap.n_dstates))
-        self.classes = outcome.grounding.classes(range(len(self.tableau)))
         self.proved = self.classes.count + 1
         return None
+
+    def _suspects(self, found: CognitiveMap | None) -> list[Suspect]:
+        """The views the search may take as misreads: none unless allowed; where one dstate per class
+        explains the experience, only views with one or two images (each made a dstate of its own)."""
+        if not self.resolver.misreads:
+            return []
+        suspects = find_suspects(self.tableau.views, self.action_keys, _images(self.tableau))
+        return [s for s in suspects if s.reason == RARE_VIEW] if found else suspects
 
     def bounded(self, bound: int) -> CognitiveMap | None:
         """The minimal maps if at most ``bound`` dstates will do, else None (and the bound is proved)."""
@@ -191,21 +305,31 @@ class _Search:
                     f"this experience (levels: {', '.join(levels)})", levels=levels)
             spare = min(widest, 2 * spare)
 
-    def optimise(self, upper: CognitiveMap) -> CognitiveMap:
-        """The minimal maps within the upper map's number of dstates, by clingo's optimisation."""
-        layout = self.classes.layout(upper.n_dstates) + [MINIMISE_DSTATES()]
-        outcome = self._solve(layout, f"the fewest dstates, at most {upper.n_dstates}", optimise=True)
+    def optimise(self, upper: CognitiveMap | None, bound: int | None = None) -> CognitiveMap | None:
+        """The minimal maps within ``bound`` dstates (default: the upper map's), by clingo's optimisation;
+        None if no map has that few."""
+        bound = upper.n_dstates if bound is None else bound  # type: ignore[union-attr]
+        layout = self.classes.layout(bound) + [MINIMISE_DSTATES()]
+        what = f"the fewest dstates{' and misreads' if self.suspects else ''}, at most {bound} dstates"
+        outcome = self._solve(layout, what, optimise=True)
+        if not outcome.models:  # only when a bound below the upper map's was asked for
+            return None
         cmap = self._map(outcome)
         return replace(cmap, stats=replace(cmap.stats, lower_bound=cmap.n_dstates))  # the optimiser proved it
 
     def _map(self, outcome: "_Outcome", minimal: bool = True) -> CognitiveMap:
         models = outcome.models if minimal else outcome.models[:1]
         return build_map(self.tableau, models, minimal and outcome.exhausted, self.resolver.theory.levels,
-                         self._stats(), minimal=minimal, action_types=self.action_types)
+                         self._stats(), minimal=minimal, action_types=self.action_types,
+                         misread_costs=self._costs())
+
+    def _costs(self) -> dict[int, int]:
+        return {t: s.cost for t, s in self.suspects.items()}
 
     def _stats(self) -> SolveStats:
         """The figures so far, as a snapshot: each map keeps its own."""
         return SolveStats(classes=self.classes.count if self.classes else 0, lower_bound=self.proved,
+                          as_seen_lower_bound=self.as_seen if self.suspects else None,
                           ground_s=self.ground_s, solve_s=self.solve_s,
                           total_s=time.perf_counter() - self.start, bounds=tuple(self.tries))
 
@@ -244,13 +368,31 @@ class _Search:
     def _timed_out(self, what: str, improving: list) -> SolveTimeout:
         if improving:  # the optimiser's last (smallest) model so far
             self.best = build_map(self.tableau, improving[-1:], False, self.resolver.theory.levels,
-                                  self._stats(), minimal=False, action_types=self.action_types)
+                                  self._stats(), minimal=False, action_types=self.action_types,
+                                  misread_costs=self._costs())
         found = (f"best map so far: {self.best.n_dstates} dstates, not proved minimal" if self.best
                  else "no map found yet")
         limit = self.deadline.limit_s
         return SolveTimeout(f"time limit of {limit:g} s reached while looking for {what}; "
                             f"at least {self.proved} dstates are proved necessary; {found}",
                             lower_bound=self.proved, best_map=self.best, time_limit_s=limit, stage=what)
+
+
+def _images(tableau: Tableau) -> np.ndarray | None:
+    """The tableau's images when every step has one (their margins price misreads), else None."""
+    if not tableau.steps or any(s.image is None for s in tableau.steps):
+        return None
+    return as_images([s.image for s in tableau.steps])
+
+
+def _with_view(key: Symbol, view: Symbol) -> Symbol:
+    """A class key (``k(F, X, Rest)`` folded in core/partition.lp) with its view replaced."""
+    if key.type != clingo.SymbolType.Function or key.name != "k" or len(key.arguments) != 3:
+        return key
+    feature, value, rest = key.arguments
+    if feature.type == clingo.SymbolType.Function and feature.name == "view" and not feature.arguments:
+        value = view
+    return Function("k", [feature, value, _with_view(rest, view)])
 
 
 @dataclass

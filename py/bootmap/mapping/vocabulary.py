@@ -34,6 +34,9 @@ QUANTUM_DEG = 15.0
 FUTURE_DEPTH = 8
 #: The name of that constant in causal.lp.
 FUTURE_DEPTH_CONST = "future_depth"
+#: What one dstate costs where misreads are priced (``#const dstate_cost`` in core/partition.lp).
+DSTATE_COST = 4
+DSTATE_COST_CONST = "dstate_cost"
 
 
 @dataclass(frozen=True)
@@ -114,6 +117,8 @@ SLOTS = Predicate("slots", 2, "layout")
 PREV_IN_CLASS = Predicate("prev_in_class", 2, "layout")
 DSTATE_BOUND = Predicate("dstate_bound", 1, "layout")
 MINIMISE_DSTATES = Predicate("minimise_dstates", 0, "layout")
+SUSPECT = Predicate("suspect", 2, "layout", "the view seen at t{0} may be a misread (cost {1})")
+MAY_BE = Predicate("may_be", 2, "layout")
 
 # --------------------------------------------------------------------------------------------------
 # Questions (core/ask.lp reads these)
@@ -128,6 +133,7 @@ FINEST_MAP = Predicate("finest_map", 0, "question")
 CLASS_KEY = Predicate("class_key", 2, "derived")
 SHOWN_BY_ALL = Predicate("shown_by_all", 1, "derived")
 CANDIDATE = Predicate("cand", 2, "derived")
+MISREAD = Predicate("misread", 1, "derived", "the view seen at t{0} was a misread")
 # causal.lp
 TIME = Predicate("time", 1, "derived")
 IS = Predicate("is", 2, "derived", "t{0} is at {1}")
@@ -238,9 +244,9 @@ def mismatches(files: Iterable[str | Path]) -> list[str]:
         if p.signature not in where:
             verb = "defines" if p.role == "derived" else "reads"
             problems.append(f"no rule {verb} {p.name}/{p.arity} ({p.role})")
-    if FUTURE_DEPTH_CONST not in constants:
-        problems.append(f"no #const {FUTURE_DEPTH_CONST}")
-    elif constants[FUTURE_DEPTH_CONST] != str(FUTURE_DEPTH):
-        problems.append(f"#const {FUTURE_DEPTH_CONST} = {constants[FUTURE_DEPTH_CONST]}, but Python's default "
-                        f"is {FUTURE_DEPTH}")
+    for name, value in ((FUTURE_DEPTH_CONST, FUTURE_DEPTH), (DSTATE_COST_CONST, DSTATE_COST)):
+        if name not in constants:
+            problems.append(f"no #const {name}")
+        elif constants[name] != str(value):
+            problems.append(f"#const {name} = {constants[name]}, but Python's default is {value}")
     return problems

@@ -151,6 +151,15 @@ class StepRow(Out):
     action: str
 
 
+class SuspectStep(Out):
+    """A time point whose view the map takes as a misread (a misclustered image)."""
+
+    t: int
+    observed: str = Field(description="The view the tableau gives at t.")
+    expected: str = Field(description="The view of the dstate the map puts t at.")
+    cost: int | None = Field(description="What taking it as a misread cost, where a dstate costs 4.")
+
+
 class DstateOut(Out):
     view: str
     heading_deg: int | None
@@ -188,6 +197,8 @@ class MapOut(Out):
     alternatives: list[list[str]] = Field(description="The dstate of each time point in the other minimal maps.")
     action_types: list[ActionTypeOut] = Field(description="The robot's action types, learned from the tableau's "
                                                          "angles (or its angles rounded to the server's quantum).")
+    suspect_steps: list[SuspectStep] = Field(description="Time points whose views the map takes as misreads: "
+                                                         "explaining them as seen needs far more dstates.")
     stats: dict[str, Any] = Field(description="Solver figures (seconds, bounds tried).")
 
 

@@ -1,0 +1,235 @@
+"""Misread views: which time points the resolver may explain as a misread, and at what cost.
+
+A clustering misreads an image now and then: a robot at dstate S, whose view is V1, records V2. The
+exact theory must then explain V2 as a dstate of its own, and determinism carries the contradiction
+forward: one misread in 400 steps can make a map of 27 dstates out of 8, or none. Robust abduction
+lets the solver take a few views as misreads, each at a cost, and finds the map with the fewest
+dstates plus the cost of its misreads (core/partition.lp): a misread is called only where reading the
+view as seen would need more dstates than the misread costs.
+
+Which views may be misreads (the *suspects*) is chosen here, from the tableau alone, so that clean
+experience is resolved exactly as before and the search stays small:
+
+* a view seen where the experience around it says otherwise: after the same one or two views and
+  actions, or before the same one or two actions and views, other views were seen at least three times
+  as often (a misread breaks both transitions; where views alias, one of them may look ordinary);
+* a view with one or two images in a tableau whose views have many (:func:`rare_views`):
+  as likely a misread image as a place, it is cheap to call a misread (half a dstate).
+
+Costs are in units where a dstate costs ``DSTATE_COST`` (4). A suspect costs ``MISREAD_COST`` (10: two
+and a half dstates). Where the tableau has images, an image deep inside its view's cluster costs more to
+call a misread than one near the boundary with another view (the clustering's own margin): from 3 at the
+boundary up to 18.
+
+Example
+-------
+>>> views = list("ABCD" * 10)
+>>> views[21] = "A"                       # a B read as A: it follows A and precedes C, unlike any other A
+>>> [(s.t, s.cost, s.expected, s.clear) for s in find_suspects(views, ["turn"] * 40)]
+[(20, 60, ('D',), False), (21, 10, ('B',), True), (22, 60, ('A', 'B'), False)]
+
+Only t21 is surprising on both sides; its neighbours are surprising on the side that sees t21.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass
+from typing import Hashable, Sequence
+
+import numpy as np
+from clingo import Symbol
+
+from .vocabulary import DSTATE_COST, action_word
+
+
+#: What calling a suspect view a misread costs when nothing else is known: 2.5 dstates.
+MISREAD_COST = 10
+#: ... for a view with one or two images in a tableau whose views have ``RARE_AMONG`` on average: half a
+#: dstate. (In a short tableau every view is seen only a few times: none is rare.)
+RARE_VIEW_COST, RARE_AMONG = 2, 10
+#: A view seen in a context at most twice is surprising when it is at most this share of the context's
+#: visits on one side (before or after it); clearly so when it is at most ``WEAK`` on the other. (Clear
+#: suspects hold about 90% of the misreads of a 600-step exploration, with few others; all suspects 98%,
+#: at eight suspects per misread.)
+STRONG = 0.25
+WEAK = 0.5
+#: Why a rare view is suspect.
+RARE_VIEW = "a view with one or two images"
+#: A misread costs more where its contexts showed the other views fewer times than this (3 times: double).
+FULL_EVIDENCE = 6
+#: With images, the cost runs from the boundary's to the cluster core's.
+MARGIN_COSTS = (3, 18)
+
+
+@dataclass(frozen=True)
+class Suspect:
+    """A time point whose view the solver may take as a misread.
+
+    Attributes
+    ----------
+    t : int
+        The time point.
+    cost : int
+        What calling it a misread costs (a dstate costs ``DSTATE_COST``).
+    expected : tuple
+        The views the experience around it suggests instead (empty: any view).
+    reason : str
+        Why it is suspect, for people.
+    evidence : tuple of str
+        What was seen in the contexts that make it surprising, for people.
+    clear : bool
+        Surprising on both sides of it (or a rare view). A misread view usually is; where views alias,
+        one side may look ordinary, so the resolver widens its search to the others when the clear
+        suspects do not explain the experience.
+    """
+
+    t: int
+    cost: int
+    expected: tuple
+    reason: str
+    clear: bool = True
+    evidence: tuple[str, ...] = ()
+
+
+def find_suspects(views: Sequence[Hashable], actions: Sequence[Hashable],
+                  images: np.ndarray | None = None) -> list[Suspect]:
+    """The suspect time points of a tableau, in order.
+
+    Parameters
+    ----------
+    views : sequence
+        The view seen at each time point.
+    actions : sequence
+        The action from each time point to the next, as the axioms name it (one fewer than views, or
+        as many with the last ignored).
+    images : array (n, d), optional
+        The images the views were clustered from; their margins set the costs.
+    """
+    n = len(views)
+    contexts = _Contexts(views, actions)
+    rare = {t for ts in rare_views(views, typical=RARE_AMONG).values() for t in ts}
+    costs = _margin_costs(views, images)
+    found = []
+    for t in range(n):
+        # How surprising the view is after what came before it, and before what came after.
+        sides = [side for side in (contexts.before(t), contexts.after(t)) if side is not None]
+        if t in rare:
+            found.append(Suspect(t, RARE_VIEW_COST, _expected(sides), RARE_VIEW))
+        elif len(sides) == 2 and min(side[0] for side in sides) <= STRONG:
+            base = MISREAD_COST if costs is None else int(costs[t])
+            # Thin evidence (a context seen only a few times) makes a misread the dearer explanation.
+            evidence = min(side[2] for side in sides)
+            cost = int(round(base * max(1.0, FULL_EVIDENCE / max(evidence, 1))))
+            clear = max(side[0] for side in sides) <= WEAK
+            found.append(Suspect(t, cost, _expected(sides), "unlike what the experience around it shows"
+                                 + ("" if clear else " on one side"), clear, tuple(side[3] for side in sides)))
+    return found
+
+
+def rare_views(views: Sequence[Hashable], at_most: int = 2, typical: int = 5) -> dict:
+    """Views with at most ``at_most`` images in a tableau whose views have ``typical`` or more on average:
+    view -> its time points. Such a view is as likely a misread image (a drop-out left unrepaired, a
+    passer-by) as a place, and reading it as seen makes it a dstate of its own.
+
+    >>> rare_views(["V0", "V1"] * 10 + ["V2"])
+    {'V2': [20]}
+    """
+    at: dict = {}
+    for t, v in enumerate(views):
+        at.setdefault(v, []).append(t)
+    if len(views) < typical * len(at):
+        return {}
+    return {v: ts for v, ts in at.items() if len(ts) <= at_most}
+
+
+class _Contexts:
+    """What views were seen in which contexts: after the last one to three (view, action) pairs, and
+    before the next one to three (action, view) pairs. One step of context is often ambiguous where views
+    alias (many dstates look alike and lead on to different views); longer ones seldom are."""
+
+    DEPTHS = (1, 2, 3)
+    #: A longer context counts once it has been seen this often.
+    MIN_SEEN = 4
+
+    def __init__(self, views: Sequence[Hashable], actions: Sequence[Hashable]):
+        self.views, self.actions = views, actions
+        self.seen: dict = {}
+        for t in range(len(views)):
+            for key in self._keys(t):
+                self.seen.setdefault(key, Counter())[views[t]] += 1
+
+    def _key(self, t: int, depth: int, ahead: bool):
+        lo, hi = (t + 1, t + 1 + depth) if ahead else (t - depth, t)
+        if lo < 0 or hi > len(self.views):
+            return None
+        acts = tuple(self.actions[lo - 1:hi - 1]) if ahead else tuple(self.actions[lo:hi])
+        return ahead, tuple(self.views[lo:hi]), acts
+
+    def _keys(self, t: int):
+        for depth in self.DEPTHS:
+            for ahead in (False, True):
+                key = self._key(t, depth, ahead)
+                if key is not None:
+                    yield key
+
+    def before(self, t: int):
+        return self._side(t, ahead=False)
+
+    def after(self, t: int):
+        return self._side(t, ahead=True)
+
+    def _side(self, t: int, ahead: bool):
+        """The most surprising reading of t's view in its contexts on one side (None at the end)."""
+        found = []
+        for depth in self.DEPTHS:
+            key = self._key(t, depth, ahead)
+            if key is not None and (depth == 1 or sum(self.seen[key].values()) >= self.MIN_SEEN):
+                found.append((*_surprise(self.seen[key], self.views[t]), _describe(key, self.seen[key])))
+        return min(found, key=lambda f: (f[0], -f[2])) if found else None
+
+
+def _surprise(seen: Counter, view) -> tuple[float, tuple, int]:
+    """How rarely ``view`` was seen in a context (its share, or 1 when seen there three times or more),
+    the views seen there instead, and how often they were."""
+    share = seen[view] / sum(seen.values()) if seen[view] <= 2 else 1.0
+    return share, tuple(v for v in seen if v != view), sum(seen.values()) - seen[view]
+
+
+def _describe(key, seen: Counter) -> str:
+    """A context and what was seen in it, e.g. "after V0, turn -90: V1 12 times, V3 once"."""
+    ahead, views, actions = key
+    steps = [x for pair in (zip(actions, views) if ahead else zip(views, actions)) for x in pair]
+    words = ", ".join(action_word(x) if isinstance(x, Symbol) else str(x) for x in steps)
+    counts = ", ".join(f"{v} {'once' if n == 1 else 'twice' if n == 2 else f'{n} times'}"
+                       for v, n in seen.most_common())
+    return f"{'before' if ahead else 'after'} {words}: {counts}"
+
+
+def _expected(sides: list) -> tuple:
+    """The views both contexts saw instead, else either saw, most often seen first."""
+    sets = [set(side[1]) for side in sides if side[1]]
+    if not sets:
+        return ()
+    return tuple(sorted(set.intersection(*sets) or set.union(*sets), key=str))
+
+
+def _margin_costs(views: Sequence[Hashable], images: np.ndarray | None) -> np.ndarray | None:
+    """Per time point, the cost of calling its view a misread, from how deep its image lies in its
+    view's cluster: (distance to the nearest other view's centre - to its own) / (their sum), in [0, 1]
+    inside the cluster, mapped onto ``MARGIN_COSTS``. None without images."""
+    if images is None or len(images) != len(views):
+        return None
+    labels = sorted(set(views), key=str)
+    if len(labels) < 2:
+        return None
+    index = {v: i for i, v in enumerate(labels)}
+    y = np.array([index[v] for v in views])
+    centres = np.stack([images[y == i].mean(axis=0) for i in range(len(labels))])
+    d = np.linalg.norm(images[:, None, :] - centres[None, :, :], axis=2)
+    own = d[np.arange(len(y)), y]
+    d[np.arange(len(y)), y] = np.inf
+    other = d.min(axis=1)
+    margin = np.clip((other - own) / np.maximum(other + own, 1e-12), 0.0, 1.0)
+    low, high = MARGIN_COSTS
+    return np.rint(low + (high - low) * margin).astype(int)

@@ -1,0 +1,136 @@
+"""Misread views: the map names them instead of inventing dstates for them (issue 12, item 2)."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from bootmap.examples import notched_rectangle
+from bootmap.mapping import Resolver
+from bootmap.mapping.misreads import RARE_VIEW_COST, find_suspects, rare_views
+from bootmap.metrics import dstate_accuracy
+from bootmap.testing.check import check_map, true_partition
+from bootmap.testing.gridworld import random_world, walk
+from bootmap.testing.noise import with_misreads, with_odometry_noise
+
+
+def exploration(seed: int, turn_sd: float = 3.0):
+    """600 steps exploring a 20-place grid world, turns read with noise (as the noise bench makes them)."""
+    rng = np.random.default_rng(seed)
+    world = random_world(rng, 5, 4, extra_edges=4, landmarks=0.4)
+    return with_odometry_noise(walk(world, 600, rng, policy="explore"), turn_sd, turn_sd / 2, rng), rng
+
+
+def assert_misreads_named(cmap, tableau, wrong):
+    named = {s["t"] for s in cmap.suspect_steps}
+    assert cmap.n_dstates == len(set(true_partition(tableau)))
+    assert len(named & set(wrong)) >= 0.9 * len(wrong), (sorted(named), wrong)
+    assert len(named - set(wrong)) <= 0.1 * len(named), (sorted(named), wrong)
+
+
+@pytest.mark.parametrize("seed", [0, 3])
+def test_two_misclustered_views_in_the_papers_tableau_are_named(seed):
+    clean = notched_rectangle(50)
+    tableau, wrong = with_misreads(clean, 0.005, np.random.default_rng(seed))
+    cmap = Resolver(time_limit=30).resolve(tableau)
+    assert (cmap.n_dstates, cmap.n_places, cmap.n_paths) == (8, 4, 4)
+    assert [s["t"] for s in cmap.suspect_steps] == wrong
+    for s in cmap.suspect_steps:
+        assert s["observed"] == tableau.steps[s["t"]].view
+        assert s["expected"] == cmap.views[cmap.dstate_of[s["t"]]]
+    # Every other time point is where the clean tableau's map puts it.
+    assert dstate_accuracy(true_partition(clean), cmap.dstate_of) == 1.0
+    # Read as seen, the same experience needs more dstates than the truth, or time.
+    exact = Resolver(time_limit=3, misreads=False, diagnose=False)
+    try:
+        assert exact.resolve(tableau).n_dstates > 8
+    except Exception as e:  # a time-out or no map: either way not the truth
+        assert type(e).__name__ in ("SolveTimeout", "InconsistentTableau")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [41, 44])
+def test_half_a_percent_misreads_on_a_600_step_exploration(seed):
+    clean, rng = exploration(seed)
+    tableau, wrong = with_misreads(clean, 0.005, rng)
+    assert_misreads_named(Resolver(time_limit=60).resolve(tableau), tableau, wrong)
+
+
+@pytest.mark.slow
+def test_two_percent_misreads_on_a_600_step_exploration():
+    clean, rng = exploration(45)
+    tableau, wrong = with_misreads(clean, 0.02, rng)
+    assert_misreads_named(Resolver(time_limit=60).resolve(tableau), tableau, wrong)
+
+
+@pytest.mark.slow
+def test_clean_experience_resolves_as_if_every_view_were_read_as_seen():
+    clean, _ = exploration(46, turn_sd=0.0)
+    robust = Resolver(time_limit=60).resolve(clean)
+    exact = Resolver(time_limit=60, misreads=False).resolve(clean)
+    assert robust.suspect_steps == []
+    assert robust.dstate_of == exact.dstate_of and robust.unique == exact.unique
+    assert check_map(clean, robust.dstate_of, robust.levels) == []
+
+
+def test_suspects_of_a_clean_paper_tableau_are_none():
+    # Views alias (S0 and S4 look alike), but every transition is seen many times: nothing is surprising.
+    t = notched_rectangle(50)
+    assert find_suspects(t.views, [s.action and type(s.action).__name__ for s in t.steps]) == []
+
+
+def test_a_view_seen_once_in_a_long_tableau_is_a_cheap_suspect():
+    views = ["A", "B", "C", "D"] * 30
+    views[50] = "Z"
+    suspects = find_suspects(views, ["turn"] * len(views))
+    assert [(s.t, s.cost) for s in suspects] == [(50, RARE_VIEW_COST)]
+    assert rare_views(views, typical=10) == {"Z": [50]}
+    assert rare_views(views[:20], typical=10) == {}  # a short tableau: no view is rare
+
+
+def test_images_near_a_cluster_boundary_are_cheaper_to_call_misreads():
+    rng = np.random.default_rng(0)
+    views = ["A", "B"] * 40
+    images = np.array([[0.0, 0.0] if v == "A" else [10.0, 0.0] for v in views]) + rng.normal(0, 0.1, (80, 2))
+    views[41] = "A"  # labelled A where the context on both sides says B
+    images[41] = [0.0, 0.0]  # ... and the image looks like every other A: deep inside A's cluster
+    deep = [s for s in find_suspects(views, ["travel"] * 80, images.copy()) if s.clear]
+    images[41] = [4.8, 0.0]  # now the image lies near the boundary with B
+    near = [s for s in find_suspects(views, ["travel"] * 80, images) if s.clear]
+    assert [s.t for s in deep] == [s.t for s in near] == [41]
+    assert near[0].cost < deep[0].cost
+
+
+def test_bootmap_map_lists_the_misreads(tmp_path):
+    tableau, wrong = with_misreads(notched_rectangle(50), 0.005, np.random.default_rng(1))
+    path = tmp_path / "run.json"
+    path.write_text(tableau.dumps())
+    out = subprocess.run([sys.executable, "-m", "bootmap.cli", "map", str(path), "--format", "json"],
+                         capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    result = json.loads(out.stdout)
+    assert [s["t"] for s in result["suspect_steps"]] == wrong
+    text = subprocess.run([sys.executable, "-m", "bootmap.cli", "map", str(path)], capture_output=True, text=True,
+                          timeout=120).stdout
+    assert f"t{wrong[0]} saw {tableau.steps[wrong[0]].view}" in text
+
+
+def test_bootmap_why_explains_a_misread_step_and_a_step_read_as_seen(tmp_path):
+    tableau, wrong = with_misreads(notched_rectangle(50), 0.005, np.random.default_rng(0))
+    path = tmp_path / "run.json"
+    path.write_text(tableau.dumps())
+
+    def why(t: int) -> dict:
+        out = subprocess.run([sys.executable, "-m", "bootmap.cli", "why", str(path), f"t{t}", "--format", "json"],
+                             capture_output=True, text=True, timeout=120)
+        assert out.returncode == 0, out.stderr
+        return json.loads(out.stdout)
+
+    misread = why(wrong[0])
+    assert misread["misread"] and misread["view"] == tableau.steps[wrong[0]].view != misread["dstate_view"]
+    assert misread["as_seen_lower_bound"] > misread["dstates"] == 8
+    assert len(misread["evidence"]) == 2 and all(misread["dstate_view"] in e for e in misread["evidence"])
+    seen = why(wrong[0] - 1)
+    assert not seen["misread"] and seen["view"] == seen["dstate_view"]
