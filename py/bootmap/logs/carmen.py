@@ -94,7 +94,7 @@ def robotlaser(tokens: list[str], where: str) -> Scan:
     told the log is corrected.)
     """
     n, ranges, rest = _ranges(tokens, 8, where)
-    tail = rest[1 + _count(rest[0], where, "remissions"):] if rest else []
+    tail = _after_remissions(rest, n, where)
     if len(tail) != _ROBOTLASER_TAIL:
         raise LogError(f"ROBOTLASER1 with {n} beams needs {9 + n + 1 + _ROBOTLASER_TAIL} fields after its "
                        f"remissions, found {len(tokens)}: a truncated line or a wrong beam count", where)
@@ -119,7 +119,7 @@ def flaser(tokens: list[str], where: str) -> Scan:
 def rawlaser(tokens: list[str], odometry: Pose, where: str) -> Scan:
     """A ``RAWLASER1`` line, with the odometry pose of the latest ``ODOM`` line."""
     n, ranges, rest = _ranges(tokens, 8, where)
-    tail = rest[1 + _count(rest[0], where, "remissions"):] if rest else []
+    tail = _after_remissions(rest, n, where)
     if len(tail) != 3:
         raise LogError(f"RAWLASER1 with {n} beams has {len(tokens)} fields: a truncated line or a wrong beam "
                        "count", where)
@@ -146,6 +146,19 @@ def _ranges(tokens: list[str], count_at: int, where: str) -> tuple[int, np.ndarr
                        "line or a wrong beam count", where)
     ranges = np.array(_numbers(values, where, "range"))
     return n, ranges, tokens[count_at + 1 + n:]
+
+
+def _after_remissions(rest: list[str], n: int, where: str) -> list[str]:
+    """The tokens after a laser line's remissions (``rest`` starts with their count)."""
+    if not rest:
+        return []
+    try:
+        count = int(rest[0])
+    except ValueError:
+        # A range where the remission count should be: the line has more beams than it declares.
+        raise LogError(f"after the {n} declared beams comes {rest[0]!r} where the number of remissions "
+                       "should be: a wrong beam count", where) from None
+    return rest[1 + count:]
 
 
 def _fields(tokens: list[str], n: int, where: str) -> list[str]:

@@ -115,7 +115,8 @@ def _actions(turns: list[FoundTurn], distance: np.ndarray, heading: np.ndarray) 
 def _truth(scans: list[Scan], chosen: list[int], radius_m: float) -> list[str]:
     """True dstates of the chosen scans, sectors aligned to the axis of the whole true path."""
     axis = main_axis([s.truth for s in scans])
-    return true_dstates([scans[i].truth for i in chosen], radius_m, axis)
+    turn_ends = [(k, k + 1) for k in range(0, len(chosen), 2)]  # dstate_scans: each turn's start, then end
+    return true_dstates([scans[i].truth for i in chosen], radius_m, axis, turn_ends)
 
 
 def _rounded(pose) -> tuple[float, float, float]:

@@ -3,7 +3,8 @@
 A log has no world file to say where its places are, only the true (optimised) pose of every scan.
 
 - **Places**: dstates whose true positions lie within ``radius_m`` of each other (directly or through
-  others) are one place: the two dstates of a turn, 2-3 m apart, and every later visit to that corner.
+  others) are one place, every visit to a corner; so are the two dstates of a turn (a turn never
+  leaves its place, though a robot that turns while driving ends it 2-4 m on).
 - **True dstates**: a place and a heading sector, the sectors aligned to the building's main axis (the
   dominant direction of the corridors, found from the true path), named as the simulator names them
   (``P3:N``).
@@ -35,11 +36,14 @@ from .scans import Pose, wrap
 SECTORS = "ENWS"  # as bootmap.sim.world.heading_sector names them, here in the building's frame
 
 
-def place_labels(poses: list[Pose] | np.ndarray, radius_m: float = 3.0) -> list[int]:
-    """A place index per pose: poses within ``radius_m`` of each other, directly or in a chain, share one.
+def place_labels(poses: list[Pose] | np.ndarray, radius_m: float = 3.0,
+                 together: list[tuple[int, int]] = ()) -> list[int]:
+    """A place index per pose: poses within ``radius_m`` of each other, directly or in a chain, share one,
+    and so does each pair in ``together`` (a turn's two ends: a turn never leaves its place).
     Places are numbered in the order they are first visited."""
     xy = np.asarray(poses, dtype=float).reshape(-1, 3)[:, :2]
     pairs = cKDTree(xy).query_pairs(radius_m, output_type="ndarray")
+    pairs = np.concatenate([pairs.reshape(-1, 2), np.asarray(together, dtype=int).reshape(-1, 2)])
     graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(xy), len(xy)))
     _, labels = connected_components(graph, directed=False)
     first_seen: dict[int, int] = {}
@@ -58,12 +62,14 @@ def main_axis(poses: list[Pose] | np.ndarray, tolerance_m: float = 1.0) -> float
     return float(wrap(mean / 4 + np.pi / 4) - np.pi / 4) if length.sum() else 0.0
 
 
-def true_dstates(poses: list[Pose] | np.ndarray, radius_m: float = 3.0, axis_rad: float | None = None) -> list[str]:
-    """The true dstate of each pose: its place and its heading's sector in the building's frame."""
+def true_dstates(poses: list[Pose] | np.ndarray, radius_m: float = 3.0, axis_rad: float | None = None,
+                 together: list[tuple[int, int]] = ()) -> list[str]:
+    """The true dstate of each pose: its place (:func:`place_labels`) and its heading's sector in the
+    building's frame."""
     p = np.asarray(poses, dtype=float).reshape(-1, 3)
     axis = main_axis(p) if axis_rad is None else axis_rad
     sectors = np.rint(wrap(p[:, 2] - axis) / (np.pi / 2)).astype(int) % 4
-    return [f"P{place}:{SECTORS[s]}" for place, s in zip(place_labels(p, radius_m), sectors)]
+    return [f"P{place}:{SECTORS[s]}" for place, s in zip(place_labels(p, radius_m, together), sectors)]
 
 
 def simplify(xy: np.ndarray, tolerance_m: float) -> np.ndarray:
