@@ -17,10 +17,11 @@ ROS1, SQLITE3, MCAP = "ros1", "sqlite3", "mcap"
 
 
 def write_bag(path: Path, kind: str, scans: list[Scan], truth_topic: str | None = None,
-              scan_topic: str | None = "/scan", odom_topic: str | None = "/odom", nan_at: int | None = None) -> Path:
+              scan_topic: str | None = "/scan", odom_topic: str | None = "/odom", nan_at: int | None = None,
+              scans_at: set[int] | None = None, odometry_at: set[int] | None = None) -> Path:
     """A bag of ``scans`` as LaserScan on ``scan_topic`` and their odometry as Odometry on ``odom_topic``
     (each odometry message stamped like its scan), the truth on ``truth_topic``. ``nan_at`` puts a NaN
-    in that scan. Returns the path to give the reader."""
+    in that scan; ``scans_at`` (``odometry_at``) writes the laser (odometry) of those scans only. Returns the path to give the reader."""
     store = get_typestore(Stores.ROS1_NOETIC if kind == ROS1 else Stores.ROS2_HUMBLE)
     types = store.types
     target = path if kind != ROS1 else path.with_suffix(".bag")
@@ -34,11 +35,11 @@ def write_bag(path: Path, kind: str, scans: list[Scan], truth_topic: str | None 
         for k, s in enumerate(scans):
             ns = int(round(s.time * 1e9))
             header = _header(types, ns, kind)
-            if odom_topic:
+            if odom_topic and (odometry_at is None or k in odometry_at):
                 writer.write(conns[odom_topic], ns, serialize(_odometry(types, header, s.odometry), "nav_msgs/msg/Odometry"))
             if truth_topic:
                 writer.write(conns[truth_topic], ns, serialize(_odometry(types, header, s.truth), "nav_msgs/msg/Odometry"))
-            if scan_topic:
+            if scan_topic and (scans_at is None or k in scans_at):
                 ranges = s.ranges.astype(np.float32)
                 if k == nan_at:
                     ranges[3] = np.nan
