@@ -19,7 +19,8 @@ How a turn is found (all from odometry, never from the true poses):
 4. A stretch is a turn if its start and end headings differ by ``turn_deg`` or more (wrapped: a full
    spin on the spot is no turn). Turns less than ``min_travel_m`` apart are one turn.
 
-Passing straight through a junction is not yet a dstate (that needs the scan, not odometry).
+Passing straight through a junction is not yet a dstate (that needs the scan, not odometry). A curve
+longer than the window is read short by up to ``2 * settled_deg`` (its ends are taken as straight).
 
 Example
 -------
