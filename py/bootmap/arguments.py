@@ -62,3 +62,16 @@ def seconds(text: str) -> float:
     if not value >= 0 or value == float("inf"):
         raise argparse.ArgumentTypeError(f"expected seconds (a number >= 0), got {text!r}")
     return value
+
+
+def positive(unit: str):
+    """An argparse type: a finite number above 0, in ``unit`` (metres, degrees)."""
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            value = float("nan")
+        if not 0 < value < float("inf"):
+            raise argparse.ArgumentTypeError(f"expected {unit} (a number > 0), got {text!r}")
+        return value
+    return parse

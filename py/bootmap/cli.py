@@ -276,7 +276,7 @@ def _register_optional(sub) -> None:
     surfaces."""
     import importlib
 
-    for module in ("bootmap.sim.commands", "bootmap.service.commands"):
+    for module in ("bootmap.sim.commands", "bootmap.service.commands", "bootmap.logs.commands"):
         try:
             register = importlib.import_module(module).register
         except ModuleNotFoundError as e:

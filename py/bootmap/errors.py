@@ -46,6 +46,16 @@ class WorldError(BadInput, ValueError):
         super().__init__(f"{where}: {message}" if where else message)
 
 
+class LogError(BadInput, ValueError):
+    """A robot log (g2o, CARMEN, ROS bag) cannot be read. ``where`` names the file and the line
+    (``killian.g2o: line 12``) or the message index (``run.bag: message 3 (/scan)``)."""
+
+    def __init__(self, message: str, where: str = ""):
+        self.where = where
+        self.reason = message
+        super().__init__(f"{where}: {message}" if where else message)
+
+
 class ExplainError(BadInput, ValueError):
     """A question the explainer cannot take, e.g. a time point or dstate the map does not have."""
 

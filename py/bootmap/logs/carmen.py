@@ -1,0 +1,197 @@
+"""CARMEN logs: the text format most public 2-D laser datasets use (Radish, the Freiburg and MIT logs).
+
+One message a line, its type first. The reader takes
+
+- ``ROBOTLASER1 type start_angle fov resolution max_range accuracy remission_mode n r_1..r_n
+  n_remissions rem_1..rem_k laser_x laser_y laser_theta robot_x robot_y robot_theta tv rv
+  forward_safety side_safety turn_axis timestamp host logger_timestamp``: a scan with the robot's
+  (odometry) pose;
+- ``FLASER n r_1..r_n x y theta odom_x odom_y odom_theta timestamp host logger_timestamp``: a front
+  laser of 180 degrees; its pose ``x y theta`` is the laser's (corrected, in a corrected log);
+- ``RAWLASER1`` (a ``ROBOTLASER1`` without poses), paired with the latest ``ODOM x y theta tv rv accel
+  timestamp host logger_timestamp``;
+- ``TRUEPOS true_x true_y true_theta odom_x odom_y odom_theta timestamp host logger_timestamp``
+  (simulators write it): the true pose of the scans that follow.
+
+Other messages (``PARAM``, ``SYNC``, ``RLASER``, sonar, ...) and ``#`` comments are skipped. A malformed
+line raises :class:`~bootmap.errors.LogError` naming the file and line.
+
+Example
+-------
+>>> text = "ODOM 1 2 0 0 0 0 5.0 h 5.0\\nRAWLASER1 0 -1.5708 3.1416 1.5708 50 0.01 0 3 1 2 3 0 5.1 h 5.1\\n"
+>>> [(s.ranges.tolist(), s.odometry) for s in read_carmen_text(text)]
+[([1.0, 2.0, 3.0], (1.0, 2.0, 0.0))]
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Iterable, Iterator
+
+import numpy as np
+
+from ..errors import LogError
+from .scans import Pose, Scan
+
+# After a ROBOTLASER1's ranges and remissions: laser pose (3), robot pose (3), tv, rv, forward and side
+# safety distances, turn axis (5), timestamp, host, logger timestamp (3).
+_ROBOTLASER_TAIL = 14
+_ODOM_FIELDS = 10  # ODOM x y theta tv rv accel timestamp host logger_timestamp
+_TRUEPOS_FIELDS = 10
+
+
+def read_carmen(path: str | Path, corrected: bool = False) -> Iterator[Scan]:
+    """The scans of a CARMEN log file, in the file's order.
+
+    Parameters
+    ----------
+    path : str or Path
+        The log (plain text).
+    corrected : bool
+        The log's laser poses are corrected (optimised) poses: use them as the true pose of each scan.
+        Without it, only ``TRUEPOS`` lines give true poses.
+    """
+    path = Path(path)
+    try:
+        with path.open("r", encoding="utf-8", errors="replace") as f:
+            yield from read_carmen_text(f, str(path), corrected)
+    except OSError as e:
+        raise LogError(f"cannot read: {e.strerror}", str(path)) from None
+
+
+def read_carmen_text(lines: Iterable[str] | str, source: str = "log", corrected: bool = False) -> Iterator[Scan]:
+    """The scans of CARMEN log text (a string or an iterable of lines); errors name ``source``."""
+    if isinstance(lines, str):
+        lines = lines.splitlines()
+    odometry: Pose | None = None
+    truth: Pose | None = None
+    for number, line in enumerate(lines, 1):
+        tokens = line.split()
+        if not tokens or tokens[0].startswith("#"):
+            continue
+        where = f"{source}: line {number}"
+        kind = tokens[0]
+        if kind == "ODOM":
+            odometry = _pose(_fields(tokens, _ODOM_FIELDS, where), 1, where)
+        elif kind == "TRUEPOS":
+            truth = _pose(_fields(tokens, _TRUEPOS_FIELDS, where), 1, where)
+        elif kind == "ROBOTLASER1":
+            scan = robotlaser(tokens, where)
+            yield _with_truth(scan, truth, corrected)
+        elif kind == "FLASER":
+            yield _with_truth(flaser(tokens, where), truth, corrected)
+        elif kind == "RAWLASER1":
+            if odometry is None:
+                raise LogError("RAWLASER1 before any ODOM line: the scan has no odometry pose", where)
+            yield _with_truth(rawlaser(tokens, odometry, where), truth, corrected)
+
+
+def robotlaser(tokens: list[str], where: str) -> Scan:
+    """A ``ROBOTLASER1`` line as a scan: odometry = its robot pose, ``truth`` = its laser pose.
+
+    (A corrected log's laser pose is the optimised one; :func:`read_carmen_text` keeps it only when
+    told the log is corrected.)
+    """
+    n, ranges, rest = _ranges(tokens, 8, where)
+    tail = _after_remissions(rest, n, where)
+    if len(tail) != _ROBOTLASER_TAIL:
+        raise LogError(f"ROBOTLASER1 with {n} beams needs {9 + n + 1 + _ROBOTLASER_TAIL} fields after its "
+                       f"remissions, found {len(tokens)}: a truncated line or a wrong beam count", where)
+    spec = _numbers(tokens[2:6], where)
+    laser, robot = _pose(tail, 0, where), _pose(tail, 3, where)
+    return Scan(time=_number(tail[11], where), ranges=ranges, angle_min=spec[0], angle_increment=spec[2],
+                range_max=spec[3], odometry=robot, truth=laser)
+
+
+def flaser(tokens: list[str], where: str) -> Scan:
+    """A ``FLASER`` line: 180 degrees from the right, evenly over its beams; max range 80 m (SICK's
+    long mode: a reading at the maximum saw nothing)."""
+    n, ranges, rest = _ranges(tokens, 1, where)
+    if len(rest) != 9:
+        raise LogError(f"FLASER with {n} beams needs {2 + n + 9} fields, found {len(tokens)}: a truncated "
+                       "line or a wrong beam count", where)
+    increment = math.pi / n if n % 2 == 0 else math.pi / max(n - 1, 1)  # 180 beams at 1 deg, 181 at 1 deg
+    return Scan(time=_number(rest[6], where), ranges=ranges, angle_min=-math.pi / 2, angle_increment=increment,
+                range_max=80.0, odometry=_pose(rest, 3, where), truth=_pose(rest, 0, where))
+
+
+def rawlaser(tokens: list[str], odometry: Pose, where: str) -> Scan:
+    """A ``RAWLASER1`` line, with the odometry pose of the latest ``ODOM`` line."""
+    n, ranges, rest = _ranges(tokens, 8, where)
+    tail = _after_remissions(rest, n, where)
+    if len(tail) != 3:
+        raise LogError(f"RAWLASER1 with {n} beams has {len(tokens)} fields: a truncated line or a wrong beam "
+                       "count", where)
+    spec = _numbers(tokens[2:6], where)
+    return Scan(time=_number(tail[0], where), ranges=ranges, angle_min=spec[0], angle_increment=spec[2],
+                range_max=spec[3], odometry=odometry)
+
+
+def _with_truth(scan: Scan, truth: Pose | None, corrected: bool) -> Scan:
+    keep = scan.truth if corrected else truth
+    return Scan(scan.time, scan.ranges, scan.angle_min, scan.angle_increment, scan.range_max, scan.odometry, keep)
+
+
+def _ranges(tokens: list[str], count_at: int, where: str) -> tuple[int, np.ndarray, list[str]]:
+    """The beam count at ``tokens[count_at]``, the ranges after it, and the tokens after those."""
+    if len(tokens) <= count_at:
+        raise LogError(f"{tokens[0]} line cut short: {len(tokens)} fields", where)
+    n = _count(tokens[count_at], where, "beams")
+    if n == 0:
+        raise LogError(f"{tokens[0]} with no beams", where)
+    values = tokens[count_at + 1:count_at + 1 + n]
+    if len(values) < n:
+        raise LogError(f"{tokens[0]} declares {n} beams but the line ends after {len(values)}: a truncated "
+                       "line or a wrong beam count", where)
+    ranges = np.array(_numbers(values, where, "range"))
+    return n, ranges, tokens[count_at + 1 + n:]
+
+
+def _after_remissions(rest: list[str], n: int, where: str) -> list[str]:
+    """The tokens after a laser line's remissions (``rest`` starts with their count)."""
+    if not rest:
+        return []
+    try:
+        count = int(rest[0])
+    except ValueError:
+        # A range where the remission count should be: the line has more beams than it declares.
+        raise LogError(f"after the {n} declared beams comes {rest[0]!r} where the number of remissions "
+                       "should be: a wrong beam count", where) from None
+    return rest[1 + count:]
+
+
+def _fields(tokens: list[str], n: int, where: str) -> list[str]:
+    if len(tokens) != n:
+        raise LogError(f"{tokens[0]} needs {n} fields, found {len(tokens)}", where)
+    return tokens
+
+
+def _pose(tokens: list[str], at: int, where: str) -> Pose:
+    x, y, theta = _numbers(tokens[at:at + 3], where, "pose")
+    return (x, y, theta)
+
+
+def _count(token: str, where: str, what: str) -> int:
+    try:
+        n = int(token)
+    except ValueError:
+        raise LogError(f"the number of {what} is {token!r}, not a whole number", where) from None
+    if n < 0:
+        raise LogError(f"the number of {what} is {n}", where)
+    return n
+
+
+def _numbers(tokens: list[str], where: str, what: str = "value") -> list[float]:
+    return [_number(t, where, what) for t in tokens]
+
+
+def _number(token: str, where: str, what: str = "value") -> float:
+    try:
+        x = float(token)
+    except ValueError:
+        raise LogError(f"a {what} reads {token!r}, not a number", where) from None
+    if not math.isfinite(x):
+        raise LogError(f"a {what} reads {token!r}, not a finite number (a laser's missing return is its "
+                       "maximum range, never NaN)", where)
+    return x

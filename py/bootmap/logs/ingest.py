@@ -1,0 +1,148 @@
+"""From a robot's log to a tableau: images at the scans where a control law would have settled, and the
+actions odometry measured between them.
+
+1. :func:`read_log` reads any supported log into :class:`~bootmap.logs.scans.Scan` records (format by
+   name: ``killian``, a ``.g2o`` or ``.zip``, a ROS bag (``.bag``, ``.db3``, ``.mcap`` or a ROS 2 bag
+   directory), else a CARMEN log).
+2. :func:`~bootmap.logs.dstates.find_turns` cuts the odometry into travels and turns; each turn gives
+   two dstates, its start and its end.
+3. :func:`log_tableau` writes one step per dstate: the scan as an image (the simulator's format), the
+   action to the next dstate as odometry measured it (a turn: its angle; a travel: its length and net
+   heading change), the true pose as ``pose`` and, when the log has true poses, the true dstate as
+   ``truth`` (:mod:`bootmap.logs.truth`). The learning never reads ``pose`` or ``truth``.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from dataclasses import asdict
+from pathlib import Path
+from typing import Iterable, Iterator
+
+import numpy as np
+
+from ..errors import LogError
+from ..tableau import Step, Tableau, Travel, Turn
+from .dstates import FoundTurn, TurnDetector, dstate_scans, find_turns, odometry_track
+from .scans import IMAGE_ANGLE_MAX, IMAGE_ANGLE_MIN, IMAGE_BEAMS, Scan, to_image, wrap
+from .truth import corner_recall, corners_in_poses, main_axis, true_dstates
+
+ROS_SUFFIXES = (".bag", ".db3", ".mcap")
+
+
+def read_log(log: str | Path, progress: bool = False, **ros_options) -> list[Scan]:
+    """Every scan of a log, in time order. ``log`` is a path, or ``killian`` for the MIT Killian Court
+    log of the ``rtb-data`` package. ``ros_options`` go to :func:`bootmap.logs.rosbag.read_rosbag`."""
+    if str(log) == "killian" and not Path(log).exists():
+        from .g2o import killian
+
+        return killian()
+    path = Path(log)
+    if not path.exists():
+        raise LogError("no such file or directory", str(path))
+    if path.suffix in (".g2o", ".zip"):
+        from .g2o import read_g2o
+
+        return read_g2o(path)
+    if path.is_dir() or path.suffix in ROS_SUFFIXES:
+        from .rosbag import read_rosbag
+
+        return list(_shown(read_rosbag(path, **ros_options), progress))
+    from .carmen import read_carmen
+
+    return list(_shown(read_carmen(path), progress))
+
+
+def _shown(scans: Iterable[Scan], progress: bool) -> Iterator[Scan]:
+    """The scans, with a progress count on stderr for a long log."""
+    if not progress:
+        return iter(scans)
+    from tqdm import tqdm
+
+    return iter(tqdm(scans, unit=" scans", file=sys.stderr, dynamic_ncols=True, desc="reading", leave=False))
+
+
+def log_tableau(scans: list[Scan], detector: TurnDetector = TurnDetector(), max_range: float = 20.0,
+                radius_m: float = 3.0, source: str = "log") -> Tableau:
+    """The tableau of a log: one step per dstate (see the module docstring).
+
+    Parameters
+    ----------
+    scans : list of Scan
+        The log, in time order.
+    detector : TurnDetector
+        Where turns are found, hence where dstates are (:mod:`bootmap.logs.dstates`).
+    max_range : float
+        Images are clipped at this range (m): beyond it a corridor's far end says little, and a long
+        reading swings with small changes of heading.
+    radius_m : float
+        Dstates whose true poses lie this close are one place (for ``truth`` only).
+    source : str
+        What the log is called in messages and in ``meta.source``.
+    """
+    if len(scans) < 2:
+        raise LogError(f"{len(scans)} scan(s): a log needs at least two to have any motion", source)
+    distance, heading = odometry_track([s.odometry for s in scans])
+    turns = find_turns(distance, heading, detector)
+    if not turns:
+        raise LogError(f"the odometry turns nowhere (no heading change of {detector.turn_deg:g} degrees or "
+                       "more between travels): no dstate to choose", source)
+    chosen = dstate_scans(turns)
+    actions = _actions(turns, distance, heading)
+    has_truth = all(s.truth is not None for s in scans)
+    truth = _truth(scans, chosen, radius_m) if has_truth else [None] * len(chosen)
+    steps = tuple(Step(action=actions[k] if k < len(actions) else None,
+                       image=to_image(scans[i], IMAGE_BEAMS, max_range), truth=truth[k],
+                       pose=_rounded(scans[i].truth) if has_truth else None)
+                  for k, i in enumerate(chosen))
+    meta = _meta(scans, chosen, turns, detector, max_range, radius_m, source, has_truth)
+    return Tableau(steps, None, meta)
+
+
+def _actions(turns: list[FoundTurn], distance: np.ndarray, heading: np.ndarray) -> list:
+    """The actions between consecutive dstates: each turn, then the travel to the next turn's start."""
+    actions: list = []
+    for k, turn in enumerate(turns):
+        actions.append(Turn(round(turn.angle_deg, 2)))
+        if k + 1 < len(turns):
+            a, b = turn.after, turns[k + 1].before
+            change = math.degrees(wrap(float(heading[b] - heading[a])))
+            actions.append(Travel(round(float(distance[b] - distance[a]), 3), round(change, 2)))
+    return actions
+
+
+def _truth(scans: list[Scan], chosen: list[int], radius_m: float) -> list[str]:
+    """True dstates of the chosen scans, sectors aligned to the axis of the whole true path."""
+    axis = main_axis([s.truth for s in scans])
+    turn_ends = [(k, k + 1) for k in range(0, len(chosen), 2)]  # dstate_scans: each turn's start, then end
+    return true_dstates([scans[i].truth for i in chosen], radius_m, axis, turn_ends)
+
+
+def _rounded(pose) -> tuple[float, float, float]:
+    return (round(pose[0], 4), round(pose[1], 4), round(float(wrap(pose[2])), 5))
+
+
+def _meta(scans, chosen, turns, detector, max_range, radius_m, source, has_truth) -> dict:
+    meta = {"generator": "bootmap.logs", "source": source, "scans": len(scans),
+            "laser": {"angle_min": IMAGE_ANGLE_MIN, "angle_max": IMAGE_ANGLE_MAX,
+                      "angle_increment": (IMAGE_ANGLE_MAX - IMAGE_ANGLE_MIN) / (IMAGE_BEAMS - 1),
+                      "range_max": max_range, "beams": IMAGE_BEAMS,
+                      "log_range_max": scans[0].range_max},
+            "dstates": {"scans": chosen, "detector": asdict(detector)}}
+    if has_truth:
+        truth = [s.truth for s in scans]
+        recall = corner_recall(turns, truth, corners_in_poses(truth))
+        meta["truth"] = {"radius_m": radius_m, "axis_deg": round(math.degrees(main_axis(truth)), 2),
+                         "corner_recall": recall.to_dict()}
+        meta["trajectory"] = np.round(np.asarray(truth)[:, :2], 2).tolist()
+    return meta
+
+
+def ingest(log: str | Path, detector: TurnDetector = TurnDetector(), max_range: float = 20.0,
+           radius_m: float = 3.0, progress: bool = False, **ros_options) -> Tableau:
+    """:func:`read_log` then :func:`log_tableau`: a log file (or ``killian``) to a tableau."""
+    scans = read_log(log, progress=progress, **ros_options)
+    return log_tableau(scans, detector, max_range, radius_m, source=str(log))
+
+

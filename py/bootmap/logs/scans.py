@@ -1,0 +1,96 @@
+"""The record every log reader yields: one laser scan with the robot's poses when it was taken.
+
+A log is a stream of :class:`Scan` records in time order, whatever its format (g2o, CARMEN, ROS bag):
+the ranges and the angles they were read at, the odometry pose (what the robot itself measured, the
+only pose the learning may use) and, when the log has one, the true pose (for evaluation only).
+:func:`to_image` turns a scan into a tableau image the way the simulator writes one.
+
+Example
+-------
+>>> s = Scan(0.0, np.array([1.0, 2.0, 60.0]), -np.pi / 2, np.pi / 2, 50.0, (0.0, 0.0, 0.0))
+>>> s.angles.round(3).tolist(), to_image(s, beams=3, max_range=20.0)
+([-1.571, 0.0, 1.571], (1.0, 2.0, 20.0))
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+Pose = tuple[float, float, float]  # x (m), y (m), heading (rad, counter-clockwise from x)
+
+#: The tableau's image format, as the simulator writes it: 180 beams from -90 to +90 degrees.
+IMAGE_BEAMS = 180
+IMAGE_ANGLE_MIN = -math.pi / 2
+IMAGE_ANGLE_MAX = math.pi / 2
+
+
+@dataclass(frozen=True, eq=False)
+class Scan:
+    """One laser scan of a log.
+
+    Parameters
+    ----------
+    time : float
+        Seconds (the log's clock).
+    ranges : numpy.ndarray
+        Metres, beam ``i`` at angle ``angle_min + i * angle_increment``; a reading at or beyond
+        ``range_max`` saw nothing.
+    angle_min, angle_increment : float
+        Radians, relative to the robot's heading; negative is to the right.
+    range_max : float
+        The sensor's maximum range, metres.
+    odometry : Pose
+        The robot's own dead-reckoned pose when the scan was taken.
+    truth : Pose, optional
+        The log's best estimate of the true pose (optimised, or from a ground-truth topic); never used
+        by the learning.
+    """
+
+    time: float
+    ranges: np.ndarray
+    angle_min: float
+    angle_increment: float
+    range_max: float
+    odometry: Pose
+    truth: Pose | None = None
+
+    @property
+    def angles(self) -> np.ndarray:
+        return self.angle_min + self.angle_increment * np.arange(len(self.ranges))
+
+
+def image_angles(beams: int = IMAGE_BEAMS) -> np.ndarray:
+    """The beam angles of a tableau image (the simulator's: both ends included)."""
+    return np.linspace(IMAGE_ANGLE_MIN, IMAGE_ANGLE_MAX, beams)
+
+
+def to_image(scan: Scan, beams: int = IMAGE_BEAMS, max_range: float = 20.0) -> tuple[float, ...]:
+    """A scan as a tableau image: ``beams`` readings from -90 to +90 degrees, clipped at ``max_range``.
+
+    Each image beam takes the nearest beam of the scan (not an interpolation, which would invent
+    points between a near wall and a far one); an image beam outside the scan's field of view, or whose
+    reading saw nothing, reads ``max_range``, as the simulated laser's does.
+    """
+    want = image_angles(beams)
+    idx = np.rint((want - scan.angle_min) / scan.angle_increment).astype(int)
+    inside = (idx >= 0) & (idx < len(scan.ranges))
+    out = np.full(beams, float(max_range))
+    ranges = np.asarray(scan.ranges, dtype=float)
+    seen = np.where(ranges >= scan.range_max, max_range, ranges)
+    out[inside] = np.minimum(seen[idx[inside]], max_range)
+    return tuple(np.round(out, 4).tolist())
+
+
+def wrap(angle: float | np.ndarray) -> float | np.ndarray:
+    """An angle (radians) in [-pi, pi)."""
+    return (np.asarray(angle) + np.pi) % (2 * np.pi) - np.pi if isinstance(angle, np.ndarray) else \
+        (angle + math.pi) % (2 * math.pi) - math.pi
+
+
+def compose(a: Pose, b: Pose) -> Pose:
+    """Pose ``a`` followed by the motion ``b`` expressed in ``a``'s frame (SE(2) composition)."""
+    c, s = math.cos(a[2]), math.sin(a[2])
+    return (a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], wrap(a[2] + b[2]))

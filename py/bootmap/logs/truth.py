@@ -1,0 +1,166 @@
+"""Truth from a log's poses: places, true dstates and corners, measured from the data, not from us.
+
+A log has no world file to say where its places are, only the true (optimised) pose of every scan.
+
+- **Places**: dstates whose true positions lie within ``radius_m`` of each other (directly or through
+  others) are one place, every visit to a corner; so are the two dstates of a turn (a turn never
+  leaves its place, though a robot that turns while driving ends it 2-4 m on).
+- **True dstates**: a place and a heading sector, the sectors aligned to the building's main axis (the
+  dominant direction of the corridors, found from the true path), named as the simulator names them
+  (``P3:N``).
+- **Corners**: where the true path bends (a Ramer-Douglas-Peucker simplification of the positions,
+  bends closer than ``merge_m`` summed), ``turn_deg`` or more. They come from the positions alone, so
+  they check the odometry's turn detector rather than repeat it.
+
+Example
+-------
+>>> poses = [(0, 0, 0), (0.5, 0, 0), (10, 0, 1.57), (10, 0.5, 1.57), (10, 10, 1.57)]
+>>> place_labels(poses, radius_m=3.0)
+[0, 0, 1, 1, 2]
+>>> true_dstates(poses, radius_m=3.0, axis_rad=0.0)
+['P0:E', 'P0:E', 'P1:N', 'P1:N', 'P2:N']
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+
+from .dstates import FoundTurn, odometry_track
+from .scans import Pose, wrap
+
+SECTORS = "ENWS"  # as bootmap.sim.world.heading_sector names them, here in the building's frame
+
+
+def place_labels(poses: list[Pose] | np.ndarray, radius_m: float = 3.0,
+                 together: list[tuple[int, int]] = ()) -> list[int]:
+    """A place index per pose: poses within ``radius_m`` of each other, directly or in a chain, share one,
+    and so does each pair in ``together`` (a turn's two ends: a turn never leaves its place).
+    Places are numbered in the order they are first visited."""
+    xy = np.asarray(poses, dtype=float).reshape(-1, 3)[:, :2]
+    pairs = cKDTree(xy).query_pairs(radius_m, output_type="ndarray")
+    pairs = np.concatenate([pairs.reshape(-1, 2), np.asarray(together, dtype=int).reshape(-1, 2)])
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(xy), len(xy)))
+    _, labels = connected_components(graph, directed=False)
+    first_seen: dict[int, int] = {}
+    return [first_seen.setdefault(int(c), len(first_seen)) for c in labels]
+
+
+def main_axis(poses: list[Pose] | np.ndarray, tolerance_m: float = 1.0) -> float:
+    """The building's main axis (radians, in [-pi/4, pi/4)): the mean direction of the path's straight
+    legs modulo 90 degrees, each leg weighted by its length."""
+    xy = np.asarray(poses, dtype=float).reshape(-1, 3)[:, :2]
+    legs = np.diff(xy[simplify(xy, tolerance_m)], axis=0)
+    length = np.hypot(legs[:, 0], legs[:, 1])
+    direction = np.arctan2(legs[:, 1], legs[:, 0])
+    # Directions four times over: corridors at 0, 90, 180 and 270 degrees all point the same way.
+    mean = np.arctan2((length * np.sin(4 * direction)).sum(), (length * np.cos(4 * direction)).sum())
+    return float(wrap(mean / 4 + np.pi / 4) - np.pi / 4) if length.sum() else 0.0
+
+
+def true_dstates(poses: list[Pose] | np.ndarray, radius_m: float = 3.0, axis_rad: float | None = None,
+                 together: list[tuple[int, int]] = ()) -> list[str]:
+    """The true dstate of each pose: its place (:func:`place_labels`) and its heading's sector in the
+    building's frame."""
+    p = np.asarray(poses, dtype=float).reshape(-1, 3)
+    axis = main_axis(p) if axis_rad is None else axis_rad
+    sectors = np.rint(wrap(p[:, 2] - axis) / (np.pi / 2)).astype(int) % 4
+    return [f"P{place}:{SECTORS[s]}" for place, s in zip(place_labels(p, radius_m, together), sectors)]
+
+
+def simplify(xy: np.ndarray, tolerance_m: float) -> np.ndarray:
+    """Indices of the Ramer-Douglas-Peucker simplification of a path (first and last kept)."""
+    keep = np.zeros(len(xy), dtype=bool)
+    keep[[0, -1]] = True
+    stack = [(0, len(xy) - 1)]
+    while stack:  # iterative: a 4,000-point path would overflow Python's recursion
+        a, b = stack.pop()
+        if b - a < 2:
+            continue
+        offset = _distance_to_segment(xy[a + 1:b], xy[a], xy[b])
+        k = int(np.argmax(offset))
+        if offset[k] > tolerance_m:
+            keep[a + 1 + k] = True
+            stack += [(a, a + 1 + k), (a + 1 + k, b)]
+    return np.flatnonzero(keep)
+
+
+def _distance_to_segment(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    ab = b - a
+    span = float(ab @ ab)
+    t = np.zeros(len(points)) if span == 0 else np.clip((points - a) @ ab / span, 0.0, 1.0)
+    return np.hypot(*(points - a - t[:, None] * ab).T)
+
+
+@dataclass(frozen=True)
+class Corner:
+    """A bend of the true path: the scan at its apex and the change of direction (degrees)."""
+
+    scan: int
+    angle_deg: float
+
+
+def corners_in_poses(poses: list[Pose] | np.ndarray, turn_deg: float = 45.0, tolerance_m: float = 0.5,
+                     merge_m: float = 3.0) -> list[Corner]:
+    """The corners the true path turns, from positions only (never the odometry, never the headings)."""
+    xy = np.asarray(poses, dtype=float).reshape(-1, 3)[:, :2]
+    keep = simplify(xy, tolerance_m)
+    legs = np.diff(xy[keep], axis=0)
+    length = np.hypot(legs[:, 0], legs[:, 1])
+    bends = wrap(np.diff(np.arctan2(legs[:, 1], legs[:, 0])))
+    corners, k = [], 0
+    while k < len(bends):
+        # A curve is several small bends joined by short legs: sum them into one corner.
+        end = k
+        while end + 1 < len(bends) and length[end + 1] < merge_m:
+            end += 1
+        total = float(np.degrees(wrap(bends[k:end + 1].sum())))  # a loop on the spot ends where it began
+        if abs(total) >= turn_deg:
+            corners.append(Corner(int(keep[(k + end) // 2 + 1]), total))
+        k = end + 1
+    return corners
+
+
+@dataclass(frozen=True)
+class CornerRecall:
+    """How the odometry's turns compare with the corners seen in the true poses."""
+
+    corners: int
+    found: int
+    turns: int
+    turns_at_corners: int
+    angle_errors_deg: list[float]
+
+    @property
+    def recall(self) -> float:
+        return self.found / self.corners if self.corners else 1.0
+
+    @property
+    def precision(self) -> float:
+        return self.turns_at_corners / self.turns if self.turns else 1.0
+
+    def to_dict(self) -> dict:
+        errors = np.abs(self.angle_errors_deg) if self.angle_errors_deg else np.zeros(0)
+        return {"corners": self.corners, "found": self.found, "recall": self.recall, "turns": self.turns,
+                "turns_at_corners": self.turns_at_corners, "precision": self.precision,
+                "angle_error_deg_median": float(np.median(errors)) if len(errors) else None,
+                "angle_error_deg_max": float(errors.max()) if len(errors) else None,
+                "angles_within_10_deg": float((errors <= 10).mean()) if len(errors) else None}
+
+
+def corner_recall(turns: list[FoundTurn], truth: list[Pose] | np.ndarray, corners: list[Corner],
+                  match_m: float = 3.0) -> CornerRecall:
+    """Which corners a found turn covers: the corner's apex lies within ``match_m`` metres of travel of
+    the turn's stretch. Each turn's angle is compared with the true heading change over its stretch."""
+    distance, heading = odometry_track(truth)
+    near = [[abs(distance[c.scan] - np.clip(distance[c.scan], distance[t.before], distance[t.after])) <= match_m
+             for t in turns] for c in corners]
+    found = sum(any(row) for row in near)
+    at_corners = sum(any(row[j] for row in near) for j in range(len(turns)))
+    errors = [float(np.degrees(wrap(np.radians(t.angle_deg) - (heading[t.after] - heading[t.before]))))
+              for t in turns]
+    return CornerRecall(len(corners), found, len(turns), at_corners, errors)

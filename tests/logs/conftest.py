@@ -1,0 +1,19 @@
+"""The committed Killian excerpt, read once."""
+
+from pathlib import Path
+
+import pytest
+
+from bootmap.logs.g2o import read_g2o
+
+from log_data import EXCERPT
+
+
+@pytest.fixture(scope="session")
+def excerpt_scans():
+    return read_g2o(EXCERPT)
+
+
+@pytest.fixture(scope="session")
+def excerpt_lines():
+    return EXCERPT.read_text().splitlines()

@@ -1,0 +1,55 @@
+"""Where a control law would have settled: turns found in odometry, synthetic runs and the Killian excerpt."""
+
+import numpy as np
+import pytest
+
+from bootmap.logs.dstates import TurnDetector, dstate_scans, find_turns, odometry_track
+
+
+def _run(headings_deg, step_m=0.5):
+    """Poses driving ``step_m`` between headings: a run as odometry would read it."""
+    theta = np.radians(headings_deg)
+    xy = np.cumsum(np.column_stack([np.cos(theta), np.sin(theta)]) * step_m, axis=0)
+    return np.column_stack([xy, theta])
+
+
+def _turns(poses, **kw):
+    return find_turns(*odometry_track(poses), TurnDetector(**kw))
+
+
+def test_a_sharp_corner_is_one_turn_between_its_travels():
+    (turn,) = _turns(_run([0] * 30 + [45] + [90] * 30))
+    assert (turn.before, turn.after, round(turn.angle_deg)) == (29, 31, 90)
+
+
+def test_a_gradual_corner_needs_the_window():
+    # 90 degrees spread over 10 m (3 degrees every 0.5 m): never 20 degrees within 2 m.
+    poses = _run([0] * 40 + list(np.arange(3, 90, 3)) + [90] * 40)
+    assert _turns(poses, window_m=2.0) == []
+    (turn,) = _turns(poses, window_m=6.0)
+    assert 66 <= turn.angle_deg <= 90  # read short by up to twice settled_deg: its ends look straight
+
+
+def test_headings_across_pi_are_unwrapped_before_summing():
+    (turn,) = _turns(_run([170] * 30 + [-170] * 0 + [-100] * 30))  # 170 -> 260 (= -100): a left turn of 90
+    assert round(turn.angle_deg) == 90
+
+
+def test_a_spin_on_the_spot_is_no_turn_and_a_wiggle_neither():
+    spin = np.array([(0.5 * i, 0.0, 0.0) for i in range(20)] + [(10.0, 0.0, np.radians(a)) for a in range(0, 360, 30)]
+                    + [(10.0 + 0.5 * i, 0.0, 0.0) for i in range(20)])
+    assert _turns(spin) == []
+    assert _turns(_run([0] * 20 + [15, 25, 15] + [0] * 20)) == []
+
+
+def test_two_turns_with_no_travel_between_are_one_u_turn():
+    (turn,) = _turns(_run([0] * 30 + [90, 180] + [180] * 30))
+    assert abs(turn.angle_deg) == pytest.approx(180)
+
+
+def test_the_excerpt_has_eight_turns_and_sixteen_dstates(excerpt_scans):
+    turns = find_turns(*odometry_track([s.odometry for s in excerpt_scans]))
+    assert [(t.before, t.after) for t in turns] == [(18, 25), (113, 118), (132, 142), (163, 170), (206, 214),
+                                                   (236, 244), (321, 324), (341, 350)]
+    assert [round(t.angle_deg) for t in turns] == [-89, -90, 83, 100, 80, 84, -83, 87]
+    assert dstate_scans(turns)[:4] == [18, 25, 113, 118]
