@@ -24,7 +24,7 @@ import numpy as np
 from ..tableau import Action
 from ..tableau import Travel as TravelAction
 from ..tableau import Turn as TurnAction
-from .perception import Percept, Perception
+from .perception import CAPTURE_LIMIT, Percept, Perception
 from .physics import Odometry
 
 NEAR_EDGE_WATCH = 1.0  # m: the end of the wall beside the robot is watched for this far ahead
@@ -200,23 +200,56 @@ class Travel(ControlLaw):
 
 class Turn(ControlLaw):
     """Turn in place by ``angle`` (radians, positive left) by odometry, then hill-climb to alignment
-    with the walls of the new path."""
+    with the walls of the new path.
+
+    Odometry only has to bring the robot near the new heading: once within ``align_window`` of it by
+    odometry, with walls in sight, the law aligns with the walls and never goes back to odometry (the
+    robot is where the walls say; a slipping odometry that still reads the turn as unfinished must not
+    turn it away again). Where the walls are not in sight at the usual fold limit, the law looks for
+    them up to :data:`~bootmap.sim.perception.CAPTURE_LIMIT` off the robot's axes, since odometry that
+    is several degrees off can leave the robot further from them than a fixed point ever is.
+
+    Parameters
+    ----------
+    lim : Limits
+    angle : float
+        Radians, positive left.
+    perception : Perception, optional
+        For the wider look at the walls; without it the law aligns only with walls the percept sees.
+    align_window : float
+        Radians of odometry-measured turn still to go where alignment with the walls takes over.
+    """
 
     timeout = 30.0
 
-    def __init__(self, lim: Limits, angle: float, align_window: float = math.radians(12)):
+    def __init__(self, lim: Limits, angle: float, perception: Perception | None = None,
+                 align_window: float = math.radians(12)):
         super().__init__(lim)
-        self.angle, self.align_window = angle, align_window
+        self.angle, self.perception, self.align_window = angle, perception, align_window
+        self.aligning = False
 
     def step(self, p: Percept, ranges: np.ndarray, odo: Odometry) -> tuple[float, float]:
         lim = self.lim
         remaining = self.angle - (odo.theta - self.start.theta)
-        if abs(remaining) > self.align_window or math.isnan(p.wall_angle):
+        wall = self._wall_angle(p, ranges, remaining)
+        if math.isnan(wall) and self.aligning:  # the walls lost for a scan (drop-outs): hold still
+            self._settle(False)
+            return 0.0, 0.0
+        if math.isnan(wall):
             mag = min(lim.w_max, math.sqrt(2 * lim.w_accel * abs(remaining)), lim.k_align * abs(remaining))
             self._settle(abs(remaining) < lim.align_tolerance)
             return 0.0, (0.0 if self.done else math.copysign(mag, remaining))
-        self._settle(abs(p.wall_angle) < lim.align_tolerance)
-        return 0.0, (0.0 if self.done else lim.k_align * p.wall_angle)
+        self.aligning = True
+        self._settle(abs(wall) < lim.align_tolerance)
+        return 0.0, (0.0 if self.done else max(-lim.w_max, min(lim.w_max, lim.k_align * wall)))
+
+    def _wall_angle(self, p: Percept, ranges: np.ndarray, remaining: float) -> float:
+        """The walls' angle to align with, or nan while the turn is still odometry's to make."""
+        if not self.aligning and abs(remaining) > self.align_window:
+            return math.nan
+        if not math.isnan(p.wall_angle) or self.perception is None:
+            return p.wall_angle
+        return self.perception.wall_angle(ranges, CAPTURE_LIMIT)
 
     def action(self, odometry: Odometry) -> Action:
         return TurnAction(round(math.degrees(odometry.theta - self.start.theta), 3))
