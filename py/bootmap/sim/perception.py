@@ -20,8 +20,6 @@ HALF_WINDOW = 3  # scan points either side of the centre of a straight-run windo
 MAX_SAG = 0.025  # m: a window with a point further than this from its chord is not straight
 AGREE = math.radians(1.5)  # chords within this of the weighted median direction are averaged
 FOLD_LIMIT = math.radians(25)  # wall directions further from the robot's axes than this are ignored
-# ... except by a turn that has lost the walls near its end: odometry may leave it this far off them
-CAPTURE_LIMIT = math.radians(40)
 
 
 @dataclass(frozen=True)
@@ -101,11 +99,8 @@ class Perception:
         d = _median(side * ranges[idx] * np.sin(self.angles[idx] - phi))
         return d if d <= self.open_range else math.inf
 
-    def wall_angle(self, ranges: np.ndarray, fold_limit: float = FOLD_LIMIT) -> float:
-        """Robust direction of the straight walls in view, folded onto the robot's axes; nan if none.
-
-        Chords further than ``fold_limit`` (radians) from the robot's axes are ignored: at a fixed point
-        they are the edges of clutter and corners, not walls."""
+    def wall_angle(self, ranges: np.ndarray) -> float:
+        """Robust direction of the straight walls in view, folded onto the robot's axes; nan if none."""
         x, y = ranges * self.cos, ranges * self.sin
         k = HALF_WINDOW
         cx, cy = x[2 * k:] - x[:-2 * k], y[2 * k:] - y[:-2 * k]
@@ -126,7 +121,7 @@ class Perception:
             return math.nan
         folded = (np.arctan2(cy[ok], cx[ok]) + math.pi / 4) % (math.pi / 2) - math.pi / 4
         w = length[ok] ** 2  # a longer chord gives its direction more precisely
-        w[np.abs(folded) > fold_limit] = 0.0
+        w[np.abs(folded) > FOLD_LIMIT] = 0.0
         if w.sum() <= 0:
             return math.nan
         # Robust mean: the weighted median direction, then the weighted mean of the chords that agree

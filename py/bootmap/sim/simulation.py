@@ -147,7 +147,7 @@ class Simulation:
     def _law(self, decision: Decision, policy) -> ControlLaw:
         if decision.kind == "travel":
             return self._travel_law(policy)
-        return Turn(self.limits, decision.angle, self.perception)
+        return Turn(self.limits, decision.angle)
 
     def _travel_law(self, policy) -> Travel:
         c = self.world.control
