@@ -82,7 +82,7 @@ def main(argv=None) -> int:
         rms_old = float(np.sqrt(np.mean(old["errors"]["turn 90"] ** 2)))
         targets.check(f"{name}: RMS error of 90-degree turns", rms_new, ">=", 4.0, fmt="{:.2f}", unit=" deg")
         targets.check(f"{name}: RMS error of 90-degree turns", rms_new, "<=", 10.0, fmt="{:.2f}", unit=" deg")
-        targets.check(f"{name}: ... against the old model's", rms_new / rms_old, ">=", 3.0, fmt="{:.1f}x", unit="x")
+        targets.check(f"{name}: ... against the old model's", rms_new / rms_old, ">=", 3.0, fmt="{:.1f}x", bound_text="3x")
         targets.check(f"{name}: stops of one dstate within", 100 * new["stop_spread_m"], "<", 5.0, fmt="{:.1f}",
                       unit=" cm")
     return targets.exit_status()
