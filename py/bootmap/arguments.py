@@ -75,3 +75,19 @@ def positive(unit: str):
             raise argparse.ArgumentTypeError(f"expected {unit} (a number > 0), got {text!r}")
         return value
     return parse
+
+
+def setting(text: str) -> tuple[str, object]:
+    """'laser.noise_sd=0.02' -> ('laser.noise_sd', 0.02): a world field and its value, read as TOML
+    reads a value (numbers, true/false, quoted strings, arrays); a bare word is taken as a string."""
+    key, eq, value = text.partition("=")
+    key = key.strip()
+    if not eq or not key or not value.strip():
+        raise argparse.ArgumentTypeError(f"expected SECTION.FIELD=VALUE, e.g. laser.noise_sd=0.02, got {text!r}")
+    import tomllib
+
+    try:
+        parsed = tomllib.loads(f"v = {value.strip()}")["v"]
+    except tomllib.TOMLDecodeError:
+        parsed = value.strip()
+    return key, parsed

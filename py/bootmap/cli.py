@@ -107,15 +107,20 @@ def cmd_schema(args: argparse.Namespace) -> int:
 def cmd_experiment(args: argparse.Namespace) -> int:
     from .experiment import failed_checks, run_experiment, run_seeds
 
+    world = args.world
+    if args.set:
+        from .sim.world import load_world
+
+        world = load_world(args.world, dict(args.set))  # a bad setting is a WorldError: exit 2
     if args.seeds:
-        out = run_seeds(args.world, args.seeds, out_dir=args.output, circuits=args.circuits, steps=args.steps,
+        out = run_seeds(world, args.seeds, out_dir=args.output, circuits=args.circuits, steps=args.steps,
                         k_max=args.k_max, time_limit=args.time_limit, quantum_deg=args.quantum, progress=True)
         runs = out["runs"]
         for r in runs:
             _print_summary(r)
         print(f"summary over seeds: {args.output}/summary.md")
     else:
-        runs = [run_experiment(args.world, circuits=args.circuits, steps=args.steps, seed=args.seed,
+        runs = [run_experiment(world, circuits=args.circuits, steps=args.steps, seed=args.seed,
                                out_dir=args.output, k_max=args.k_max, progress=True, time_limit=args.time_limit,
                                quantum_deg=args.quantum)]
         _print_summary(runs[0])
@@ -257,6 +262,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quantum", type=arguments.quantum, metavar="DEG",
                    help="round the actions' angles to this many degrees instead of learning the robot's action "
                         "types (the default)")
+    p.add_argument("--set", type=arguments.setting, action="append", metavar="SECTION.FIELD=VALUE",
+                   help="override a field of the world file, e.g. --set laser.noise_sd=0.02 --set "
+                        "laser.dropout=0.002 (twice the shipped sensor noise); validated as in the file; "
+                        "repeatable (worlds/README.md lists the fields)")
     p.add_argument("-o", "--output", default="out", metavar="DIR", help="output directory (default out/)")
     p.set_defaults(handler=cmd_experiment)
 

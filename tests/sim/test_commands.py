@@ -3,6 +3,8 @@
 import argparse
 import json
 
+import pytest
+
 
 from bootmap.sim.commands import register
 from bootmap.tableau import load
@@ -52,3 +54,18 @@ def test_render_rejects_an_image_step_out_of_range(tmp_path, capsys):
     _main(["simulate", "plus", "--steps", "2", "--no-progress", "-o", str(run_file)])
     assert _main(["render", "plus", "--run", str(run_file), "--image", "9", "-o", str(tmp_path / "x.png")]) == 2
     assert "--image 9" in capsys.readouterr().err
+
+
+def test_simulate_set_overrides_a_world_field_and_a_bad_one_exits_2(tmp_path, capsys):
+    quiet = ["--set", "motion_noise.turn_scale=0", "--set", "motion_noise.drift_deg_s=0",
+             "--set", "motion_noise.slip_omega=0"]
+    out = tmp_path / "run.json"
+    assert _main(["simulate", "notched_rectangle", "--circuits", "1", "--seed", "1", "-o", str(out), *quiet]) == 0
+    turns = [s.action.angle_deg for s in load(out).steps if s.action is not None and hasattr(s.action, "angle_deg")]
+    assert turns and all(abs(a + 90) < 1.5 for a in turns)  # no turn-rate noise: turns read as made
+    assert _main(["simulate", "notched_rectangle", "--set", "motion_noise.turn_scale=0.9", "--no-progress"]) == 2
+    assert "motion_noise.turn_scale: must be <= 0.5, got 0.9" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as usage:  # argparse: a malformed setting is a usage error
+        _main(["simulate", "notched_rectangle", "--set", "laser.noise_sd"])
+    assert usage.value.code == 2
+    assert "expected SECTION.FIELD=VALUE" in capsys.readouterr().err

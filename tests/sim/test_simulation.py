@@ -73,8 +73,9 @@ def test_actions_are_odometry_turns_and_travels(paper_run):
     turns = [a.angle_deg for a in acts if isinstance(a, Turn)]
     travels = [a.distance_m for a in acts if isinstance(a, Travel)]
     assert len(turns) == 200 and len(travels) == 199
-    assert np.allclose(turns, -90, atol=6)  # right turns, measured by odometry, not exactly -90
-    assert np.std(turns) > 0.1
+    # right turns, measured by a real robot's odometry: several degrees off -90 (docs/noise.md)
+    assert np.allclose(turns, -90, atol=25)
+    assert 3.0 < np.sqrt(np.mean((np.array(turns) + 90) ** 2)) < 10.0
     long_side = [d for d in travels if d > 3]
     assert np.allclose(long_side, 4.0, atol=0.15) and np.allclose([d for d in travels if d < 3], 2.0, atol=0.15)
 

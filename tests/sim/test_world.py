@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from bootmap.errors import BootmapError, WorldError
-from bootmap.sim.world import World, heading_sector, load_world, loads_world, world_names, worlds_dir
+from bootmap.sim.world import MotionNoise, World, heading_sector, load_world, loads_world, world_names, worlds_dir
 
 MINIMAL = """
 format = "bootmap.world/1"
@@ -61,6 +61,26 @@ def test_minimal_world_gets_defaults():
     assert isinstance(w, World)
     assert w.laser.beams == 180 and w.laser.noise_sd == pytest.approx(0.01)
     assert w.robot.radius == pytest.approx(0.25)
+    # a real robot's odometry unless the file says otherwise (worlds/README.md, the noise model)
+    assert w.motion_noise == MotionNoise(slip_v=0.06, slip_omega=0.06, turn_scale=0.05, turn_scale_time_s=5.0,
+                                         drift_deg_s=0.15, drift_time_s=60.0)
+
+
+def test_motion_noise_fields_are_read_and_the_rest_keep_their_defaults():
+    w = loads_world(MINIMAL + "[motion_noise]\nturn_scale = 0\ndrift_deg_s = 0.5\n", "box.toml")
+    assert (w.motion_noise.turn_scale, w.motion_noise.drift_deg_s) == (0.0, 0.5)
+    assert w.motion_noise.slip_v == MotionNoise().slip_v
+
+
+def test_settings_override_the_file_and_are_validated_like_it():
+    w = load_world("notched_rectangle", {"laser.noise_sd": 0.02, "motion_noise.turn_scale": 0.0})
+    assert (w.laser.noise_sd, w.motion_noise.turn_scale) == (0.02, 0.0)
+    with pytest.raises(WorldError, match=r"with laser.dropout=0.9\): laser.dropout: must be <= 0.5"):
+        load_world("notched_rectangle", {"laser.dropout": 0.9})
+    with pytest.raises(WorldError, match="laser.nosie_sd: unknown field"):
+        load_world("notched_rectangle", {"laser.nosie_sd": 0.02})
+    with pytest.raises(WorldError, match="a setting is section.field"):
+        load_world("notched_rectangle", {"laser.x.y": 1})
 
 
 @pytest.mark.parametrize("edit, where, words", [
@@ -80,6 +100,13 @@ def test_minimal_world_gets_defaults():
     (lambda s: s + "[[discs]]\ncenter = [1, 2]\nradius = 0\n", "discs[0].radius", "must be > 0"),
     (lambda s: s + "[[boxes]]\ncenter = [1, 2]\nsize = [1, 1]\njitter = 5\n", "boxes[0].jitter", "<= 2"),
     (lambda s: s.replace('name = "box"', 'name = "box"\npolicy = "teleport"'), "policy", "unknown policy"),
+    (lambda s: s + "[motion_noise]\nturn_scale = 0.9\n", "motion_noise.turn_scale", "<= 0.5"),
+    (lambda s: s + "[motion_noise]\nslip_v = -0.1\n", "motion_noise.slip_v", ">= 0"),
+    (lambda s: s + "[motion_noise]\ndrift_deg_s = 11\n", "motion_noise.drift_deg_s", "<= 10"),
+    (lambda s: s + "[motion_noise]\ndrift_time_s = 0\n", "motion_noise.drift_time_s", "must be > 0"),
+    (lambda s: s + "[motion_noise]\nturn_scale_time_s = \"slow\"\n", "motion_noise.turn_scale_time_s",
+     "must be a number"),
+    (lambda s: s + "[motion_noise]\ngyro_bias = 0.1\n", "motion_noise.gyro_bias", "unknown field"),
 ])
 def test_bad_world_names_file_field_and_problem(edit, where, words):
     with pytest.raises(WorldError) as err:

@@ -28,6 +28,9 @@ def register(subparsers) -> None:
                    help="record exactly N dstates (explore: keep wandering after exploring)")
     p.add_argument("--direction", choices=("cw", "ccw"), default="cw", help="direction of circuits")
     p.add_argument("--seed", type=arguments.count("seed", 0), default=0, help="random seed (default 0); same seed, same tableau")
+    p.add_argument("--set", type=arguments.setting, action="append", metavar="SECTION.FIELD=VALUE",
+                   help="override a field of the world file, e.g. --set motion_noise.turn_scale=0; validated "
+                        "as in the file; repeatable")
     p.add_argument("-o", "--output", metavar="FILE", help="write the tableau here (default: stdout)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(handler=cmd_simulate)
@@ -48,7 +51,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     from .world import load_world
 
     try:
-        world = load_world(args.world)
+        world = load_world(args.world, dict(args.set or ()))
         if args.circuits < 1 or (args.steps is not None and args.steps < 1):
             raise WorldError("--circuits and --steps must be at least 1")
         result = run(world, policy=args.policy or world.policy, circuits=args.circuits, steps=args.steps,

@@ -30,6 +30,8 @@ from .physics import Odometry
 NEAR_EDGE_WATCH = 1.0  # m: the end of the wall beside the robot is watched for this far ahead
 NEAR_EDGE_SLACK = 0.3  # m: a sighting of the edge further than this from where the side opened is stale
 MIN_FAR_EDGE = 0.5  # m: an opening's far edge is first measured when at least this far ahead
+BACK_OFF_SLACK = math.radians(1.0)  # a turn's last approach may start this much nearer than its window
+SEARCH_LIMIT = math.radians(40)  # a turn looks for walls this far past its odometry angle before giving up
 
 
 @dataclass(frozen=True)
@@ -200,23 +202,69 @@ class Travel(ControlLaw):
 
 class Turn(ControlLaw):
     """Turn in place by ``angle`` (radians, positive left) by odometry, then hill-climb to alignment
-    with the walls of the new path."""
+    with the walls of the new path.
+
+    Odometry only has to bring the robot near the new heading: once within ``align_window`` of it by
+    odometry, with walls in sight, the law aligns with the walls and never goes back to odometry (the
+    robot is where the walls say; a slipping odometry that still reads the turn as unfinished must not
+    turn it away again). Until the walls are in sight, odometry turns on, to the whole angle, and on
+    beyond it by up to ``SEARCH_LIMIT`` while no wall shows: a robot that turned short (its turn starts
+    a control period late, and slips) may be more than 25 degrees off the walls, where the percept does
+    not see them as walls.
+
+    The last approach always starts ``align_window`` short of the walls, by the walls: a robot that
+    odometry brought closer, or past them, first backs off to there. The hill-climbing stops as soon as
+    the walls are within tolerance, so where in the tolerance it stops depends on the way it came; if
+    that way varied with the odometry error, so would the heading at the dstate and its image (a turn
+    approached from 5 or from 15 degrees out stops up to a degree apart, which splits a view).
+
+    Parameters
+    ----------
+    lim : Limits
+    angle : float
+        Radians, positive left.
+    align_window : float
+        Radians of odometry-measured turn still to go where alignment with the walls takes over, and
+        how far short of the walls the last approach starts.
+    """
 
     timeout = 30.0
 
     def __init__(self, lim: Limits, angle: float, align_window: float = math.radians(12)):
         super().__init__(lim)
         self.angle, self.align_window = angle, align_window
+        self.direction = math.copysign(1.0, angle)
+        self.aligning = False  # the walls have taken over from odometry
+        self.approaching = False  # the last approach, from align_window short of the walls, has begun
 
     def step(self, p: Percept, ranges: np.ndarray, odo: Odometry) -> tuple[float, float]:
         lim = self.lim
         remaining = self.angle - (odo.theta - self.start.theta)
-        if abs(remaining) > self.align_window or math.isnan(p.wall_angle):
+        # the walls take over within the window (or once they have): before, odometry turns
+        wall = p.wall_angle if self.aligning or abs(remaining) <= self.align_window else math.nan
+        if not self.aligning and wall * self.direction < -self.align_window:
+            # Walls that say the robot turned too far by more than the window: a robot that starts its
+            # turn late and slips turns short, not long, so this is the fold of walls far ahead
+            # (a 45-degree reading folds to -45) or corner chords; turn on until the walls are clear.
+            wall = math.nan
+        if math.isnan(wall) and self.aligning:  # the walls lost for a scan (drop-outs): hold still
+            self._settle(False)
+            return 0.0, 0.0
+        if math.isnan(wall) and -SEARCH_LIMIT < remaining * self.direction <= self.align_window:
+            # Odometry says nearly there, yet no wall is within 25 degrees of the axes: the robot has
+            # turned short (a turn starts a tick late and slips), so it turns on until the walls show.
+            self._settle(False)
+            return 0.0, self.direction * lim.k_align * self.align_window
+        if math.isnan(wall):  # no walls to align with at all: the turn is odometry's alone
             mag = min(lim.w_max, math.sqrt(2 * lim.w_accel * abs(remaining)), lim.k_align * abs(remaining))
             self._settle(abs(remaining) < lim.align_tolerance)
             return 0.0, (0.0 if self.done else math.copysign(mag, remaining))
-        self._settle(abs(p.wall_angle) < lim.align_tolerance)
-        return 0.0, (0.0 if self.done else lim.k_align * p.wall_angle)
+        self.aligning = True
+        # short of the walls (in the turn's direction) by the window, less a degree of slack: approach
+        self.approaching = self.approaching or wall * self.direction >= self.align_window - BACK_OFF_SLACK
+        target = 0.0 if self.approaching else self.direction * self.align_window
+        self._settle(self.approaching and abs(wall) < lim.align_tolerance)
+        return 0.0, (0.0 if self.done else max(-lim.w_max, min(lim.w_max, lim.k_align * (wall - target))))
 
     def action(self, odometry: Odometry) -> Action:
         return TurnAction(round(math.degrees(odometry.theta - self.start.theta), 3))

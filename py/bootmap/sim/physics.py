@@ -5,9 +5,13 @@ velocity (that pushes it into walls): a kinematic *control body* carries the com
 pivot joint and a gear joint with no position correction (``max_bias = 0``) drag the robot along with
 bounded force and torque, like wheel friction (pymunk's "tank" example does the same).
 
-The wheels are commanded (v, omega); the body achieves them only up to slip, a relative Gaussian error
-drawn every control period from the world's ``motion_noise``. Odometry integrates what the wheel encoders
-report - the commanded motion - so it drifts from the truth exactly by the slip, as on a real robot.
+The wheels are commanded (v, omega); the body achieves them only up to slip (the world's ``motion_noise``,
+documented in ``worlds/README.md``): a relative Gaussian error drawn every control period on both, and on
+the turn rate a relative error that wanders slowly (wheel scrub: it holds through a whole turn, so white
+slip alone, which averages out, would understate a real robot's turn errors). Odometry integrates what
+the wheel encoders report - the commanded motion - and its heading drifts besides, by a bias that
+wanders slowly (a gyro's). So odometry is off from the truth by the slip and the drift, as on a real
+robot; the control laws, which stop at dstates by the laser, do not let either move a dstate.
 """
 
 from __future__ import annotations
@@ -57,6 +61,41 @@ class Odometry:
         return Odometry(self.x, self.y, self.theta, self.distance, self.progress)
 
 
+class Wander:
+    """A slowly wandering Gaussian error: a first-order autoregressive process (a random walk pulled back
+    to zero, so it stays within a few standard deviations however long the run).
+
+    Parameters
+    ----------
+    sd : float
+        Its standard deviation at any moment (the first value is drawn from it too).
+    time_s : float
+        Correlation time: values this far apart in time are correlated by 1/e.
+    dt : float
+        Time between updates.
+    rng : numpy.random.Generator
+
+    Examples
+    --------
+    >>> w = Wander(0.05, 5.0, 0.1, np.random.default_rng(0))
+    >>> xs = [w.step() for _ in range(20000)]
+    >>> round(float(np.std(xs)), 2), abs(float(np.corrcoef(xs[:-50], xs[50:])[0, 1]) - math.exp(-1)) < 0.1
+    (0.05, True)
+    """
+
+    def __init__(self, sd: float, time_s: float, dt: float, rng: np.random.Generator):
+        self.sd, self.rng = sd, rng
+        self.keep = math.exp(-dt / time_s)
+        self.fresh = sd * math.sqrt(1.0 - self.keep ** 2)  # keeps the variance at sd**2
+        self.value = sd * float(rng.normal()) if sd > 0 else 0.0
+
+    def step(self) -> float:
+        """Advance one update; the new value."""
+        if self.sd > 0:
+            self.value = self.keep * self.value + self.fresh * float(self.rng.normal())
+        return self.value
+
+
 class PhysicalRobot:
     """A disc robot in a pymunk space built from a world.
 
@@ -65,7 +104,9 @@ class PhysicalRobot:
     world : World
         Walls, clutter, the robot's radius and start pose, and the slip noise.
     rng : numpy.random.Generator
-        The simulation's generator (slip).
+        The simulation's generator (slip and drift).
+    dt : float
+        The control period, seconds (the wandering errors are updated once per period).
     substeps : int
         Physics steps per control period; pymunk integrates constant velocities exactly, so a few suffice.
     start : (x, y, theta), optional
@@ -79,9 +120,12 @@ class PhysicalRobot:
         Control periods during which the body touched a wall or obstacle.
     """
 
-    def __init__(self, world: World, rng: np.random.Generator, substeps: int = 2,
+    def __init__(self, world: World, rng: np.random.Generator, dt: float = 0.1, substeps: int = 2,
                  start: tuple[float, float, float] | None = None):
         self.world, self.rng, self.substeps = world, rng, substeps
+        noise = world.motion_noise
+        self.turn_scale = Wander(noise.turn_scale, noise.turn_scale_time_s, dt, rng)
+        self.drift = Wander(math.radians(noise.drift_deg_s), noise.drift_time_s, dt, rng)
         self.space = pymunk.Space()
         self.space.collision_slop = 0.001  # metres, not pixels
         self.space.iterations = 10
@@ -128,11 +172,13 @@ class PhysicalRobot:
         return (p.x, p.y, self.body.angle)
 
     def drive(self, v: float, omega: float, dt: float) -> None:
-        """Command (v, omega) for one control period: slip on the body, the command into odometry."""
+        """Command (v, omega) for one control period: slip on the body; the command, and the drift,
+        into odometry."""
         noise = self.world.motion_noise
         slip_v, slip_w = self.rng.normal(0.0, 1.0, 2)
+        scale, drift = self.turn_scale.step(), self.drift.step()
         v_true = v * (1.0 + noise.slip_v * slip_v)
-        w_true = omega * (1.0 + noise.slip_omega * slip_w)
+        w_true = omega * (1.0 + scale + noise.slip_omega * slip_w)
         h = dt / self.substeps
         body, control = self.body, self.control
         control.angular_velocity = w_true
@@ -140,7 +186,7 @@ class PhysicalRobot:
             a = body.angle
             control.velocity = (v_true * math.cos(a), v_true * math.sin(a))
             self.space.step(h)
-        self.odometry.advance(v, omega, dt)
+        self.odometry.advance(v, omega + drift, dt)
         if self._touching():
             self.contacts += 1
 

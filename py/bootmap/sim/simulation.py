@@ -110,7 +110,7 @@ class Simulation:
             raise ValueError(f"start pose {start} is not in free space")
         self.rng = np.random.default_rng(seed)
         self.seed = seed
-        self.robot = PhysicalRobot(self.world, self.rng, self.substeps, start)
+        self.robot = PhysicalRobot(self.world, self.rng, self.dt, self.substeps, start)
         self._box_offsets: dict[int, tuple[float, float]] = {}
         self._disc_offsets: dict[int, tuple[float, float]] = {}
         self.scene = Scene.of_world(self.world)

@@ -85,10 +85,33 @@ class LaserSpec:
 
 @dataclass(frozen=True)
 class MotionNoise:
-    """Relative standard deviations of the slip between commanded and achieved (v, omega)."""
+    """How the body's motion departs from the command, and how odometry departs from the truth.
 
-    slip_v: float
-    slip_omega: float
+    See ``worlds/README.md`` (the noise model) for what each parameter does and why its default.
+
+    Attributes
+    ----------
+    slip_v, slip_omega : float
+        Relative standard deviations of achieved against commanded (v, omega), drawn afresh every
+        control period (white slip: it averages out over a long motion).
+    turn_scale : float
+        Relative standard deviation of a slowly wandering error of the achieved turn rate (wheel scrub
+        on turning in place): it persists through a whole turn, so a turn's measured angle is off by
+        about this fraction of the angle.
+    turn_scale_time_s : float
+        Correlation time of that error, seconds.
+    drift_deg_s : float
+        Standard deviation of the odometry heading's drift (a gyro's bias), degrees per second.
+    drift_time_s : float
+        Correlation time of the drift, seconds.
+    """
+
+    slip_v: float = 0.06
+    slip_omega: float = 0.06
+    turn_scale: float = 0.05
+    turn_scale_time_s: float = 5.0
+    drift_deg_s: float = 0.15
+    drift_time_s: float = 60.0
 
 
 @dataclass(frozen=True)
@@ -263,23 +286,58 @@ def resolve_world_path(world: str | os.PathLike) -> Path:
     raise WorldError(f"no such world file or name; known worlds: {names}", str(world))
 
 
-def load_world(world: str | os.PathLike) -> World:
-    """Read and validate a world file (a path or a name from ``worlds/``); errors name the file."""
+def load_world(world: str | os.PathLike, settings: dict[str, Any] | None = None) -> World:
+    """Read and validate a world file (a path or a name from ``worlds/``); errors name the file.
+
+    ``settings`` overrides fields of the file before it is validated, as ``{"section.field": value}``
+    (``{"laser.noise_sd": 0.02}``): the values are checked as the file's own would be, and the error of
+    a bad one names the field (see :func:`apply_settings`)."""
     path = resolve_world_path(world)
     try:
         text = path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as e:
         raise WorldError(f"cannot read: {getattr(e, 'strerror', None) or e}", str(path)) from None
-    return loads_world(text, str(path))
+    return loads_world(text, str(path), settings)
 
 
-def loads_world(text: str, source: str = "world") -> World:
-    """Parse and validate world TOML text."""
+def loads_world(text: str, source: str = "world", settings: dict[str, Any] | None = None) -> World:
+    """Parse and validate world TOML text, with ``settings`` applied as in :func:`load_world`."""
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise WorldError(f"not valid TOML: {e}", source) from None
+    if settings:
+        data = apply_settings(data, settings, source)
+        source = f"{source} (with {', '.join(f'{k}={v!r}' for k, v in settings.items())})"
     return World.from_dict(data, source)
+
+
+def apply_settings(data: dict, settings: dict[str, Any], source: str = "world") -> dict:
+    """A copy of a parsed world document with ``{"section.field": value}`` set.
+
+    Only fields of a plain section (``laser``, ``motion_noise``, ``robot``, ``control``) or the top level
+    can be set; the value is validated afterwards with the rest of the file, so a bad one fails as it
+    would in the file. A name that is not ``section.field`` or names an array of tables is refused here.
+
+    Examples
+    --------
+    >>> apply_settings({"laser": {"range_max": 8.0}}, {"laser.noise_sd": 0.02})
+    {'laser': {'range_max': 8.0, 'noise_sd': 0.02}}
+    """
+    out = {k: (dict(v) if isinstance(v, dict) else v) for k, v in data.items()}
+    for key, value in settings.items():
+        section, _, field_ = key.rpartition(".")
+        if not field_ or "." in section:
+            raise WorldError("a setting is section.field, e.g. laser.noise_sd", f"{source}: {key}")
+        if not section:
+            out[field_] = value
+            continue
+        table = out.setdefault(section, {})
+        if not isinstance(table, dict):
+            raise WorldError(f"{section} is not a section of plain fields (it is {_kind(table)})",
+                             f"{source}: {key}")
+        table[field_] = value
+    return out
 
 
 # --------------------------------------------------------------------------- validation
@@ -394,8 +452,7 @@ def _build(data: Any, source: str) -> World:
     discs = tuple(_disc(r) for r in _array_of_tables(top, "discs"))
     robot = _section(top, "robot", _robot)
     laser = _section(top, "laser", _laser)
-    noise = _section(top, "motion_noise", lambda r: MotionNoise(
-        r.get("slip_v", _number(0, 0.5), 0.02), r.get("slip_omega", _number(0, 0.5), 0.02)), optional=True)
+    noise = _section(top, "motion_noise", _motion_noise, optional=True)
     control = _section(top, "control", lambda r: ControlSpec(
         r.get("wall_distance", _number(0, lo_open=True), 0.5),
         r.get("stop_distance", _number(0, lo_open=True), 0.5),
@@ -463,6 +520,17 @@ def _robot(r: _Reader) -> RobotSpec:
     return RobotSpec(radius=r.get("radius", _number(0.05, 2.0), 0.25), start=(x, y, math.radians(heading)),
                      max_speed=r.get("max_speed", _number(0, 5, lo_open=True), 0.8),
                      max_turn_rate=math.radians(r.get("max_turn_rate_deg", _number(0, 720, lo_open=True), 90.0)))
+
+
+def _motion_noise(r: _Reader) -> MotionNoise:
+    d = MotionNoise()  # the defaults: a real robot's odometry (worlds/README.md)
+    return MotionNoise(slip_v=r.get("slip_v", _number(0, 0.5), d.slip_v),
+                       slip_omega=r.get("slip_omega", _number(0, 0.5), d.slip_omega),
+                       turn_scale=r.get("turn_scale", _number(0, 0.5), d.turn_scale),
+                       turn_scale_time_s=r.get("turn_scale_time_s", _number(0, 3600, lo_open=True),
+                                               d.turn_scale_time_s),
+                       drift_deg_s=r.get("drift_deg_s", _number(0, 10), d.drift_deg_s),
+                       drift_time_s=r.get("drift_time_s", _number(0, 36000, lo_open=True), d.drift_time_s))
 
 
 def _laser(r: _Reader) -> LaserSpec:
