@@ -7,7 +7,12 @@ and AALpy's RPNI with views + dead-reckoned heading (rounded to 15 degrees, as b
 feeds it), all against the truth: dstates found, time points on their true dstate (best one-to-one
 renaming), seconds.
 
-Targets (issue 12): the true map on every tableau up to 10 degrees of turn noise, each in under 5 s.
+Then misclustered views (0-5% of the time points given another view, bootmap.testing.noise.with_misreads)
+on explorations of other worlds (seeds 50-52) at turn sd 3: ours (misreads abduced), ours reading every view as seen
+(--no-misreads) and RPNI, with the misread steps the map names and those it names wrongly.
+
+Targets (issue 12): the true map on every tableau up to 10 degrees of turn noise, and up to 2% misreads,
+each in under 5 s.
 Writes docs/noise_sweep.png. Run: .venv/bin/python bench/noise_bench.py
 """
 
@@ -24,7 +29,7 @@ from bootmap.mapping.resolver import Resolver
 from bootmap.metrics import dstate_accuracy
 from bootmap.testing.check import true_partition
 from bootmap.testing.gridworld import random_world, walk
-from bootmap.testing.noise import with_odometry_noise
+from bootmap.testing.noise import with_misreads, with_odometry_noise
 from resolve_bench import rpni
 from targets import Targets
 
@@ -33,10 +38,14 @@ SEEDS = (21, 22, 23)
 STEPS = 600
 EXACT_UP_TO_DEG, MAX_S = 10, 5.0
 FIGURE = Path(__file__).resolve().parents[1] / "docs" / "noise_sweep.png"
+MISREAD = (0.0, 0.005, 0.01, 0.02, 0.05)
+MISREAD_SEEDS = (50, 51, 52)  # the suspects' rules were worked out on seeds 21-26 and 40-49
+EXACT_UP_TO_MISREAD = 0.02
+MISREAD_FIGURE = FIGURE.with_name("misread_sweep.png")
 
 
-def tableaux(turn_sd: float):
-    for seed in SEEDS:
+def tableaux(turn_sd: float, seeds=SEEDS):
+    for seed in seeds:
         rng = np.random.default_rng(seed)
         world = random_world(rng, 5, 4, extra_edges=4, landmarks=0.4)
         yield seed, with_odometry_noise(walk(world, STEPS, rng, policy="explore"), turn_sd,
@@ -56,7 +65,15 @@ def run(resolver: Resolver, tableau) -> tuple[int | None, float, float]:
 
 
 def main() -> int:
+    import argparse
+
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--only", choices=["turns", "misreads"], help="run one of the two sweeps")
+    only = parser.parse_args().only
     targets = Targets()
+    if only == "misreads":
+        misread_sweep(targets)
+        return targets.exit_status()
     learned, fixed = Resolver(time_limit=30), Resolver(quantum_deg=15, time_limit=10)
     print(f"{'turn sd':>7} {'drift':>5} {'seed':>4} {'true':>4} | {'ours':>5} {'acc':>6} {'s':>5} | "
           f"{'q=15':>5} {'acc':>6} {'s':>5} | {'rpni':>5} {'acc':>6} {'s':>5}")
@@ -76,29 +93,81 @@ def main() -> int:
                 targets.check(f"  ours, turn sd {sd}, seed {seed}: seconds", ours[2], "<", MAX_S, fmt="{:.2f}")
     print("\n'-': no map within the time limit (q=15: 10 s); accuracy then of the best map found, if any")
     _figure(rows)
+    if only is None:
+        misread_sweep(targets)
     return targets.exit_status()
 
 
+def misread_sweep(targets: Targets) -> None:
+    """Misclustered views (bootmap.testing.noise.with_misreads) on the same explorations, turn sd 3:
+    ours (misreads abduced, the default), ours reading every view as seen, RPNI; and how many of the
+    misread steps the map names, and how many it names wrongly."""
+    robust, as_seen = Resolver(time_limit=30), Resolver(time_limit=10, misreads=False, diagnose=False)
+    print(f"\nmisclustered views (turn sd 3, drift 1.2):\n{'misread':>7} {'seed':>4} {'true':>4} | "
+          f"{'ours':>5} {'acc':>6} {'s':>5} {'named':>7} {'wrong':>5} | {'as seen':>7} {'acc':>6} {'s':>5} | "
+          f"{'rpni':>5} {'acc':>6} {'s':>5}")
+    rows = []
+    for fraction in MISREAD:
+        for seed, clean in tableaux(3.0, MISREAD_SEEDS):
+            tableau, wrong = with_misreads(clean, fraction, np.random.default_rng(seed))
+            truth = true_partition(tableau)
+            t0 = time.perf_counter()
+            try:
+                cmap = robust.resolve(tableau)
+                named = {s["t"] for s in cmap.suspect_steps}
+                ours = (cmap.n_dstates, dstate_accuracy(truth, cmap.dstate_of), time.perf_counter() - t0)
+            except SolveTimeout:
+                named, ours = set(), (None, 0.0, time.perf_counter() - t0)
+            exact = run(as_seen, tableau)
+            states, rpni_s = rpni(tableau, with_heading=True)
+            theirs = (len(set(states)), dstate_accuracy(truth, states), rpni_s)
+            hit, miss = len(named & set(wrong)), len(named - set(wrong))
+            rows.append((fraction, ours, exact, theirs))
+            cells = [f"{'-' if n is None else n:>5} {acc:>6.1%} {s:>5.2f}" for n, acc, s in (ours,)]
+            print(f"{fraction:>7.1%} {seed:>4} {len(set(truth)):>4} | {cells[0]} {hit:>3}/{len(wrong):<3} {miss:>5} | "
+                  f"{'-' if exact[0] is None else exact[0]:>7} {exact[1]:>6.1%} {exact[2]:>5.2f} | "
+                  f"{theirs[0]:>5} {theirs[1]:>6.1%} {theirs[2]:>5.2f}")
+            if fraction <= EXACT_UP_TO_MISREAD:
+                targets.check(f"  ours, {fraction:.1%} misreads, seed {seed}: time points right", ours[1], "==", 1.0,
+                              fmt="{:.1%}", bound_text="100%")
+                targets.check(f"  ours, {fraction:.1%} misreads, seed {seed}: seconds", ours[2], "<", MAX_S,
+                              fmt="{:.2f}")
+    _misread_figure(rows)
+
+
 def _figure(rows) -> None:
+    _plot(rows, TURN_SD, 1, ("ours (learned action types)", "ours, --quantum 15", "RPNI, views + heading"),
+          "turn noise, sd (degrees); travel drift sd = min(4, turn / 2.5)",
+          f"{STEPS}-step explorations of 20-place grid worlds, {len(SEEDS)} seeds", FIGURE)
+
+
+def _misread_figure(rows) -> None:
+    _plot(rows, MISREAD, 100, ("ours (misreads abduced)", "ours, --no-misreads", "RPNI, views + heading"),
+          "misclustered views (% of time points); turn noise sd 3 degrees",
+          f"{STEPS}-step explorations of 20-place grid worlds, seeds {MISREAD_SEEDS[0]}-{MISREAD_SEEDS[-1]}",
+          MISREAD_FIGURE)
+
+
+def _plot(rows, levels, scale, labels, xlabel: str, title: str, path: Path) -> None:
+    """Mean accuracy of three resolvers (rows: level, then (dstates, accuracy, s) for each) per level."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(6, 3.5))
-    for i, (label, style) in enumerate((("ours (learned action types)", "o-"), ("ours, --quantum 15", "s--"),
-                                        ("RPNI, views + heading", "^:"))):
-        means = [np.mean([r[1 + i][1] for r in rows if r[0] == sd]) for sd in TURN_SD]
-        ax.plot(TURN_SD, means, style, label=label)
-    ax.set_xlabel("turn noise, sd (degrees); travel drift sd = min(4, turn / 2.5)")
+    for i, (label, style) in enumerate(zip(labels, ("o-", "s--", "^:"))):
+        means = [np.mean([r[1 + i][1] for r in rows if r[0] == level]) for level in levels]
+        ax.plot([scale * level for level in levels], means, style, label=label)
+    ax.set_xlabel(xlabel)
     ax.set_ylabel("time points on their true dstate")
     ax.set_ylim(0, 1.05)
-    ax.set_title(f"{STEPS}-step explorations of 20-place grid worlds, {len(SEEDS)} seeds")
+    ax.set_title(title)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(FIGURE, dpi=110)
+    fig.savefig(path, dpi=110)
     plt.close(fig)
-    print(f"figure: {FIGURE.relative_to(FIGURE.parents[1])}")
+    print(f"figure: {path.relative_to(path.parents[1])}")
 
 
 if __name__ == "__main__":

@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import time
 from typing import Callable, Sequence
 
 from . import __version__, arguments
@@ -28,15 +29,19 @@ def _add_theory_options(p: argparse.ArgumentParser) -> None:
 
 
 def cmd_map(args: argparse.Namespace) -> int:
-    from .mapping.bounded import resolve_within
+    from .mapping.bounded import run_within
+    from .mapping.grounding import Deadline
     from .mapping.resolver import Resolver
     from .tableau import load
 
     tableau = _with_views(load(args.tableau))
     resolver = Resolver(axioms=args.axioms, levels=args.levels, quantum_deg=args.quantum,
                         time_limit=args.time_limit, max_models=args.max_models, misreads=args.misreads)
+    left = _time_left(args)
+    deadline = Deadline.after(None) if left is None else Deadline(time.perf_counter() + left, args.time_limit)
     try:
-        cmap = resolve_within(resolver, tableau)  # stopped for sure a little after --time-limit
+        # Stopped for sure a little after --time-limit, counted from the command's start.
+        cmap = run_within(lambda: resolver.resolve(tableau, deadline), left, stated_s=args.time_limit)
     except SolveTimeout as e:
         if e.best_map is None:
             raise
@@ -44,6 +49,14 @@ def cmd_map(args: argparse.Namespace) -> int:
         _print_map(e.best_map, args)
         return EXIT_FAILURE
     return _print_map(cmap, args)
+
+
+def _time_left(args: argparse.Namespace) -> float | None:
+    """The search's time limit less what reading (and clustering) the tableau took: the command returns
+    within its limit plus the grace, from the moment it was started."""
+    if args.time_limit is None:
+        return None
+    return max(0.0, args.time_limit - (time.monotonic() - args.started))
 
 
 def _with_views(tableau):
@@ -298,6 +311,7 @@ def _register_optional(sub) -> None:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    args.started = time.monotonic()
     handler: Callable[[argparse.Namespace], int] = args.handler
     try:
         return handler(args)

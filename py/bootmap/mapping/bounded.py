@@ -29,8 +29,10 @@ def resolve_within(resolver, tableau: Tableau, grace_s: float = GRACE_S) -> Cogn
     return run_within(lambda: resolver.resolve(tableau), resolver.time_limit, grace_s)
 
 
-def run_within(work: Callable[[], T], limit: float | None, grace_s: float = GRACE_S) -> T:
-    """``work()`` (a resolution, an explanation) in a forked child, stopped ``grace_s`` after ``limit``."""
+def run_within(work: Callable[[], T], limit: float | None, grace_s: float = GRACE_S,
+               stated_s: float | None = None) -> T:
+    """``work()`` (a resolution, an explanation) in a forked child, stopped ``grace_s`` after ``limit``.
+    ``stated_s``: the limit as the user stated it, for the message (``limit`` may be what is left of it)."""
     if limit is None or "fork" not in multiprocessing.get_all_start_methods():
         return work()
     ctx = multiprocessing.get_context("fork")  # the work is inherited, not pickled
@@ -41,9 +43,10 @@ def run_within(work: Callable[[], T], limit: float | None, grace_s: float = GRAC
     try:
         if not receive.poll(limit + grace_s):
             child.kill()
-            raise SolveTimeout(f"time limit of {limit:g} s reached while grounding (clingo cannot interrupt a "
-                               f"grounding; stopped at {limit + grace_s:g} s); no answer found",
-                               time_limit_s=limit, stage="grounding")
+            stated = limit if stated_s is None else stated_s
+            raise SolveTimeout(f"time limit of {stated:g} s reached while grounding (clingo cannot interrupt a "
+                               f"grounding; stopped at {stated + grace_s:g} s); no answer found",
+                               time_limit_s=stated, stage="grounding")
         try:
             reply = receive.recv()
         except EOFError:

@@ -181,50 +181,82 @@ class _Search:
         exact_facts = self.facts
         self.bound_classes_from_below()
         exact_lower = self.classes.lower
-        if exact is not None:  # one dstate per class: the exact map is known and minimal
-            exact_lower = [1] * self.classes.count
-        self.as_seen = sum(exact_lower)
-        # First the clear suspects; if they do not reach the bound they set, every suspect.
-        clear = [s for s in suspects if s.clear]
-        fewest = self._allow_misreads(exact_facts, clear or suspects)
-        misread = self.optimise(None, fewest)
-        if misread is None and clear and len(clear) < len(suspects):
-            # The layout stays the one the clear suspects set: the others may join their classes'
-            # dstates, but each class keeps its dstates (a small search, where misreads are few).
-            planned = self.classes.lower
-            self._allow_misreads(exact_facts, suspects)
-            self.classes.lower = planned
-            misread = self.optimise(None, fewest)
-        while misread is None and fewest < sum(exact_lower):
-            fewest += 1
-            self.proved = max(self.proved, fewest)
-            misread = self.optimise(None, fewest)
+        if exact is None and self.classes.lower_bound > self.classes.count:
+            exact = self.bounded(self.classes.lower_bound)  # reading every view as seen, when that is easy
+        self.as_seen = exact.n_dstates if exact else max(self.proved, sum(exact_lower))
+        if exact is not None:
+            # Reading every view as seen is easy (its lower bound holds): a misread that carries a
+            # contradiction forward would have made it hard. Only views with one or two images, each a
+            # dstate of its own in the exact map, are left to weigh.
+            suspects = [s for s in suspects if s.reason == RARE_VIEW]
+            if not suspects:
+                return exact
+        clear = [s for s in suspects if s.clear] or suspects
+        fewest = self._allow_misreads(exact_facts, clear)
+        if exact is not None:
+            # The exact map is in hand: misreads must save more dstates than the cheapest of them costs,
+            # and are looked for in a share of the time (clean experience must not wait for them).
+            if DSTATE_COST * (exact.n_dstates - fewest) <= min(s.cost for s in clear):
+                misread = None
+            else:
+                misread = self._within_share(lambda: self._misread_map(fewest, exact.n_dstates - 1))
+        else:
+            misread = self._misread_map(fewest, self.as_seen, exact_facts, suspects)
         if misread is None:  # the misreads save nothing: read every view as seen
             self.facts, self.suspects, self.classes.lower = exact_facts, {}, exact_lower
             return exact or self.exact()
         cost = sum(self.suspects[s["t"]].cost for s in misread.suspect_steps)
-        saved = sum(exact_lower) - fewest  # at least this many more dstates without the misreads
+        saved = self.as_seen - misread.n_dstates  # at least this many more dstates without the misreads
         if not misread.suspect_steps or DSTATE_COST * saved > cost:
             return misread
-        if exact is not None:  # the exact map has exactly the bound's dstates: the misreads are not worth it
+        if exact is not None:  # the exact map is minimal: the misreads do not pay for themselves
+            self.suspects = {}
             return exact
         # Not proved by the bound: is there a map reading every view as seen within the misreads' cost?
         # Looked for in a share of the time left: where reading misreads as seen is hard to explain, the
         # search for it is hard too, and the misread map is kept (the tries say the check timed out).
         suspects = self.suspects
         self.facts, self.suspects, self.classes.lower = exact_facts, {}, exact_lower
-        full = self.deadline
-        self.deadline = full.share(VERIFY_SHARE, VERIFY_MAX_S)
-        try:
-            for bound in range(sum(exact_lower), fewest + cost // DSTATE_COST + 1):
+
+        def exact_within_cost() -> CognitiveMap | None:
+            for bound in range(self.as_seen, misread.n_dstates + cost // DSTATE_COST + 1):
                 found = self.bounded(bound)
                 if found:
                     return found
-        except SolveTimeout:
-            pass
-        finally:
-            self.deadline, self.suspects = full, suspects
+            return None
+
+        found = self._within_share(exact_within_cost)
+        self.suspects = suspects
+        return found or misread
+
+    def _misread_map(self, fewest: int, ceiling: int, exact_facts: list[Symbol] | None = None,
+                     wider: list[Suspect] = ()) -> CognitiveMap | None:
+        """The best map with misreads and at most ``ceiling`` dstates, from ``fewest`` up; None if none.
+        If the suspects allowed so far do not reach ``fewest``, the ``wider`` set is allowed too."""
+        misread = self.optimise(None, fewest)
+        if misread is None and exact_facts is not None and len(wider) > len(self.suspects):
+            # The layout stays the one the clear suspects set: the others may join their classes'
+            # dstates, but each class keeps its dstates (a small search, where misreads are few).
+            planned = self.classes.lower
+            self._allow_misreads(exact_facts, list(wider))
+            self.classes.lower = planned
+            misread = self.optimise(None, fewest)
+        while misread is None and fewest < ceiling:
+            fewest += 1
+            self.proved = max(self.proved, fewest)
+            misread = self.optimise(None, fewest)
         return misread
+
+    def _within_share(self, work):
+        """``work()`` within a share of the time left; None if that runs out."""
+        full = self.deadline
+        self.deadline = full.share(VERIFY_SHARE, VERIFY_MAX_S)
+        try:
+            return work()
+        except SolveTimeout:
+            return None
+        finally:
+            self.deadline = full
 
     def _allow_misreads(self, exact_facts: list[Symbol], suspects: list[Suspect]) -> int:
         """Let these suspects be misreads from now on; the classes' lower bounds without them, and what
