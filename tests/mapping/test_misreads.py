@@ -92,13 +92,13 @@ def test_a_view_seen_once_in_a_long_tableau_is_a_cheap_suspect():
 
 def test_images_near_a_cluster_boundary_are_cheaper_to_call_misreads():
     rng = np.random.default_rng(0)
-    views = ["A", "B"] * 40
-    images = np.array([[0.0, 0.0] if v == "A" else [10.0, 0.0] for v in views]) + rng.normal(0, 0.1, (80, 2))
+    views = ["A", "B"] * 50
+    images = np.array([[0.0, 0.0] if v == "A" else [10.0, 0.0] for v in views]) + rng.normal(0, 0.1, (100, 2))
     views[41] = "A"  # labelled A where the context on both sides says B
     images[41] = [0.0, 0.0]  # ... and the image looks like every other A: deep inside A's cluster
-    deep = [s for s in find_suspects(views, ["travel"] * 80, images.copy()) if s.clear]
+    deep = [s for s in find_suspects(views, ["travel"] * 100, images.copy()) if s.clear]
     images[41] = [4.8, 0.0]  # now the image lies near the boundary with B
-    near = [s for s in find_suspects(views, ["travel"] * 80, images) if s.clear]
+    near = [s for s in find_suspects(views, ["travel"] * 100, images) if s.clear]
     assert [s.t for s in deep] == [s.t for s in near] == [41]
     assert near[0].cost < deep[0].cost
 

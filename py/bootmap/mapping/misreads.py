@@ -23,9 +23,9 @@ boundary up to 18.
 
 Example
 -------
->>> views = list("ABCD" * 10)
+>>> views = list("ABCD" * 25)
 >>> views[21] = "A"                       # a B read as A: it follows A and precedes C, unlike any other A
->>> [(s.t, s.cost, s.expected, s.clear) for s in find_suspects(views, ["turn"] * 40)]
+>>> [(s.t, s.cost, s.expected, s.clear) for s in find_suspects(views, ["turn"] * 100)]
 [(20, 60, ('D',), False), (21, 10, ('B',), True), (22, 60, ('A', 'B'), False)]
 
 Only t21 is surprising on both sides; its neighbours are surprising on the side that sees t21.
@@ -54,6 +54,9 @@ RARE_VIEW_COST, RARE_AMONG = 2, 10
 #: at eight suspects per misread.)
 STRONG = 0.25
 WEAK = 0.5
+#: A view is surprising in its context only in a tableau this long: short ones repeat too little (and a
+#: search for misreads there only slows the exact map down: 30-step aliased walks timed out).
+MIN_STEPS = 100
 #: Why a rare view is suspect.
 RARE_VIEW = "a view with one or two images"
 #: A misread costs more where its contexts showed the other views fewer times than this (3 times: double).
@@ -107,7 +110,11 @@ def find_suspects(views: Sequence[Hashable], actions: Sequence[Hashable],
         The images the views were clustered from; their margins set the costs.
     """
     n = len(views)
-    contexts = _Contexts(views, actions)
+    # Views and actions as small ints: the contexts hash tuples of them, and a clingo symbol's hash
+    # is a call into clingo.
+    view_ids, action_ids = _ids(views), _ids(actions)
+    contexts = _Contexts([view_ids[v] for v in views], [action_ids[a] for a in actions[:n]],
+                         {i: v for v, i in view_ids.items()}, {i: a for a, i in action_ids.items()})
     rare = {t for ts in rare_views(views, typical=RARE_AMONG).values() for t in ts}
     costs = _margin_costs(views, images)
     found = []
@@ -116,7 +123,7 @@ def find_suspects(views: Sequence[Hashable], actions: Sequence[Hashable],
         sides = [side for side in (contexts.before(t), contexts.after(t)) if side is not None]
         if t in rare:
             found.append(Suspect(t, RARE_VIEW_COST, _expected(sides), RARE_VIEW))
-        elif len(sides) == 2 and min(side[0] for side in sides) <= STRONG:
+        elif n >= MIN_STEPS and len(sides) == 2 and min(side[0] for side in sides) <= STRONG:
             base = MISREAD_COST if costs is None else int(costs[t])
             # Thin evidence (a context seen only a few times) makes a misread the dearer explanation.
             evidence = min(side[2] for side in sides)
@@ -152,8 +159,9 @@ class _Contexts:
     #: A longer context counts once it has been seen this often.
     MIN_SEEN = 4
 
-    def __init__(self, views: Sequence[Hashable], actions: Sequence[Hashable]):
+    def __init__(self, views: Sequence[int], actions: Sequence[int], view_names: dict, action_names: dict):
         self.views, self.actions = views, actions
+        self.view_names, self.action_names = view_names, action_names
         self.seen: dict = {}
         for t in range(len(views)):
             for key in self._keys(t):
@@ -185,8 +193,22 @@ class _Contexts:
         for depth in self.DEPTHS:
             key = self._key(t, depth, ahead)
             if key is not None and (depth == 1 or sum(self.seen[key].values()) >= self.MIN_SEEN):
-                found.append((*_surprise(self.seen[key], self.views[t]), _describe(key, self.seen[key])))
-        return min(found, key=lambda f: (f[0], -f[2])) if found else None
+                found.append((*_surprise(self.seen[key], self.views[t]), key))
+        if not found:
+            return None
+        share, others, n, key = min(found, key=lambda f: (f[0], -f[2]))
+        return share, tuple(self.view_names[v] for v in others), n, self._describe(key)
+
+    def _describe(self, key) -> str:
+        """A context and what was seen in it, e.g. "after V0, turn -90: V1 12 times, V3 once"."""
+        ahead, views, actions = key
+        views = [self.view_names[v] for v in views]
+        actions = [self.action_names[a] for a in actions]
+        steps = [x for pair in (zip(actions, views) if ahead else zip(views, actions)) for x in pair]
+        words = ", ".join(action_word(x) if isinstance(x, Symbol) else str(x) for x in steps)
+        counts = ", ".join(f"{self.view_names[v]} {'once' if n == 1 else 'twice' if n == 2 else f'{n} times'}"
+                           for v, n in self.seen[key].most_common())
+        return f"{'before' if ahead else 'after'} {words}: {counts}"
 
 
 def _surprise(seen: Counter, view) -> tuple[float, tuple, int]:
@@ -196,14 +218,12 @@ def _surprise(seen: Counter, view) -> tuple[float, tuple, int]:
     return share, tuple(v for v in seen if v != view), sum(seen.values()) - seen[view]
 
 
-def _describe(key, seen: Counter) -> str:
-    """A context and what was seen in it, e.g. "after V0, turn -90: V1 12 times, V3 once"."""
-    ahead, views, actions = key
-    steps = [x for pair in (zip(actions, views) if ahead else zip(views, actions)) for x in pair]
-    words = ", ".join(action_word(x) if isinstance(x, Symbol) else str(x) for x in steps)
-    counts = ", ".join(f"{v} {'once' if n == 1 else 'twice' if n == 2 else f'{n} times'}"
-                       for v, n in seen.most_common())
-    return f"{'before' if ahead else 'after'} {words}: {counts}"
+def _ids(items: Sequence[Hashable]) -> dict:
+    """Each distinct item's small int, by first appearance."""
+    ids: dict = {}
+    for x in items:
+        ids.setdefault(x, len(ids))
+    return ids
 
 
 def _expected(sides: list) -> tuple:

@@ -49,7 +49,7 @@ from .diagnosis import diagnosed
 from .facts import action_symbol, read_actions, tableau_facts
 from .grounding import Classes, Deadline, Grounding, prepass
 from .theory import Theory, load_theory
-from .misreads import DSTATE_COST, RARE_VIEW, Suspect, find_suspects
+from .misreads import DSTATE_COST, RARE_AMONG, RARE_VIEW, Suspect, find_suspects, rare_views
 from .vocabulary import FUTURE_DEPTH, MAY_BE, MINIMISE_DSTATES, ONE_PER_CLASS, SUSPECT
 
 
@@ -144,7 +144,8 @@ class _Search:
         self.start = time.perf_counter()
         angles, self.action_types = read_actions(tableau, resolver.quantum_deg)
         self.facts = tableau_facts(tableau, angles=angles)
-        self.action_keys = [action_symbol(s.action, a) for s, a in zip(tableau.steps, angles)]
+        self.angles = angles
+        self.first: Grounding | None = None  # the first try's grounding
         self.suspects: dict[int, Suspect] = {}  # views the search may take as misreads (robust only)
         self.as_seen: int | None = None  # dstates proved necessary reading every view as seen
         self.depth = 0  # futures only matter once one dstate per class has failed
@@ -179,6 +180,8 @@ class _Search:
         view as seen by more than its misreads cost (a dstate costs ``DSTATE_COST``): proved by the exact
         lower bound where that suffices, else by asking for an exact map within the difference."""
         exact_facts = self.facts
+        if self.classes is None:
+            self.classes = self.first.classes(range(len(self.tableau)))
         self.bound_classes_from_below()
         exact_lower = self.classes.lower
         if exact is None and self.classes.lower_bound > self.classes.count:
@@ -289,19 +292,21 @@ class _Search:
     def one_per_class(self) -> CognitiveMap | None:
         """The first try, in one grounding: one dstate per class. If it fails, learn the classes from it."""
         outcome = self._solve([ONE_PER_CLASS()], "one dstate per class", keep=True)
-        self.classes = outcome.grounding.classes(range(len(self.tableau)))
+        self.first = outcome.grounding  # its classes are read only when needed (a Python loop over atoms)
         if outcome.models:  # every class holds its one dstate: as many classes as dstates
             cmap = self._map(outcome)
             return replace(cmap, stats=replace(cmap.stats, classes=cmap.n_dstates, lower_bound=cmap.n_dstates))
+        self.classes = self.first.classes(range(len(self.tableau)))
         self.proved = self.classes.count + 1
         return None
 
     def _suspects(self, found: CognitiveMap | None) -> list[Suspect]:
         """The views the search may take as misreads: none unless allowed; where one dstate per class
         explains the experience, only views with one or two images (each made a dstate of its own)."""
-        if not self.resolver.misreads:
+        if not self.resolver.misreads or (found and not rare_views(self.tableau.views, typical=RARE_AMONG)):
             return []
-        suspects = find_suspects(self.tableau.views, self.action_keys, _images(self.tableau))
+        actions = [action_symbol(s.action, a) for s, a in zip(self.tableau.steps, self.angles)]
+        suspects = find_suspects(self.tableau.views, actions, _images(self.tableau))
         return [s for s in suspects if s.reason == RARE_VIEW] if found else suspects
 
     def bounded(self, bound: int) -> CognitiveMap | None:
