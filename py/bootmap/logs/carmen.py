@@ -41,6 +41,15 @@ _ODOM_FIELDS = 10  # ODOM x y theta tv rv accel timestamp host logger_timestamp
 _TRUEPOS_FIELDS = 10
 
 
+
+def records(lines, source: str):
+    """The tokens of each line of a text log that holds a record (not blank, not a ``#`` comment), with
+    where it is (``source: line N``) for error messages."""
+    for number, line in enumerate(lines, 1):
+        tokens = line.split()
+        if tokens and not tokens[0].startswith("#"):
+            yield tokens, f"{source}: line {number}"
+
 def read_carmen(path: str | Path, corrected: bool = False) -> Iterator[Scan]:
     """The scans of a CARMEN log file, in the file's order.
 
@@ -66,11 +75,7 @@ def read_carmen_text(lines: Iterable[str] | str, source: str = "log", corrected:
         lines = lines.splitlines()
     odometry: Pose | None = None
     truth: Pose | None = None
-    for number, line in enumerate(lines, 1):
-        tokens = line.split()
-        if not tokens or tokens[0].startswith("#"):
-            continue
-        where = f"{source}: line {number}"
+    for tokens, where in records(lines, source):
         kind = tokens[0]
         if kind == "ODOM":
             odometry = _pose(_fields(tokens, _ODOM_FIELDS, where), 1, where)

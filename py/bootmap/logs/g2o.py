@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Iterable, Iterator
 
 from ..errors import LogError
-from .carmen import _count, _numbers, robotlaser
+from .carmen import _count, _numbers, records, robotlaser
 from .scans import Pose, Scan, compose
 
 KILLIAN_ZIP = "data/killian.g2o.zip"  # inside the rtb-data package (import name rtbdata)
@@ -73,11 +73,7 @@ def read_g2o_text(lines: Iterable[str] | str, source: str = "g2o") -> list[Scan]
     lasers: dict[int, tuple[Scan, str]] = {}
     edges: dict[int, tuple[Pose, str]] = {}
     last_vertex: int | None = None
-    for number, line in enumerate(lines, 1):
-        tokens = line.split()
-        if not tokens or tokens[0].startswith("#"):
-            continue
-        where = f"{source}: line {number}"
+    for tokens, where in records(lines, source):
         if tokens[0] == "VERTEX_SE2":
             last_vertex, pose = _vertex(tokens, where)
             vertices[last_vertex] = pose

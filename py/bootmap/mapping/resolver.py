@@ -142,9 +142,8 @@ class _Search:
     def __init__(self, resolver: Resolver, tableau: Tableau, deadline: Deadline):
         self.resolver, self.tableau, self.deadline = resolver, tableau, deadline
         self.start = time.perf_counter()
-        angles, self.action_types = read_actions(tableau, resolver.quantum_deg)
-        self.facts = tableau_facts(tableau, angles=angles)
-        self.angles = angles
+        self.angles, self.action_types = read_actions(tableau, resolver.quantum_deg)
+        self.facts = tableau_facts(tableau, angles=self.angles)
         self.first: Grounding | None = None  # the first try's grounding
         self.suspects: dict[int, Suspect] = {}  # views the search may take as misreads (robust only)
         self.as_seen: int | None = None  # dstates proved necessary reading every view as seen
