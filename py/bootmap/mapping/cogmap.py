@@ -19,10 +19,11 @@ from .vocabulary import AHEAD, HEADING_OF, IS, LEFT, MISREAD, PATH_OF, PLACE_OF,
 @dataclass(frozen=True)
 class Try:
     """One grounding the resolver tried: what it asked (e.g. "at most 8 dstates") and clingo's verdict
-    ("sat", "unsat" or "timeout")."""
+    ("sat", "unsat" or "timeout"), and the seconds its grounding and solving took."""
 
     dstates: str
     result: str
+    seconds: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -42,7 +43,8 @@ class SolveStats:
         return {"classes": self.classes, "lower_bound": self.lower_bound,
                 "as_seen_lower_bound": self.as_seen_lower_bound, "ground_s": self.ground_s,
                 "solve_s": self.solve_s, "total_s": self.total_s,
-                "bounds": [{"dstates": b.dstates, "result": b.result} for b in self.bounds]}
+                "bounds": [{"dstates": b.dstates, "result": b.result, "seconds": round(b.seconds, 3)}
+                           for b in self.bounds]}
 
 
 @dataclass

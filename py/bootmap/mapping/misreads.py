@@ -19,7 +19,8 @@ experience is resolved exactly as before and the search stays small:
 Costs are in units where a dstate costs ``DSTATE_COST`` (4). A suspect costs ``MISREAD_COST`` (10: two
 and a half dstates). Where the tableau has images, an image deep inside its view's cluster costs more to
 call a misread than one near the boundary with another view (the clustering's own margin): from 3 at the
-boundary up to 18.
+boundary up to 18. A suspect surprising on one side only costs more where the other side's contexts
+were seen only a few times (``FULL_EVIDENCE``).
 
 Example
 -------
@@ -125,10 +126,12 @@ def find_suspects(views: Sequence[Hashable], actions: Sequence[Hashable],
             found.append(Suspect(t, RARE_VIEW_COST, _expected(sides), RARE_VIEW))
         elif n >= MIN_STEPS and len(sides) == 2 and min(side[0] for side in sides) <= STRONG:
             base = MISREAD_COST if costs is None else int(costs[t])
-            # Thin evidence (a context seen only a few times) makes a misread the dearer explanation.
-            evidence = min(side[2] for side in sides)
-            cost = int(round(base * max(1.0, FULL_EVIDENCE / max(evidence, 1))))
             clear = max(side[0] for side in sides) <= WEAK
+            # Where one side looks ordinary, thin evidence on the other (a context seen only a few
+            # times) makes a misread the dearer explanation. Surprise on both sides is evidence enough:
+            # the search still takes a misread only where it saves dstates.
+            evidence = min(side[2] for side in sides)
+            cost = base if clear else int(round(base * max(1.0, FULL_EVIDENCE / max(evidence, 1))))
             found.append(Suspect(t, cost, _expected(sides), "unlike what the experience around it shows"
                                  + ("" if clear else " on one side"), clear, tuple(side[3] for side in sides)))
     return found

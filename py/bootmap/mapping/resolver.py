@@ -388,7 +388,7 @@ class _Search:
         self.ground_s += grounding.ground_s
         self.solve_s += grounding.solve_s
         verdict = "timeout" if result is None else ("sat" if result.satisfiable else "unsat")
-        self.tries.append(Try(what, verdict))
+        self.tries.append(Try(what, verdict, grounding.ground_s + grounding.solve_s))
         if result is None:
             if self.classes is None:  # timed out in the first try: the classes still bound the answer
                 self.classes = grounding.classes(range(len(self.tableau)))
