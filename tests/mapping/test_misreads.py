@@ -9,6 +9,8 @@ import pytest
 
 from bootmap.examples import notched_rectangle
 from bootmap.mapping import Resolver
+from bootmap.mapping.explain import Explainer, _Question
+from bootmap.mapping.grounding import Deadline
 from bootmap.mapping.misreads import RARE_VIEW_COST, find_suspects, rare_views
 from bootmap.metrics import dstate_accuracy
 from bootmap.testing.check import check_map, true_partition
@@ -134,3 +136,22 @@ def test_bootmap_why_explains_a_misread_step_and_a_step_read_as_seen(tmp_path):
     assert len(misread["evidence"]) == 2 and all(misread["dstate_view"] in e for e in misread["evidence"])
     seen = why(wrong[0] - 1)
     assert not seen["misread"] and seen["view"] == seen["dstate_view"]
+
+
+def test_proofs_argue_from_the_views_the_map_reads_not_from_its_misreads():
+    # t255 shows V0 where the map reads V3 (a misread). t254 and t234 (views V2, dstates S6 and S2) are
+    # apart; read as seen, "turn -90 leads to V3 at t235 but to V0 at t255" would prove it, but the map
+    # says t255 was at a V3 dstate after all. The proof must rest on other experience.
+    tableau, wrong = with_misreads(notched_rectangle(50), 0.005, np.random.default_rng(0))
+    explainer = Explainer(time_limit=60)
+    cmap = explainer.resolver.resolve(tableau)
+    t = [s["t"] for s in cmap.suspect_steps][0]
+    a = t - 1
+    b = next(b for b in range(a - 30, a) if tableau.steps[b].view == tableau.steps[a].view
+             and cmap.dstate_of[b] != cmap.dstate_of[a])
+    e = explainer.explain(tableau, a, b)
+    assert e.verdict == "different"
+    assert t not in e.evidence, e.sentence
+    # Without the map's misreads, the same question is answered from the misread view.
+    assert t in _Question(explainer, tableau, Deadline.after(60)).minimal_evidence(
+        a, b, list(range(b, t + 1)))

@@ -36,18 +36,18 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Sequence
 
-from clingo import Symbol
+from clingo import String, Symbol
 
 from ..errors import ExplainError, SolveTimeout
 from ..tableau import Tableau
 from .cogmap import CognitiveMap, action_text
 from .facts import action_symbol, excerpt_facts, read_actions, tableau_facts
-from .grounding import Deadline, Grounding, prepass
+from .grounding import Deadline, Grounding, key_with_view, prepass
 from .misreads import find_suspects
 from .proof import Failure, Names, ProofNode, merged, node, rule_dict
 from .resolver import Resolver
 from .trace import Derivations, Instrumented, RuleRef
-from .vocabulary import FEATURE, FINEST_MAP, SAME_ASKED, SHOWN_BY_ALL, action_word
+from .vocabulary import CLASS_KEY, FEATURE, FINEST_MAP, MAY_BE, SAME_ASKED, SHOWN_BY_ALL, SUSPECT, action_word
 
 __all__ = ["Explainer", "Explanation", "Failure", "ProofNode"]
 
@@ -197,8 +197,9 @@ class Explainer:
         one dstate, by ``deadline`` (default: ``time_limit`` from now). Raises :class:`ExplainError` for
         names the map does not have, :class:`SolveTimeout` when out of time."""
         start = time.perf_counter()
-        q = _Question(self, tableau, deadline or Deadline.after(self.time_limit))
-        cmap = self.resolver.resolve(tableau, q.deadline)
+        deadline = deadline or Deadline.after(self.time_limit)
+        cmap = self.resolver.resolve(tableau, deadline)
+        q = _Question(self, tableau, deadline, cmap)
         a, b = _time_points(cmap, a, b)
         maps = [cmap.dstate_of] + cmap.alternatives
         apart = [m[a] != m[b] for m in maps]
@@ -245,12 +246,31 @@ class Explainer:
 class _Question:
     """One explanation under way: the tableau's facts (built once for every excerpt tried) and the deadline."""
 
-    def __init__(self, explainer: Explainer, tableau: Tableau, deadline: Deadline):
+    def __init__(self, explainer: Explainer, tableau: Tableau, deadline: Deadline,
+                 cmap: CognitiveMap | None = None):
         self.explainer, self.tableau, self.deadline = explainer, tableau, deadline
         self.theory = explainer.resolver.theory
         self.depth = explainer.resolver.future_depth
         self.angles, _ = read_actions(tableau, explainer.quantum_deg)
         self.facts = tableau_facts(tableau, angles=self.angles)
+        self.misreads = self.misread_facts(cmap) if cmap is not None and cmap.suspect_steps else {}
+
+    @staticmethod
+    def misread_facts(cmap: CognitiveMap) -> dict[int, tuple[Symbol, Symbol]]:
+        """Per time point the map takes as a misread: its cost and the view the map expects there. The
+        proofs then argue from the experience as the map reads it (a misread may sit at a dstate of its
+        expected view), not as seen."""
+        return {s["t"]: (SUSPECT(s["t"], s["cost"]), String(s["expected"])) for s in cmap.suspect_steps}
+
+    def with_misreads(self, facts: list[Symbol], keep: Sequence[int]) -> list[Symbol]:
+        """The kept steps' facts with the map's misreads among them: each may be at a dstate of the
+        class its expected view makes (the class keys of this excerpt: its headings are its own)."""
+        taken = [t for t in keep if t in self.misreads]
+        if not taken:
+            return facts
+        facts = facts + [self.misreads[t][0] for t in taken]
+        key_of = {t.number: key for t, key in CLASS_KEY.facts_in(prepass(self.theory, facts, self.depth).control)}
+        return facts + [MAY_BE(t, key_with_view(key_of[t], self.misreads[t][1])) for t in taken if t in key_of]
 
     # ---------------------------------------------------------------------------------------------
     # Different: evidence, the axioms it needs, and where each fails
@@ -303,7 +323,7 @@ class _Question:
         allowed (as many dstates as time points), so "cannot be one dstate" means in no map at all.
         None when a and b are not even in one class (they differ in a feature every time point shows,
         e.g. the view)."""
-        facts = excerpt_facts(self.facts, keep)
+        facts = self.with_misreads(excerpt_facts(self.facts, keep), keep)
         classes = prepass(self.theory, facts, self.depth).classes(keep)
         if None in classes.keys or not classes.same_class(a, b):
             return None
@@ -332,7 +352,8 @@ class _Question:
     def feature_failure(self, a: int, b: int, evidence: list[int]) -> tuple[list[RuleRef], list[Failure]]:
         """a and b differ in a feature every time point shows: no supposition needed, the features'
         own derivations are the proof."""
-        traced = Grounding(self.theory, excerpt_facts(self.facts, evidence), self.depth, instrumented=True).ground()
+        facts = self.with_misreads(excerpt_facts(self.facts, evidence), evidence)
+        traced = Grounding(self.theory, facts, self.depth, instrumented=True).ground()
         inst = traced.rules
         symbols = [sa.symbol for sa in traced.control.symbolic_atoms if sa.is_fact]
         derivations = Derivations.of(symbols)

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from typing import Callable, Collection, Sequence
 
 import clingo
-from clingo import Symbol
+from clingo import Function, Symbol
 
 from .facts import add_facts
 from .theory import Theory
@@ -187,6 +187,16 @@ class Classes:
             if p is not None:
                 out.append(PREV_IN_CLASS(p, t))
         return out
+
+
+def key_with_view(key: Symbol, view: Symbol) -> Symbol:
+    """A class key (``k(F, X, Rest)`` folded in core/partition.lp) with its view replaced."""
+    if key.type != clingo.SymbolType.Function or key.name != "k" or len(key.arguments) != 3:
+        return key
+    feature, value, rest = key.arguments
+    if feature.type == clingo.SymbolType.Function and feature.name == "view" and not feature.arguments:
+        value = view
+    return Function("k", [feature, value, key_with_view(rest, view)])
 
 
 def _apart(a: dict, b: dict) -> bool:

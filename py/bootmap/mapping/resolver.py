@@ -39,7 +39,7 @@ from typing import Sequence
 
 import clingo
 import numpy as np
-from clingo import Function, String, Symbol
+from clingo import String, Symbol
 
 from ..errors import InconsistentTableau, SolveTimeout
 from ..images import as_images
@@ -47,7 +47,7 @@ from ..tableau import Tableau
 from .cogmap import CognitiveMap, SolveStats, Try, build_map
 from .diagnosis import diagnosed
 from .facts import action_symbol, read_actions, tableau_facts
-from .grounding import Classes, Deadline, Grounding, prepass
+from .grounding import Classes, Deadline, Grounding, key_with_view, prepass
 from .theory import Theory, load_theory
 from .misreads import DSTATE_COST, RARE_AMONG, RARE_VIEW, Suspect, find_suspects, rare_views
 from .vocabulary import FUTURE_DEPTH, MAY_BE, MINIMISE_DSTATES, ONE_PER_CLASS, SUSPECT
@@ -283,7 +283,7 @@ class _Search:
             if own is None:
                 continue
             for view in s.expected or views:
-                key = _with_view(own, String(view))
+                key = key_with_view(own, String(view))
                 if key != own and key in index:
                     out.append(MAY_BE(s.t, key))
         return out
@@ -419,16 +419,6 @@ def _images(tableau: Tableau) -> np.ndarray | None:
     if not tableau.steps or any(s.image is None for s in tableau.steps):
         return None
     return as_images([s.image for s in tableau.steps])
-
-
-def _with_view(key: Symbol, view: Symbol) -> Symbol:
-    """A class key (``k(F, X, Rest)`` folded in core/partition.lp) with its view replaced."""
-    if key.type != clingo.SymbolType.Function or key.name != "k" or len(key.arguments) != 3:
-        return key
-    feature, value, rest = key.arguments
-    if feature.type == clingo.SymbolType.Function and feature.name == "view" and not feature.arguments:
-        value = view
-    return Function("k", [feature, value, _with_view(rest, view)])
 
 
 @dataclass
