@@ -110,6 +110,20 @@ def cmd_why(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def cmd_rehearse(args: argparse.Namespace) -> int:
+    from .mapping.bounded import run_within
+    from .mapping.rehearsal import Rehearsal
+    from .mapping.resolver import Resolver
+    from .tableau import load
+
+    tableau = _with_views(load(args.tableau))
+    resolver = Resolver(axioms=args.axioms, levels=args.levels, quantum_deg=args.quantum,
+                        time_limit=args.time_limit)
+    plan = run_within(lambda: Rehearsal(resolver, args.max_length).plan(tableau), args.time_limit)
+    print(json.dumps(plan.to_dict(), indent=1) if args.format == "json" else plan.to_text())
+    return EXIT_OK
+
+
 def cmd_schema(args: argparse.Namespace) -> int:
     from .tableau import schema
 
@@ -248,6 +262,20 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--time-limit", type=arguments.seconds, default=60.0, metavar="S", help="seconds for the map (default 60)")
     _add_theory_options(p)
     p.set_defaults(handler=cmd_why)
+
+    p = sub.add_parser("rehearse", help="plan the actions that tell the minimal maps apart",
+                       description="When the experience leaves more than one minimal map, plan the shortest actions "
+                                   "from where the robot is whose outcome the maps predict differently (the paper's "
+                                   "rehearsal procedure), and print what each map predicts along them. 'Nothing to "
+                                   "rehearse' when the map is unique.")
+    p.add_argument("tableau", help="tableau JSON file")
+    p.add_argument("--format", choices=["text", "json"], default="text")
+    p.add_argument("--max-length", type=arguments.count("actions"), default=10, metavar="N",
+                   help="longest plan searched for (default 10)")
+    p.add_argument("--time-limit", type=arguments.seconds, default=60.0, metavar="S",
+                   help="seconds for the maps (default 60)")
+    _add_theory_options(p)
+    p.set_defaults(handler=cmd_rehearse)
 
     p = sub.add_parser("schema", help="print the JSON Schema of the tableau format")
     p.set_defaults(handler=cmd_schema)
