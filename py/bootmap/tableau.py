@@ -115,6 +115,14 @@ class Tableau:
         steps = tuple(Step(v, s.action, s.image, s.truth, s.pose) for v, s in zip(views, self.steps))
         return Tableau(steps, self.world, dict(self.meta))
 
+    def prefix(self, n: int) -> "Tableau":
+        """The first ``n`` time points: the experience as it was after ``n - 1`` actions."""
+        if not 1 <= n <= len(self.steps):
+            raise TableauError(f"a prefix of 1 to {len(self.steps)} time points, not {n}")
+        last = self.steps[n - 1]
+        steps = self.steps[:n - 1] + (Step(last.view, None, last.image, last.truth, last.pose),)
+        return Tableau(steps, self.world, dict(self.meta))
+
     @property
     def labelled(self) -> bool:
         """Every step has a view label (else the views are found by clustering the images)."""

@@ -1,0 +1,161 @@
+"""Maps that keep up with a robot as it explores: extend the map by each new step, re-solve only when
+that does not stand.
+
+A robot explores step by step, and most steps repeat what it has done before: the same action from
+the same dstate. When the map of the experience so far is the unique minimal map, a new time point
+reached by an action already taken from the same dstate must be at the dstate that action led to
+before (determinism). If the map so extended still satisfies every axiom (clingo checks it, with the
+partition fixed, so axioms a user adds are checked too), it is the unique minimal map of the longer
+experience as well:
+
+* minimal: a map of the longer experience restricted to the old steps is a map of them, so it has at
+  least as many dstates as their minimal map; the extension adds none;
+* unique: every minimal map of the longer experience restricts to the old steps' unique map, and
+  determinism then places the new time point.
+
+So the result equals a fresh resolve of the same steps, which is what the tests check on every prefix
+of long walks. Anything else (a new transition, a changed action type, a view that may be a misread,
+an ambiguous map) is resolved again from scratch. Where some views are suspect (possible misreads,
+:mod:`.misreads`), the map is extended only where the resolver too would keep the exact map without
+weighing them: one dstate per class, or as many as the classes' proved lower bounds.
+
+Example
+-------
+>>> from bootmap.examples import notched_rectangle
+>>> stream = MapStream()
+>>> full = notched_rectangle(3)
+>>> for n in range(1, len(full) + 1):
+...     cmap = stream.update(full.prefix(n))
+>>> cmap.n_dstates, stream.extended_, stream.resolved_ > 0
+(8, 16, True)
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+
+from clingo import Function, Number, Symbol
+
+from ..tableau import Tableau
+from .cogmap import CognitiveMap, SolveStats, Try, build_map
+from .facts import action_symbol, read_actions, tableau_facts
+from .grounding import Deadline, Grounding, prepass
+from .misreads import RARE_AMONG, find_suspects, rare_views
+from .resolver import Resolver
+from .vocabulary import FIXED
+
+__all__ = ["MapStream"]
+
+
+class MapStream:
+    """The map of a growing tableau, kept current.
+
+    Parameters
+    ----------
+    resolver : Resolver, optional
+        Resolves from scratch when the map cannot be extended (default ``Resolver()``).
+
+    Attributes
+    ----------
+    map_ : CognitiveMap or None
+        The map of the last tableau given.
+    extended_ : int
+        Updates answered by extending the map (checked by clingo, no search).
+    resolved_ : int
+        Updates answered by a full resolve.
+    """
+
+    def __init__(self, resolver: Resolver | None = None):
+        self.resolver = resolver or Resolver()
+        self.map_: CognitiveMap | None = None
+        self.extended_ = 0
+        self.resolved_ = 0
+        self._tableau: Tableau | None = None
+        self._angles: list[int] = []
+
+    def update(self, tableau: Tableau, deadline: Deadline | None = None) -> CognitiveMap:
+        """The map of ``tableau``, which usually extends the last one given by a few steps."""
+        deadline = deadline or Deadline.after(self.resolver.time_limit)
+        cmap = self._extended(tableau, deadline)
+        if cmap is None:
+            cmap = self.resolver.resolve(tableau, deadline)
+            self.resolved_ += 1
+        else:
+            self.extended_ += 1
+        self.map_, self._tableau = cmap, tableau
+        self._angles = read_actions(tableau, self.resolver.quantum_deg)[0]
+        return cmap
+
+    def _extended(self, tableau: Tableau, deadline: Deadline) -> CognitiveMap | None:
+        """The last map extended by determinism to the new steps, if it is still the unique minimal map;
+        else None."""
+        old, cmap = self._tableau, self.map_
+        if old is None or cmap is None or not (cmap.unique and cmap.minimal) or cmap.suspect_steps:
+            return None
+        n = len(old)
+        if len(tableau) <= n or not _extends(tableau, old):
+            return None
+        start = time.perf_counter()
+        angles, types = read_actions(tableau, self.resolver.quantum_deg)
+        if angles[:n - 1] != self._angles[:n - 1]:
+            return None  # the action types learned from the longer experience read an old action anew
+        if self.resolver.misreads and rare_views(tableau.views, typical=RARE_AMONG):
+            return None  # the resolver weighs rare views against any map: let it
+        dstate_of = _by_determinism(cmap, tableau, angles, n)
+        if dstate_of is None:
+            return None
+        facts = tableau_facts(tableau, angles=angles)
+        if self.resolver.misreads and self._suspect(tableau, angles) and not self._exact_stands(facts, dstate_of):
+            return None
+        return self._checked(tableau, facts, types, dstate_of, deadline, start)
+
+    def _suspect(self, tableau: Tableau, angles: list[int]) -> bool:
+        actions = [action_symbol(s.action, a) for s, a in zip(tableau.steps, angles)]
+        return bool(find_suspects(tableau.views, actions))
+
+    def _exact_stands(self, facts: list[Symbol], dstate_of: list[str]) -> bool:
+        """Where some views are suspect, the resolver keeps the exact map without weighing misreads when
+        it has one dstate per class or as many as the classes' proved lower bounds: so does the stream."""
+        grounded = prepass(self.resolver.theory, facts, self.resolver.future_depth)
+        classes = grounded.classes(range(len(dstate_of)))
+        n_dstates = len(set(dstate_of))
+        return classes.count == n_dstates or sum(grounded.lower_bounds(classes)) == n_dstates
+
+    def _checked(self, tableau: Tableau, facts: list[Symbol], types, dstate_of: list[str],
+                 deadline: Deadline, start: float) -> CognitiveMap | None:
+        """The map of this partition if it satisfies every axiom (clingo, the partition fixed)."""
+        fixed = [FIXED(t, Function("s", [Number(int(d[1:]))])) for t, d in enumerate(dstate_of)]
+        grounding = Grounding(self.resolver.theory, facts + fixed, self.resolver.future_depth, ["1"]).ground()
+        models: list[list[Symbol]] = []
+        result = grounding.solve(deadline, lambda m: models.append(m.symbols(shown=True)))
+        if result is None or not models:
+            return None
+        n_dstates = len(set(dstate_of))
+        stats = SolveStats(classes=self.map_.stats.classes, lower_bound=n_dstates, ground_s=grounding.ground_s,
+                           solve_s=grounding.solve_s, total_s=time.perf_counter() - start,
+                           bounds=(Try("the last map extended by determinism", "sat",
+                                       grounding.ground_s + grounding.solve_s),))
+        return build_map(tableau, models, True, self.resolver.theory.levels, stats, action_types=types)
+
+
+def _extends(tableau: Tableau, old: Tableau) -> bool:
+    """The new tableau is the old one with steps after it (the old last step now has its action)."""
+    n = len(old)
+    return (tableau.steps[:n - 1] == old.steps[:n - 1]
+            and replace(tableau.steps[n - 1], action=None) == replace(old.steps[n - 1], action=None))
+
+
+def _by_determinism(cmap: CognitiveMap, tableau: Tableau, angles: list[int], n: int) -> list[str] | None:
+    """The old partition, each new time point at the dstate its action led to before from the same
+    dstate; None if some new step takes an action never taken from there."""
+    dstate_of = list(cmap.dstate_of)
+    led: dict[tuple[str, Symbol], str] = {}
+    for t in range(n - 1):
+        led[(dstate_of[t], action_symbol(tableau.steps[t].action, angles[t]))] = dstate_of[t + 1]
+    for t in range(n, len(tableau)):
+        key = (dstate_of[t - 1], action_symbol(tableau.steps[t - 1].action, angles[t - 1]))
+        if key not in led:
+            return None
+        dstate_of.append(led[key])
+    return dstate_of
