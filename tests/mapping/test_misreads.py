@@ -143,7 +143,7 @@ def test_proofs_argue_from_the_views_the_map_reads_not_from_its_misreads():
     # apart; read as seen, "turn -90 leads to V3 at t235 but to V0 at t255" would prove it, but the map
     # says t255 was at a V3 dstate after all. The proof must rest on other experience.
     tableau, wrong = with_misreads(notched_rectangle(50), 0.005, np.random.default_rng(0))
-    explainer = Explainer(time_limit=60)
+    explainer = Explainer(time_limit=180)  # about 15 s alone: the proof reads headings over 20 steps
     cmap = explainer.resolver.resolve(tableau)
     t = [s["t"] for s in cmap.suspect_steps][0]
     a = t - 1

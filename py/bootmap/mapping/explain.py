@@ -42,12 +42,12 @@ from ..errors import ExplainError, SolveTimeout
 from ..tableau import Tableau
 from .cogmap import CognitiveMap, action_text
 from .facts import action_symbol, excerpt_facts, read_actions, tableau_facts
-from .grounding import Deadline, Grounding, key_with_view, prepass
+from .grounding import Classes, Deadline, Grounding, key_with_view, prepass
 from .misreads import find_suspects
 from .proof import Failure, Names, ProofNode, merged, node, rule_dict
 from .resolver import Resolver
 from .trace import Derivations, Instrumented, RuleRef
-from .vocabulary import CLASS_KEY, FEATURE, FINEST_MAP, MAY_BE, SAME_ASKED, SHOWN_BY_ALL, SUSPECT, action_word
+from .vocabulary import FEATURE, FINEST_MAP, MAY_BE, SAME_ASKED, SHOWN_BY_ALL, SUSPECT, action_word
 
 __all__ = ["Explainer", "Explanation", "Failure", "ProofNode"]
 
@@ -262,15 +262,16 @@ class _Question:
         expected view), not as seen."""
         return {s["t"]: (SUSPECT(s["t"], s["cost"]), String(s["expected"])) for s in cmap.suspect_steps}
 
-    def with_misreads(self, facts: list[Symbol], keep: Sequence[int]) -> list[Symbol]:
-        """The kept steps' facts with the map's misreads among them: each may be at a dstate of the
-        class its expected view makes (the class keys of this excerpt: its headings are its own)."""
+    def with_misreads(self, facts: list[Symbol], keep: Sequence[int]) -> tuple[list[Symbol], Classes]:
+        """The kept steps' facts with the map's misreads among them, and the excerpt's classes: each
+        misread may be at a dstate of the class its expected view makes (the class keys of this excerpt:
+        its headings are its own)."""
         taken = [t for t in keep if t in self.misreads]
-        if not taken:
-            return facts
         facts = facts + [self.misreads[t][0] for t in taken]
-        key_of = {t.number: key for t, key in CLASS_KEY.facts_in(prepass(self.theory, facts, self.depth).control)}
-        return facts + [MAY_BE(t, key_with_view(key_of[t], self.misreads[t][1])) for t in taken if t in key_of]
+        classes = prepass(self.theory, facts, self.depth).classes(keep)
+        key_of = dict(zip(classes.times, (classes.keys[c] for c in classes.of_time)))
+        return facts + [MAY_BE(t, key_with_view(key_of[t], self.misreads[t][1]))
+                        for t in taken if key_of[t] is not None], classes
 
     # ---------------------------------------------------------------------------------------------
     # Different: evidence, the axioms it needs, and where each fails
@@ -323,8 +324,7 @@ class _Question:
         allowed (as many dstates as time points), so "cannot be one dstate" means in no map at all.
         None when a and b are not even in one class (they differ in a feature every time point shows,
         e.g. the view)."""
-        facts = self.with_misreads(excerpt_facts(self.facts, keep), keep)
-        classes = prepass(self.theory, facts, self.depth).classes(keep)
+        facts, classes = self.with_misreads(excerpt_facts(self.facts, keep), keep)
         if None in classes.keys or not classes.same_class(a, b):
             return None
         return facts + classes.layout(len(keep)) + [SAME_ASKED(a, b)]
@@ -352,7 +352,7 @@ class _Question:
     def feature_failure(self, a: int, b: int, evidence: list[int]) -> tuple[list[RuleRef], list[Failure]]:
         """a and b differ in a feature every time point shows: no supposition needed, the features'
         own derivations are the proof."""
-        facts = self.with_misreads(excerpt_facts(self.facts, evidence), evidence)
+        facts, _ = self.with_misreads(excerpt_facts(self.facts, evidence), evidence)
         traced = Grounding(self.theory, facts, self.depth, instrumented=True).ground()
         inst = traced.rules
         symbols = [sa.symbol for sa in traced.control.symbolic_atoms if sa.is_fact]

@@ -58,6 +58,11 @@ WEAK = 0.5
 #: A view is surprising in its context only in a tableau this long: short ones repeat too little (and a
 #: search for misreads there only slows the exact map down: 30-step aliased walks timed out).
 MIN_STEPS = 100
+#: ... and only where the robot has repeated its experience: at least this many time points per class
+#: of time points (view and heading). Early exploration (2-4 per class) visits most dstates once or
+#: twice, and a search for misreads there cost seconds to minutes for none (a 105-step exploration
+#: prefix: 43 s); a 600-step exploration with 2% misreads has 9-12 per class, the paper's tableau 45.
+MIN_VISITS = 5
 #: Why a rare view is suspect.
 RARE_VIEW = "a view with one or two images"
 #: A misread costs more where its contexts showed the other views fewer times than this (3 times: double).

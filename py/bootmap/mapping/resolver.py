@@ -49,7 +49,7 @@ from .diagnosis import diagnosed
 from .facts import action_symbol, read_actions, tableau_facts
 from .grounding import Classes, Deadline, Grounding, key_with_view, prepass
 from .theory import Theory, load_theory
-from .misreads import DSTATE_COST, RARE_AMONG, RARE_VIEW, Suspect, find_suspects, rare_views
+from .misreads import DSTATE_COST, MIN_VISITS, RARE_AMONG, RARE_VIEW, Suspect, find_suspects, rare_views
 from .vocabulary import FUTURE_DEPTH, MAY_BE, MINIMISE_DSTATES, ONE_PER_CLASS, SUSPECT
 
 
@@ -306,7 +306,10 @@ class _Search:
             return []
         actions = [action_symbol(s.action, a) for s, a in zip(self.tableau.steps, self.angles)]
         suspects = find_suspects(self.tableau.views, actions, _images(self.tableau))
-        return [s for s in suspects if s.reason == RARE_VIEW] if found else suspects
+        # A view is surprising in its context only against experience the robot has repeated: not
+        # where one dstate per class explains it, nor in early exploration (few visits per class).
+        repeated = not found and len(self.tableau) >= MIN_VISITS * self.classes.count
+        return suspects if repeated else [s for s in suspects if s.reason == RARE_VIEW]
 
     def bounded(self, bound: int) -> CognitiveMap | None:
         """The minimal maps if at most ``bound`` dstates will do, else None (and the bound is proved)."""

@@ -17,7 +17,8 @@ So the result equals a fresh resolve of the same steps, which is what the tests 
 of long walks. Anything else (a new transition, a changed action type, a view that may be a misread,
 an ambiguous map) is resolved again from scratch. Where some views are suspect (possible misreads,
 :mod:`.misreads`), the map is extended only where the resolver too would keep the exact map without
-weighing them: one dstate per class, or as many as the classes' proved lower bounds.
+weighing them: one dstate per class, experience too little repeated for misreads to show, or as many
+dstates as the classes' proved lower bounds.
 
 Example
 -------
@@ -41,7 +42,7 @@ from ..tableau import Tableau
 from .cogmap import CognitiveMap, SolveStats, Try, build_map
 from .facts import action_symbol, read_actions, tableau_facts
 from .grounding import Deadline, Grounding, prepass
-from .misreads import RARE_AMONG, find_suspects, rare_views
+from .misreads import MIN_VISITS, RARE_AMONG, find_suspects, rare_views
 from .resolver import Resolver
 from .vocabulary import FIXED
 
@@ -116,11 +117,14 @@ class MapStream:
 
     def _exact_stands(self, facts: list[Symbol], dstate_of: list[str]) -> bool:
         """Where some views are suspect, the resolver keeps the exact map without weighing misreads when
-        it has one dstate per class or as many as the classes' proved lower bounds: so does the stream."""
+        it has one dstate per class, when the experience is too little repeated (``MIN_VISITS``), or when
+        the exact map has as many dstates as the classes' proved lower bounds: so does the stream."""
         grounded = prepass(self.resolver.theory, facts, self.resolver.future_depth)
         classes = grounded.classes(range(len(dstate_of)))
         n_dstates = len(set(dstate_of))
-        return classes.count == n_dstates or sum(grounded.lower_bounds(classes)) == n_dstates
+        if classes.count == n_dstates or len(dstate_of) < MIN_VISITS * classes.count:
+            return True  # one dstate per class, or experience too little repeated for misreads to show
+        return sum(grounded.lower_bounds(classes)) == n_dstates
 
     def _checked(self, tableau: Tableau, facts: list[Symbol], types, dstate_of: list[str],
                  deadline: Deadline, start: float) -> CognitiveMap | None:
