@@ -2,18 +2,21 @@
 
 from __future__ import annotations
 
+import re
 import threading
 from collections import OrderedDict
 from dataclasses import dataclass, field
 from typing import Annotated, Any, Callable
 
 from fastapi import Depends, Path, Request
+from fastapi.concurrency import run_in_threadpool
+from pydantic import BeforeValidator
 
 from ..tableau import FORMAT
 from .settings import Settings
 from .store import Store
 from .theory import LoadedTheory, Theories
-from .worker import ExplainJob, SolveGate, SolveJob, SolverPool
+from .worker import Explained, ExplainJob, Solved, SolveGate, SolveJob, SolverPool
 
 
 class Cache:
@@ -67,15 +70,44 @@ class Services:
         return SolveJob(document, str(theory.snapshot), s.solve_time_limit_s, s.quantum_deg, s.max_models), theory
 
 
+    async def solve(self, job: SolveJob | ExplainJob, token_id: int | None, request: Request) -> Solved | Explained:
+        """Solve in the pool, holding one of the token's solve places (shared by every server on the
+        database) meanwhile; stopped if the client goes away."""
+        lease = None
+        if token_id is not None:
+            s = self.settings
+            lease = await run_in_threadpool(self.store.lease_solve, token_id, s.token_max_solves,
+                                            s.solve_time_limit_s + s.solve_kill_grace_s + 60)
+        try:
+            return await self.gate.solve(job, lambda: client_gone(request))
+        finally:
+            if lease is not None:
+                await run_in_threadpool(self.store.release_solve, lease)
+
     def explain_job(self, document: dict, a: str, b: str, levels: tuple[str, ...] | None) -> ExplainJob:
         """A question about a tableau document, with the current theory."""
         theory, s = self.theories.current, self.settings
         return ExplainJob(document, str(theory.snapshot), s.solve_time_limit_s, a, b, levels, s.quantum_deg)
 
 
+async def client_gone(request: Request) -> None:
+    """Return when the client has closed the connection (its body is read by then: what the server
+    receives next is the disconnect)."""
+    while (await request.receive())["type"] != "http.disconnect":
+        pass
+
+
 def get_services(request: Request) -> Services:
     return request.app.state.services
 
 
+def _canonical_id(value: object) -> object:
+    # "01" and "+1" would parse as 1: one tableau, one path.
+    if isinstance(value, str) and not re.fullmatch(r"[1-9][0-9]{0,18}", value):
+        raise ValueError("should be a positive integer written without sign or leading zeros")
+    return value
+
+
 ServicesDep = Annotated[Services, Depends(get_services)]
-TableauId = Annotated[int, Path(ge=1, le=2**63 - 1, description="The id the tableau was created with.")]
+TableauId = Annotated[int, BeforeValidator(_canonical_id),
+                      Path(ge=1, le=2**63 - 1, description="The id the tableau was created with.")]

@@ -222,6 +222,29 @@ class TableauInfo(Out):
     created: datetime
     updated: datetime
     views_from_images: int | None
+    public: bool = Field(description="Anyone may read it; only its owner or an admin changes it.")
+
+
+class TableauSharing(BaseModel):
+    """Whether anyone may read a tableau and its maps."""
+
+    model_config = STRICT
+    public: bool
+
+
+class TokenIn(BaseModel):
+    """A new API token's name, and whether it is an admin's."""
+
+    model_config = STRICT
+    name: StrictStr = Field(min_length=1, max_length=100, pattern="^[A-Za-z0-9_.@-]+$")
+    admin: bool = False
+
+
+class TokenCreated(Out):
+    id: int
+    name: str
+    admin: bool
+    token: str = Field(description="The token, shown this once: only its hash is stored.")
 
 
 class TableauCreated(TableauInfo):

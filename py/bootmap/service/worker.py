@@ -24,13 +24,14 @@ import threading
 import time
 import traceback
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Awaitable, Callable
 
 from ..errors import AxiomError, BootmapError, ExplainError, InconsistentTableau, SolveTimeout, TableauError
 from ..tableau import Tableau
 
 log = logging.getLogger("bootmap.service")
-READY_TIMEOUT_S = 60.0  # a fresh solver imports clingo and scikit-learn; generous for a loaded machine
+READY_TIMEOUT_S = 60.0
+CANCEL_POLL_S = 0.1  # how often a waiting solve looks whether its client went away  # a fresh solver imports clingo and scikit-learn; generous for a loaded machine
 
 
 class SolverBusy(BootmapError):
@@ -55,6 +56,10 @@ class SolverOutOfMemory(BootmapError):
 
 class SolverCrashed(BootmapError):
     """The solver process died or failed unexpectedly (a bug: it is logged)."""
+
+
+class SolveCancelled(BootmapError):
+    """The client went away: its solve was stopped and the solver freed."""
 
 
 @dataclass(frozen=True)
@@ -220,20 +225,31 @@ class _Worker:
     def alive(self) -> bool:
         return self.process.is_alive()
 
-    def run(self, job: SolveJob, hard_deadline_s: float) -> tuple:
+    def run(self, job: SolveJob, hard_deadline_s: float, cancel: threading.Event | None = None) -> tuple:
+        """Send the job and wait for the reply, at most ``hard_deadline_s``; ``cancel`` set meanwhile
+        (the client went away) kills the solver at once: clingo cannot be interrupted any other way."""
         if not self.ready:
             self._await_ready()
         self.conn.send(job)
-        if not self.conn.poll(hard_deadline_s):
-            self.kill()
-            raise SolverKilled(f"the solver was stopped at the deadline of {hard_deadline_s:g} s (this server's time "
-                               f"limit of {job.time_limit_s:g} s plus grace), still busy: clingo cannot interrupt "
-                               "grounding, and this tableau grounds for longer than that", job.time_limit_s)
+        deadline = time.monotonic() + hard_deadline_s
+        while not self.conn.poll(min(CANCEL_POLL_S, max(0.0, deadline - time.monotonic()))):
+            if cancel is not None and cancel.is_set():
+                self.kill()
+                raise SolveCancelled("the client went away; its solve was stopped")
+            if time.monotonic() >= deadline:
+                self.kill()
+                raise SolverKilled(f"the solver was stopped at the deadline of {hard_deadline_s:g} s (this server's "
+                                   f"time limit of {job.time_limit_s:g} s plus grace), still busy: clingo cannot "
+                                   "interrupt grounding, and this tableau grounds for longer than that",
+                                   job.time_limit_s)
         try:
             return self.conn.recv()
         except (EOFError, OSError):
+            code = self.process.exitcode
             self.kill()
-            raise SolverCrashed("the solver process died during the solve (see the server log)") from None
+            log.error("solver process %s died during a solve (exit code %s)", self.process.pid,
+                      self.process.exitcode if code is None else code)
+            raise SolverCrashed("the solver process died during the solve (the server log says how)") from None
 
     def _await_ready(self) -> None:
         if not self.conn.poll(READY_TIMEOUT_S) or self.conn.recv() != "ready":
@@ -280,13 +296,16 @@ class SolverPool:
         with self._lock:
             return sum(w.alive() for w in self._workers)
 
-    def solve(self, job: SolveJob | ExplainJob) -> Solved | Explained:
-        """Solve (or explain) in a free solver; raises bootmap's exceptions (see :func:`_outcome`)."""
+    def solve(self, job: SolveJob | ExplainJob, cancel: threading.Event | None = None) -> Solved | Explained:
+        """Solve (or explain) in a free solver; raises bootmap's exceptions (see :func:`_outcome`), and
+        SolveCancelled if ``cancel`` is set before the reply."""
         worker = self._idle.get()
         with self._lock:
             self.busy += 1
         try:
-            reply = worker.run(job, job.time_limit_s + self.kill_grace_s)
+            if cancel is not None and cancel.is_set():
+                raise SolveCancelled("the client went away before its solve started")
+            reply = worker.run(job, job.time_limit_s + self.kill_grace_s, cancel)
             if reply[0] == "memory":
                 # After clingo's bad_alloc the process's heap is full and fragmented: whether it can start
                 # its next solve's thread depends on where the allocation failed. A fresh solver can.
@@ -350,7 +369,11 @@ class SolveGate:
     def waiting(self) -> int:
         return max(0, self.admitted - self.pool.busy)
 
-    async def solve(self, job: SolveJob | ExplainJob) -> Solved | Explained:
+    async def solve(self, job: SolveJob | ExplainJob,
+                    gone: Callable[[], Awaitable[None]] | None = None) -> Solved | Explained:
+        """Solve in the pool. ``gone`` returns when the client has gone away: then a waiting solve leaves
+        the line at once and a running one is stopped (its solver killed and replaced), and
+        SolveCancelled is raised."""
         import anyio
 
         if self.admitted >= self.capacity:
@@ -359,7 +382,27 @@ class SolveGate:
         if self._limiter is None:  # created in the loop that uses it
             self._limiter = anyio.CapacityLimiter(self.running)
         self.admitted += 1
+        cancel = threading.Event()
+        outcome: list = []  # the result, or the exception (raised outside the task group, unwrapped)
         try:
-            return await anyio.to_thread.run_sync(self.pool.solve, job, limiter=self._limiter)
+            async with anyio.create_task_group() as tg:
+                async def watch() -> None:
+                    await gone()
+                    cancel.set()  # a running solve: its thread kills the solver and returns at once
+                    tg.cancel_scope.cancel()  # a waiting one: it leaves the line
+
+                if gone is not None:
+                    tg.start_soon(watch)
+                try:
+                    outcome.append(await anyio.to_thread.run_sync(self.pool.solve, job, cancel,
+                                                                  limiter=self._limiter))
+                except Exception as e:
+                    outcome.append(e)
+                tg.cancel_scope.cancel()
         finally:
             self.admitted -= 1
+        if not outcome:
+            raise SolveCancelled("the client went away; its solve was stopped")
+        if isinstance(outcome[0], Exception):
+            raise outcome[0]
+        return outcome[0]
