@@ -164,12 +164,16 @@ def _message(err: dict) -> str:
 def validation_problem(errors: list[dict]) -> Problem:
     """One 422 for every invalid field; a union's branches that all failed are one field."""
     seen: dict[str, dict] = {}
+    by_type: dict[str, bool] = {}  # was the field's message a union branch's "wrong type"?
     for err in errors:
         field = field_path(err.get("loc", ()))
         item = {"field": field, "detail": _message(err)}
         if err.get("loc", ("",))[0] == "body":
             item["pointer"] = _pointer(err["loc"])  # RFC 9457's suggestion: a JSON Pointer into the body
-        seen.setdefault(field, item)
+        wrong_type = str(err.get("type", "")).endswith("_type")
+        # Of a union's branches, the one whose type matched says what is wrong with the value.
+        if field not in seen or (by_type[field] and not wrong_type):
+            seen[field], by_type[field] = item, wrong_type
     items = list(seen.values())
     first = items[0] if items else {"field": "", "detail": "invalid request"}
     if first["field"] == "" and errors and errors[0].get("type") == "missing":
