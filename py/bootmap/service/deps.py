@@ -54,7 +54,8 @@ class Services:
         store = Store(settings.database_url)
         theories = Theories(settings.axioms, settings.data_dir)
         pool = SolverPool(settings.max_concurrent_solves, settings.solver_memory_mb, settings.solve_kill_grace_s)
-        gate = SolveGate(pool, settings.max_concurrent_solves, settings.max_queued_solves, settings.retry_after_s)
+        gate = SolveGate(pool, settings.max_concurrent_solves, settings.max_queued_solves, settings.retry_after_s,
+                         settings.token_max_running)
         services = cls(settings, store, theories, pool, gate)
         pool.warm(services.job({"format": FORMAT, "steps": [
             {"view": "a", "action": {"type": "travel", "distance_m": 1.0}}, {"view": "b"}]})[0])
@@ -79,7 +80,7 @@ class Services:
             lease = await run_in_threadpool(self.store.lease_solve, token_id, s.token_max_solves,
                                             s.solve_time_limit_s + s.solve_kill_grace_s + 60)
         try:
-            return await self.gate.solve(job, lambda: client_gone(request))
+            return await self.gate.solve(job, lambda: client_gone(request), token_id)
         finally:
             if lease is not None:
                 await run_in_threadpool(self.store.release_solve, lease)

@@ -63,6 +63,8 @@ class Settings(BaseSettings):
                                     "a browser (CORS), comma-separated; default none.")
     # Fair share: limits per token, shared by every server on one database.
     token_max_solves: int = Field(4, ge=1, description="Solves one token may have running or waiting at once.")
+    token_max_running: int | None = Field(None, ge=1, description="Solvers one token may use at once on one "
+                                          "server; default half of them (at least one), so others find one free.")
     token_requests_per_minute: int = Field(600, ge=1, description="Requests one token may make per minute.")
     token_max_stored_bytes: int = Field(256 * 2**20, ge=1024, description="Bytes of tableaux and maps one token "
                                                                           "may keep stored.")

@@ -357,20 +357,68 @@ def _outcome(reply: tuple, memory_mb: int) -> Solved | Explained:
 
 
 class SolveGate:
-    """The event loop's door to the pool: solves run in threads, at most ``running`` at once, at most
-    ``waiting`` more queued; beyond that :class:`SolverBusy` is raised at once."""
+    """The event loop's door to the pool: at most ``running`` solves at once (in threads, off the loop),
+    at most ``waiting`` more in line, and beyond that :class:`SolverBusy` at once.
 
-    def __init__(self, pool: SolverPool, running: int, waiting: int, retry_after_s: int):
+    Fair share between callers: one caller (a token) runs at most ``per_caller`` solves at once however
+    many it sends, so a solver stays free for the others; when a solver frees, the longest-waiting solve
+    whose caller is under that bound starts. Callers are keys (a token id, or None for the local user,
+    who is alone and not bounded)."""
+
+    def __init__(self, pool: SolverPool, running: int, waiting: int, retry_after_s: int,
+                 per_caller: int | None = None):
         self.pool, self.running, self.capacity, self.retry_after_s = pool, running, running + waiting, retry_after_s
+        self.per_caller = per_caller or max(1, running // 2)
         self.admitted = 0  # touched only from the event loop thread: no lock needed
-        self._limiter: Any = None
+        self._line: list[tuple[int, Any]] = []  # (ticket, caller) of solves waiting, in arrival order
+        self._started: dict[Any, int] = {}  # caller -> solves running
+        self._tickets = 0
+        self._changed: Any = None
 
     @property
     def waiting(self) -> int:
-        return max(0, self.admitted - self.pool.busy)
+        return len(self._line)
 
-    async def solve(self, job: SolveJob | ExplainJob,
-                    gone: Callable[[], Awaitable[None]] | None = None) -> Solved | Explained:
+    def _next(self) -> int | None:
+        """The ticket that may start now: the first in line whose caller is under its bound."""
+        if sum(self._started.values()) >= self.running:
+            return None
+        for ticket, caller in self._line:
+            if caller is None or self._started.get(caller, 0) < self.per_caller:
+                return ticket
+        return None
+
+    async def _start(self, caller: Any) -> None:
+        import anyio
+
+        if self._changed is None:  # made in the loop that uses it
+            self._changed = anyio.Condition()
+        self._tickets += 1
+        ticket = self._tickets
+        async with self._changed:
+            self._line.append((ticket, caller))
+            try:
+                while self._next() != ticket:
+                    await self._changed.wait()
+            except BaseException:  # cancelled (the client went away): the line moves on without it
+                self._line.remove((ticket, caller))
+                self._changed.notify_all()
+                raise
+            self._line.remove((ticket, caller))
+            self._started[caller] = self._started.get(caller, 0) + 1
+
+    async def _end(self, caller: Any) -> None:
+        import anyio
+
+        self._started[caller] -= 1
+        if not self._started[caller]:
+            del self._started[caller]
+        with anyio.CancelScope(shield=True):
+            async with self._changed:
+                self._changed.notify_all()
+
+    async def solve(self, job: SolveJob | ExplainJob, gone: Callable[[], Awaitable[None]] | None = None,
+                    caller: Any = None) -> Solved | Explained:
         """Solve in the pool. ``gone`` returns when the client has gone away: then a waiting solve leaves
         the line at once and a running one is stopped (its solver killed and replaced), and
         SolveCancelled is raised."""
@@ -379,8 +427,6 @@ class SolveGate:
         if self.admitted >= self.capacity:
             raise SolverBusy(f"all {self.running} solvers are busy and {self.capacity - self.running} solves are "
                              f"waiting; retry in {self.retry_after_s} s", self.retry_after_s)
-        if self._limiter is None:  # created in the loop that uses it
-            self._limiter = anyio.CapacityLimiter(self.running)
         self.admitted += 1
         cancel = threading.Event()
         outcome: list = []  # the result, or the exception (raised outside the task group, unwrapped)
@@ -393,11 +439,13 @@ class SolveGate:
 
                 if gone is not None:
                     tg.start_soon(watch)
+                await self._start(caller)
                 try:
-                    outcome.append(await anyio.to_thread.run_sync(self.pool.solve, job, cancel,
-                                                                  limiter=self._limiter))
+                    outcome.append(await anyio.to_thread.run_sync(self.pool.solve, job, cancel))
                 except Exception as e:
                     outcome.append(e)
+                finally:
+                    await self._end(caller)
                 tg.cancel_scope.cancel()
         finally:
             self.admitted -= 1
