@@ -259,13 +259,14 @@ def test_a_solver_that_dies_is_logged_where_the_problem_says(client, server):
     _wait_for(lambda: client.get("/health").json()["solvers"] == 1, timeout=30)
 
 
-def _solver_pids(parent: int) -> list[int]:
-    """The server's solver processes (multiprocessing's spawned children, not its resource tracker)."""
+def _solver_pids(parent: int, memory_mb: int = 2048) -> list[int]:
+    """The server's solver processes: its children whose address space is capped at the solvers' memory
+    (the intake processes have another cap, multiprocessing's resource tracker none)."""
     children = []
     for task in Path(f"/proc/{parent}/task").iterdir():
         children += [int(p) for p in (task / "children").read_text().split()]
-    return [p for p in children if "resource_tracker" not in Path(f"/proc/{p}/cmdline").read_bytes().decode()
-            and "multiprocessing" in Path(f"/proc/{p}/cmdline").read_bytes().decode()]
+    cap = ["Max", "address", "space", str(memory_mb * 2**20)]
+    return [p for p in children if any(line.split()[:4] == cap for line in Path(f"/proc/{p}/limits").open())]
 
 
 def test_unknown_routes_and_methods_are_problems_too(client):

@@ -20,6 +20,7 @@ from .. import __version__
 from . import problems
 from .auth import Guard
 from .deps import Services
+from .models import AppendIn, TableauIn
 from .models import Problem as ProblemModel
 from .routers import axioms, explanations, health, maps, recognise, tableaux, tokens
 from .settings import Settings
@@ -50,10 +51,10 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     app = FastAPI(title="bootmap", version=__version__, description=DESCRIPTION, lifespan=lifespan)
     app.state.settings = settings
-    app.state.parse_budget = problems.ByteBudget(settings.max_parsing_bytes)
     problems.install(app)
     # Added last = outermost: the guard sees a request first, then CORS, then the body limit.
-    app.add_middleware(problems.BodyLimit, max_bytes=settings.max_body_bytes, timeout_s=settings.body_timeout_s)
+    app.add_middleware(problems.BodyLimit, max_bytes=settings.max_body_bytes, timeout_s=settings.body_timeout_s,
+                       held_bytes=settings.max_held_body_bytes)
     if settings.cors_origins:
         app.add_middleware(CORSMiddleware, allow_origins=settings.cors_origins, allow_methods=["*"],
                            allow_headers=["Authorization", "Content-Type"], expose_headers=["Location", "Retry-After"])
@@ -86,6 +87,10 @@ def _openapi(app: FastAPI, settings: Settings) -> dict:
     spec["security"] = [{"token": []}, {}]  # optional on a loopback server without tokens
     schemas = spec.setdefault("components", {}).setdefault("schemas", {})
     schemas["Problem"] = ProblemModel.model_json_schema(ref_template="#/components/schemas/{model}")
+    for model in (TableauIn, AppendIn):  # bodies their routes read themselves (intake): not in FastAPI's list
+        schema = model.model_json_schema(ref_template="#/components/schemas/{model}")
+        schemas.update(schema.pop("$defs", {}))
+        schemas[model.__name__] = schema
     for name, schema in schemas.items():
         props = schema.get("properties", {})
         if name.startswith(("TableauIn", "AppendIn")) and "steps" in props:

@@ -13,6 +13,7 @@ from fastapi.concurrency import run_in_threadpool
 from pydantic import BeforeValidator
 
 from ..tableau import FORMAT
+from .intake import Intake, Limits, intake_workers
 from .settings import Settings
 from .store import Store
 from .theory import LoadedTheory, Theories
@@ -45,7 +46,13 @@ class Services:
     theories: Theories
     pool: SolverPool
     gate: SolveGate
+    intake: Intake
     recognisers: Cache = field(default_factory=Cache)
+
+    @property
+    def limits(self) -> Limits:
+        s = self.settings
+        return Limits(s.max_steps, s.max_image_len, s.max_meta_bytes, s.max_json_values)
 
     @classmethod
     def start(cls, settings: Settings) -> "Services":
@@ -56,16 +63,19 @@ class Services:
         pool = SolverPool(settings.max_concurrent_solves, settings.solver_memory_mb, settings.solve_kill_grace_s)
         gate = SolveGate(pool, settings.max_concurrent_solves, settings.max_queued_solves, settings.retry_after_s,
                          settings.token_max_running)
-        services = cls(settings, store, theories, pool, gate)
+        intake = Intake(intake_workers(), settings.intake_memory_mb)
+        services = cls(settings, store, theories, pool, gate, intake)
+        intake.warm()
         pool.warm(services.job({"format": FORMAT, "steps": [
             {"view": "a", "action": {"type": "travel", "distance_m": 1.0}}, {"view": "b"}]})[0])
         return services
 
     def close(self) -> None:
+        self.intake.close()
         self.pool.close()
         self.store.close()
 
-    def job(self, document: dict) -> tuple[SolveJob, LoadedTheory]:
+    def job(self, document: dict | str) -> tuple[SolveJob, LoadedTheory]:
         """A solve of a tableau document with the current theory, and that theory (its id goes with the map)."""
         theory, s = self.theories.current, self.settings
         return SolveJob(document, str(theory.snapshot), s.solve_time_limit_s, s.quantum_deg, s.max_models), theory
@@ -85,7 +95,7 @@ class Services:
             if lease is not None:
                 await run_in_threadpool(self.store.release_solve, lease)
 
-    def explain_job(self, document: dict, a: str, b: str, levels: tuple[str, ...] | None) -> ExplainJob:
+    def explain_job(self, document: dict | str, a: str, b: str, levels: tuple[str, ...] | None) -> ExplainJob:
         """A question about a tableau document, with the current theory."""
         theory, s = self.theories.current, self.settings
         return ExplainJob(document, str(theory.snapshot), s.solve_time_limit_s, a, b, levels, s.quantum_deg)

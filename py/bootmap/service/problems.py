@@ -270,9 +270,14 @@ class ByteBudget:
                     self._changed.notify_all()
 
 
+# The bodies FastAPI parses (an image to recognise, sharing, a token's name) are small; tableaux and
+# appends are read by their routes and parsed in an intake process (bootmap.service.intake).
+SMALL_BODY_BYTES = 2**20
+
+
 class _JSONRequest(Request):
-    """A request whose JSON body is parsed and validated against the route's body model in a worker
-    thread, off the event loop: FastAPI then gets the model instance, which it passes without
+    """A request whose (small) JSON body is parsed and validated against the route's body model in a
+    worker thread, off the event loop: FastAPI then gets the model instance, which it passes without
     validating again."""
 
     body_field: Any = None
@@ -280,10 +285,12 @@ class _JSONRequest(Request):
     async def json(self) -> Any:
         if not hasattr(self, "_json"):
             body = await self.body()
-            settings = self.app.state.settings
-            async with self.app.state.parse_budget.hold(len(body)):
-                self._json = await run_in_threadpool(_parse_and_validate, body, self.body_field,
-                                                     settings.max_json_values)
+            if len(body) > SMALL_BODY_BYTES:
+                raise Problem(413, "body-too-large", "Request body too large",
+                              f"this request's body may have at most {SMALL_BODY_BYTES} bytes",
+                              limit_bytes=SMALL_BODY_BYTES)
+            self._json = await run_in_threadpool(_parse_and_validate, body, self.body_field,
+                                                 self.app.state.settings.max_json_values)
         return self._json
 
 
@@ -315,10 +322,13 @@ class JSONRoute(APIRoute):
 class BodyLimit:
     """Refuse a request body over ``max_bytes``: at once when Content-Length says so, else as soon as the
     bytes read pass the limit. Nothing over the limit is ever held in memory. A body not received in
-    full within ``timeout_s`` of the request's start is refused (408) and the connection closed."""
+    full within ``timeout_s`` once reading starts is refused (408) and the connection closed. Bodies held
+    at once are bounded by ``held_bytes`` (by Content-Length, else ``max_bytes``): a request whose body
+    does not fit waits for room before it is read."""
 
-    def __init__(self, app: ASGIApp, max_bytes: int, timeout_s: float = 20.0):
+    def __init__(self, app: ASGIApp, max_bytes: int, timeout_s: float = 20.0, held_bytes: int | None = None):
         self.app, self.max_bytes, self.timeout_s = app, max_bytes, timeout_s
+        self.budget = ByteBudget(held_bytes or 4 * max_bytes)
 
     def _too_large(self) -> Problem:
         return Problem(413, "body-too-large", "Request body too large",
@@ -333,6 +343,14 @@ class BodyLimit:
             response = problem_response(self._too_large() if length.isdigit() else
                                         Problem(400, "bad-request", "Bad request", "invalid Content-Length"))
             return await response(scope, receive, send)
+        chunked = b"chunked" in dict(scope["headers"]).get(b"transfer-encoding", b"").lower()
+        size = int(length) if length is not None else (self.max_bytes if chunked else 0)
+        if size == 0:
+            return await self._run(scope, receive, send)
+        async with self.budget.hold(size):  # held until the response is sent: the body lives that long
+            await self._run(scope, receive, send)
+
+    async def _run(self, scope: Scope, receive: Receive, send: Send) -> None:
         seen, complete = 0, False
         deadline = anyio.current_time() + self.timeout_s
 
@@ -340,9 +358,9 @@ class BodyLimit:
             nonlocal seen, complete
             if complete:  # the body is in; what comes next is the disconnect, whenever it comes
                 return await receive()
-            with anyio.move_on_after(max(0.0, deadline - anyio.current_time())) as scope:
+            with anyio.move_on_after(max(0.0, deadline - anyio.current_time())) as timer:
                 message = await receive()
-            if scope.cancelled_caught:
+            if timer.cancelled_caught:
                 raise Problem(408, "body-timeout", "Request body too slow",
                               f"the request body did not arrive within {self.timeout_s:g} s "
                               "(BOOTMAP_BODY_TIMEOUT_S)", headers={"Connection": "close"})
@@ -359,8 +377,8 @@ class BodyLimit:
 # Handlers
 # ---------------------------------------------------------------------------------------------------
 
-_TITLES = {400: "Bad request", 401: "Token needed", 403: "Not allowed", 404: "Not found", 405: "Method not allowed", 406: "Not acceptable",
-           408: "Request body too slow", 413: "Request body too large", 415: "Unsupported media type",
+_TITLES = {400: "Bad request", 401: "Token needed", 403: "Not allowed", 404: "Not found", 405: "Method not allowed",
+           406: "Not acceptable", 408: "Request body too slow", 413: "Request body too large", 415: "Unsupported media type",
            422: "Invalid request", 429: "Too many requests",
            500: "Internal error", 503: "Service unavailable"}
 

@@ -72,10 +72,13 @@ class Settings(BaseSettings):
     body_timeout_s: float = Field(20.0, gt=0, description="A request body not received within this many "
                                                           "seconds of its headers is refused (408).")
     max_meta_bytes: int = Field(64 * 2**10, ge=2, description="Largest 'meta' of a tableau, bytes of JSON.")
-    max_json_values: int = Field(2_000_000, ge=100, description="Most JSON values (numbers, strings, ...) in one "
+    max_json_values: int = Field(1_000_000, ge=100, description="Most JSON values (numbers, strings, ...) in one "
                                                                 "request body.")
-    max_parsing_bytes: int = Field(32 * 2**20, ge=1024, description="Bytes of request bodies parsed at once; "
-                                                                    "larger bodies wait their turn.")
+    max_held_body_bytes: int = Field(64 * 2**20, ge=1024, description="Bytes of request bodies the server holds "
+                                     "at once (by Content-Length, else max_body_bytes); a request whose body "
+                                     "does not fit waits for room before it is read.")
+    intake_memory_mb: int = Field(1024, ge=256, description="Address-space cap of each intake process (where "
+                                                            "posted tableaux are parsed and checked), MiB.")
 
     @field_validator("allowed_hosts", "cors_origins", mode="before")
     @classmethod

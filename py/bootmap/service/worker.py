@@ -68,7 +68,7 @@ class SolveJob:
     validates the document (bootmap.tableau, against the JSON Schema): that takes longer than many solves,
     and is better spent in a solver process than under the server's GIL."""
 
-    document: dict
+    document: dict | str  # the tableau, or its JSON text (the server need not parse it)
     axioms: str
     time_limit_s: float
     quantum_deg: float | None = None
@@ -80,7 +80,7 @@ class ExplainJob:
     """A question about a stored tableau: are time points (or dstates) ``a`` and ``b`` one dstate, and
     why? Solved like a map, in a solver process under the same deadline and memory cap."""
 
-    document: dict
+    document: dict | str
     axioms: str
     time_limit_s: float
     a: str
@@ -155,7 +155,7 @@ def _solve(job: SolveJob, cache: dict) -> tuple:
     start = time.perf_counter()
     deadline = Deadline.after(job.time_limit_s)  # validation and clustering count against it too
     try:
-        tableau, k = _views(Tableau.from_dict(job.document, "tableau"))
+        tableau, k = _views(_tableau(job.document))
         resolver = _cached(cache, ("map", job.axioms, job.quantum_deg, job.max_models), lambda: _resolver(job))
         cmap = resolver.resolve(tableau, deadline)
         return "ok", Solved(cmap.to_dict(), cmap.to_text(), k, time.perf_counter() - start)
@@ -171,7 +171,7 @@ def _explain(job: ExplainJob, cache: dict) -> tuple:
     start = time.perf_counter()
     deadline = Deadline.after(job.time_limit_s)
     try:
-        tableau, _ = _views(Tableau.from_dict(job.document, "tableau"))
+        tableau, _ = _views(_tableau(job.document))
         explainer = _cached(cache, ("explain", job.axioms, job.levels, job.quantum_deg),
                             lambda: Explainer(axioms=job.axioms, levels=job.levels, quantum_deg=job.quantum_deg))
         e = explainer.explain(tableau, job.a, job.b, deadline)
@@ -182,6 +182,10 @@ def _explain(job: ExplainJob, cache: dict) -> tuple:
         return "inconsistent", str(e), e.failing_levels, e.diagnosed
     except SolveTimeout as e:
         return "timeout", str(e), e.lower_bound, None
+
+
+def _tableau(document: dict | str) -> Tableau:
+    return Tableau.loads(document, "tableau") if isinstance(document, str) else Tableau.from_dict(document, "tableau")
 
 
 def _views(tableau: Tableau) -> tuple[Tableau, int | None]:
