@@ -74,7 +74,7 @@ class Settings(BaseSettings):
     max_meta_bytes: int = Field(64 * 2**10, ge=2, description="Largest 'meta' of a tableau, bytes of JSON.")
     max_json_values: int = Field(1_000_000, ge=100, description="Most JSON values (numbers, strings, ...) in one "
                                                                 "request body.")
-    max_held_body_bytes: int = Field(64 * 2**20, ge=1024, description="Bytes of request bodies the server holds "
+    max_held_body_bytes: int = Field(32 * 2**20, ge=1024, description="Bytes of request bodies the server holds "
                                      "at once (by Content-Length, else max_body_bytes); a request whose body "
                                      "does not fit waits for room before it is read.")
     intake_memory_mb: int = Field(1024, ge=256, description="Address-space cap of each intake process (where "

@@ -209,7 +209,7 @@ def _sqlite_pragmas(dbapi_connection, _record) -> None:
 # Columns added since the first release: added to an older database when it is opened.
 _NEW_COLUMNS = {"owner_id": "INTEGER REFERENCES tokens(id) ON DELETE SET NULL",
                 "public": "BOOLEAN NOT NULL DEFAULT false", "stored_bytes": "BIGINT NOT NULL DEFAULT 0"}
-STREAM_CHUNK = 2**20  # characters per chunk of a streamed read (documents are ASCII JSON)
+STREAM_CHUNK = 2**18  # characters per chunk of a streamed read (documents are ASCII JSON)
 
 
 class Store:

@@ -53,9 +53,12 @@ def json_body(model: str) -> dict:
         "schema": {"$ref": f"#/components/schemas/{model}"}}}}}
 
 
-async def json_bytes(request: Request) -> bytes:
+async def json_bytes(request: Request) -> bytearray:
     """The request's body, which must be JSON (415 otherwise; 422 if there is none)."""
-    body = await request.body()
+    # Read into one buffer (not a list of chunks joined at the end: a large body is held once, not twice).
+    body = bytearray()
+    async for chunk in request.stream():
+        body += chunk
     if not body:
         raise Problem(422, "invalid-request", "Invalid request", "the request needs a JSON body")
     mime = request.headers.get("content-type", "").split(";")[0].strip().lower()
