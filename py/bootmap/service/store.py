@@ -438,24 +438,34 @@ class Stream:
                 self.length = len(self._blob)  # bytes (the map may hold UTF-8)
             else:
                 self.length = rowid  # characters, as substr counts them
+            self.whole: bytes | None = None
+            if self.length <= STREAM_CHUNK:  # small (most maps): read at once, the connection goes back
+                self.whole = b"".join(self._chunks())
+                self.close()
         except BaseException:
             self.close()
             raise
 
     def __iter__(self) -> Iterator[bytes]:
+        if self.whole is not None:
+            yield self.whole
+            return
         try:
-            for start in range(0, self.length, STREAM_CHUNK):
-                if self._blob is not None:
-                    yield self._blob.read(STREAM_CHUNK)
-                else:
-                    chunk = self.conn.scalar(select(func.substr(self.table.c[self.column], start + 1, STREAM_CHUNK))
-                                             .where(self.where))
-                    yield chunk.encode()
+            yield from self._chunks()
         finally:
             self.close()
 
+    def _chunks(self) -> Iterator[bytes]:
+        for start in range(0, self.length, STREAM_CHUNK):
+            if self._blob is not None:
+                yield self._blob.read(STREAM_CHUNK)
+            else:
+                chunk = self.conn.scalar(select(func.substr(self.table.c[self.column], start + 1, STREAM_CHUNK))
+                                         .where(self.where))
+                yield chunk.encode()
+
     def close(self) -> None:
-        if getattr(self, "_blob", None) is not None:
+        if self._blob is not None:
             self._blob.close()
             self._blob = None
         if not self.conn.closed:

@@ -39,6 +39,9 @@ def streamed(stream: Stream, caller: Caller, before: str = "", after: str = "",
         stream.close()
         raise
 
+    if stream.whole is not None:  # small: one response, no streaming
+        return Response(before.encode() + stream.whole + after.encode(), media_type=media_type)
+
     def chunks():
         yield before.encode()
         yield from stream
