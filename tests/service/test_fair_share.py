@@ -23,13 +23,14 @@ from bootmap import examples
 
 HARD = json.dumps(ONE_VIEW).encode()
 SETTINGS = {"solve_time_limit_s": 3, "solve_kill_grace_s": 1, "max_concurrent_solves": 2, "max_queued_solves": 8,
-            "token_max_solves": 4, "token_requests_per_minute": 60, "require_tokens": True, "retry_after_s": 3}
+            "token_max_solves": 4, "token_requests_per_minute": 60, "require_tokens": True, "retry_after_s": 3,
+            "token_max_stored_bytes": 400_000}
 
 
 @pytest.fixture(scope="module")
 def fair_server(tmp_path_factory):
     s = Server(tmp_path_factory.mktemp("fair_server"), **SETTINGS)
-    s.tokens = {name: make_token(name, data_dir=s.data_dir) for name in ("flooder", "patient", "chatty")}
+    s.tokens = {name: make_token(name, data_dir=s.data_dir) for name in ("flooder", "patient", "chatty", "hoarder")}
     s.start()
     yield s
     s.stop()
@@ -124,3 +125,20 @@ def test_requests_over_a_tokens_rate_get_429_with_retry_after(fair_server):
             assert n == 61
         other = c.get("/tableaux", headers=bearer(fair_server.tokens["patient"]))
         assert other.status_code == 200  # another token's count is its own
+
+
+def test_a_token_over_its_stored_bytes_gets_429_until_it_deletes(fair_server):
+    headers = bearer(fair_server.tokens["hoarder"])
+    doc = examples.notched_rectangle(circuits=10).to_dict()  # 81 steps: about 30 kB with its map
+    with fair_server.client() as c:
+        stored = []
+        for _ in range(40):
+            r = c.post("/tableaux", json=doc, headers=headers)
+            if r.status_code != 201:
+                break
+            stored.append(r.json()["id"])
+        assert r.status_code == 429 and "BOOTMAP_TOKEN_MAX_STORED_BYTES" in r.json()["detail"], r.text
+        assert 3 <= len(stored) < 40 and r.headers["retry-after"]
+        assert c.post("/tableaux", json=doc, headers=bearer(fair_server.tokens["patient"])).status_code == 201
+        assert c.delete(f"/tableaux/{stored[0]}", headers=headers).status_code == 204
+        assert c.post("/tableaux", json=doc, headers=headers).status_code == 201  # room again

@@ -23,7 +23,7 @@ MORE = {"action": {"type": "turn", "angle_deg": -90}, "steps": [{"view": "V1"}]}
 @pytest.fixture(scope="module")
 def tokens_server(tmp_path_factory, server_axioms):
     s = Server(tmp_path_factory.mktemp("tokens_server"), axioms=server_axioms, require_tokens=True,
-               **SESSION_SETTINGS)
+               cors_origins="https://app.example", **SESSION_SETTINGS)
     tokens = {"admin": make_token("root", admin=True, data_dir=s.data_dir),
               "alice": make_token("alice", data_dir=s.data_dir), "bob": make_token("bob", data_dir=s.data_dir)}
     s.start()
@@ -126,6 +126,14 @@ def test_only_an_admin_reloads_axioms_and_makes_tokens(tokens_server):
         assert c.get("/tableaux", headers=bearer(made.json()["token"])).status_code == 200  # honoured at once
         problem(c.post("/tokens", json={"name": "eve", "admin": True}, headers=bearer(made.json()["token"])), 403)
         problem(c.post("/tokens", json={"name": "dave"}, headers=bearer(tokens_server.tokens["admin"])), 409)
+        # Revoked: refused at once; dave's tableau stays, for admins only.
+        tid = c.post("/tableaux", json=SMALL, headers=bearer(made.json()["token"])).json()["id"]
+        problem(c.delete("/tokens/dave", headers=bearer(made.json()["token"])), 403)
+        assert c.delete("/tokens/dave", headers=bearer(tokens_server.tokens["admin"])).status_code == 204
+        problem(c.get("/tableaux", headers=bearer(made.json()["token"])), 401)
+        problem(c.delete("/tokens/dave", headers=bearer(tokens_server.tokens["admin"])), 404)
+        assert c.get(f"/tableaux/{tid}", headers=bearer(tokens_server.tokens["admin"])).status_code == 200
+        problem(c.get(f"/tableaux/{tid}", headers=bearer(tokens_server.tokens["alice"])), 403)
 
 
 # --- Hosts and other web sites (the default loopback server, no tokens) ------------------------------
@@ -157,6 +165,19 @@ def test_a_cross_site_post_to_reload_fails(client, server):
 def test_cors_is_off_unless_configured(client):
     r = client.options("/tableaux", headers={"Origin": "http://evil.example", "Access-Control-Request-Method": "POST"})
     assert "access-control-allow-origin" not in r.headers
+
+
+def test_a_configured_origin_may_call_from_a_browser(tokens_server):
+    app = {"Origin": "https://app.example"}
+    with tokens_server.client() as c:
+        pre = c.options("/tableaux", headers={**app, "Access-Control-Request-Method": "POST",
+                                              "Access-Control-Request-Headers": "authorization, content-type"})
+        assert pre.status_code == 200 and pre.headers["access-control-allow-origin"] == "https://app.example"
+        r = c.post("/tableaux", json=SMALL, headers={**app, **bearer(tokens_server.tokens["alice"])})
+        assert r.status_code == 201 and r.headers["access-control-allow-origin"] == "https://app.example"
+        other = c.post("/tableaux", json=SMALL, headers={"Origin": "https://elsewhere.example",
+                                                         **bearer(tokens_server.tokens["alice"])})
+        problem(other, 403)
 
 
 def test_any_address_but_loopback_requires_tokens_and_named_hosts(tmp_path):

@@ -90,7 +90,7 @@ def from_bootmap_error(e: BootmapError) -> Problem:
     if isinstance(e, TableauError):
         return invalid(e.where.split(": ", 1)[-1] if e.where else "", e.reason)
     if isinstance(e, NotFound):
-        return not_found(e.tableau_id)
+        return not_found(e.tableau_id) if e.tableau_id else Problem(404, "not-found", "Not found", str(e))
     if isinstance(e, ExplainError):
         return Problem(422, "invalid-question", "Invalid question", str(e))
     for cls, status, kind, title in _KINDS:

@@ -42,11 +42,11 @@ SQLITE_BUSY_TIMEOUT_MS = 10_000
 
 
 class NotFound(BootmapError):
-    """No tableau has this id."""
+    """No tableau has this id (or no token this name)."""
 
-    def __init__(self, tableau_id: int):
+    def __init__(self, tableau_id: int, message: str | None = None):
         self.tableau_id = tableau_id
-        super().__init__(f"no tableau has id {tableau_id}")
+        super().__init__(message or f"no tableau has id {tableau_id}")
 
 
 class Conflict(BootmapError):
@@ -337,6 +337,18 @@ class Store:
                 raise Conflict(f"a token named {name!r} exists already")
             s.add(row)
         return TokenRecord(row.id, row.name, row.admin)
+
+    def delete_token(self, name: str) -> None:
+        """Revoke a token: it is refused from now on, on every server; its tableaux stay, owned by no one
+        (admins reach them)."""
+        with self._session.begin() as s:
+            token_id = s.scalar(select(TokenRow.id).where(TokenRow.name == name))
+            if token_id is None:
+                raise NotFound(0, f"no token is named {name!r}")
+            s.execute(update(TableauRow).where(TableauRow.owner_id == token_id).values(owner_id=None))
+            s.execute(delete(SolveLease).where(SolveLease.token_id == token_id))
+            s.execute(delete(RequestCount).where(RequestCount.token_id == token_id))
+            s.execute(delete(TokenRow).where(TokenRow.id == token_id))
 
     def token_by_digest(self, digest: str) -> TokenRecord | None:
         with self._session() as s:
