@@ -138,7 +138,8 @@ def test_only_an_admin_reloads_axioms_and_makes_tokens(tokens_server):
 
 # --- Hosts and other web sites (the default loopback server, no tokens) ------------------------------
 
-@pytest.mark.parametrize("host", ["evil.example", "evil.example:8000", "127.0.0.1.evil.example", ""])
+@pytest.mark.parametrize("host", ["evil.example", "evil.example:8000", "127.0.0.1.evil.example", "",
+                                  "127.0.0.1:80@evil.example", "localhost:8000/x"])
 def test_a_host_header_that_is_not_allowed_gets_400(client, host):
     for method, path in [("GET", "/health"), ("GET", "/tableaux/"), ("POST", "/axioms/reload")]:
         r = client.request(method, path, headers={"Host": host})

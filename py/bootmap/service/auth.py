@@ -16,6 +16,7 @@ or ``fetch`` needs no preflight when it sends no custom header).
 from __future__ import annotations
 
 import hashlib
+import re
 import secrets
 import time
 from dataclasses import dataclass
@@ -135,7 +136,10 @@ OPEN_PATHS = {"/health", "/docs", "/docs/oauth2-redirect", "/redoc", "/openapi.j
 def host_allowed(host: str, allowed: list[str]) -> bool:
     """As Starlette's TrustedHostMiddleware matches: exact names, '*.domain' for subdomains, '*' for any;
     the port is ignored. IPv6 literals keep their brackets."""
-    name = (host[:host.find("]") + 1] if host.startswith("[") else host.split(":")[0]).lower()
+    form = re.fullmatch(r"(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9._-]+)(:[0-9]{1,5})?", host)
+    if form is None:  # e.g. "127.0.0.1:80@evil.example", which a URL built from it would send elsewhere
+        return False
+    name = form.group(1).lower()
     for pattern in allowed:
         if pattern == "*" or name == pattern.lower():
             return True
