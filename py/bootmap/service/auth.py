@@ -149,9 +149,11 @@ def host_allowed(host: str, allowed: list[str]) -> bool:
 
 
 class Guard:
-    """Refuse (problem details) a Host the server does not answer to (400), and a state-changing request
-    a browser marks as coming from another site (403): ``Sec-Fetch-Site: cross-site``, or an ``Origin``
-    that is neither this server nor a configured CORS origin."""
+    """The outermost middleware. Refuse (problem details) a Host the server does not answer to (400); a
+    state-changing request a browser marks as coming from another site (403): ``Sec-Fetch-Site:
+    cross-site``, or an ``Origin`` that is neither this server nor a configured CORS origin; and, when
+    tokens are required, a request without one (401) before its body is read. HEAD is answered as GET
+    (uvicorn sends no body for it)."""
 
     def __init__(self, app: ASGIApp, hosts: list[str], origins: list[str], tokens_required: bool = False):
         self.app, self.hosts, self.origins, self.tokens_required = app, hosts, set(origins), tokens_required
