@@ -11,7 +11,6 @@ must be free within 1 s of its client hanging up (it was 30 s before).
 
 import json
 import socket
-import threading
 import time
 from urllib.parse import urlsplit
 
