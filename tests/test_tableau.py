@@ -115,9 +115,17 @@ def test_any_well_formed_tableau_round_trips(rows, last):
 
 
 def test_an_integer_beyond_any_float_is_refused_by_name():
-    text = '{"format": "bootmap.tableau/1", "steps": [{"image": [1' + "0" * 400 + "]}]}"
-    with pytest.raises(TableauError, match=r"steps\[0\]\.image\[0\]: a number of 401 digits is too large"):
+    text = '{"format": "bootmap.tableau/1", "steps": [{"view": "a", "pose": [1' + "0" * 400 + ", 0, 0]}]}"
+    with pytest.raises(TableauError, match=r"steps\[0\]\.pose\[0\]: a number of 401 digits is too large"):
         Tableau.loads(text)
+
+
+def test_image_values_are_bounded_so_that_distances_stay_finite():
+    for value in (1e10, -1.7e308, 10**400):
+        with pytest.raises(TableauError, match=r"steps\[0\]\.image\[0\]"):
+            Tableau.from_dict({"format": "bootmap.tableau/1", "steps": [{"image": [value]}]})
+    assert Tableau.from_dict({"format": "bootmap.tableau/1", "steps": [{"image": [1e9, -1e9]}]}).steps[0].image == \
+        (1e9, -1e9)
 
 
 def test_a_nul_in_a_view_label_is_refused():

@@ -58,3 +58,17 @@ class Server:
 
     def client(self, timeout: float = 60) -> httpx.Client:
         return httpx.Client(base_url=self.url, timeout=timeout)
+
+
+def make_token(name: str, *, admin: bool = False, data_dir: Path | None = None, db: str | None = None) -> str:
+    """``bootmap token create NAME``: the token is the last line it prints."""
+    where = ["--db", db] if db else ["--data-dir", str(data_dir)]
+    env = {k: v for k, v in os.environ.items() if not k.startswith("BOOTMAP_")}
+    out = subprocess.run([sys.executable, "-m", "bootmap.cli", "token", "create", name, *where,
+                          *(["--admin"] if admin else [])], capture_output=True, text=True, env=env, timeout=60)
+    assert out.returncode == 0, out.stderr
+    return out.stdout.strip().splitlines()[-1]
+
+
+def bearer(token: str) -> dict[str, str]:
+    return {"Authorization": f"Bearer {token}"}

@@ -1,6 +1,12 @@
 """The service's capabilities, over HTTP against a real uvicorn process: create, read, append, recognise,
 minimal maps, axioms, health, schema; and a restart keeps everything."""
 
+import os
+import signal
+import threading
+import time
+from pathlib import Path
+
 import numpy as np
 import pytest
 from service_helpers import Server
@@ -206,6 +212,61 @@ def test_health_schema_and_docs(client):
     paths = client.get("/openapi.json").json()["paths"]
     assert {"/tableaux", "/tableaux/{tableau_id}/map", "/tableaux/{tableau_id}/maps", "/tableaux/{tableau_id}/steps",
             "/tableaux/{tableau_id}/recognise", "/axioms", "/axioms/reload", "/health"} <= set(paths)
+
+
+def test_head_is_answered_wherever_get_is(client, paper_id):
+    for path in ["/health", f"/tableaux/{paper_id}/map", "/openapi.json"]:
+        r = client.head(path)
+        assert r.status_code == 200 and r.content == b"" and r.headers["content-type"] == client.get(path).headers[
+            "content-type"]
+    assert "HEAD" in client.delete("/health").headers["allow"]
+
+
+def test_axioms_name_their_directory_not_the_servers_path(client, server_axioms):
+    listing = client.get("/axioms").text
+    assert client.get("/axioms").json()["directory"] == server_axioms.name and str(server_axioms.parent) not in listing
+
+
+def test_a_script_in_an_axiom_file_is_refused_with_clingos_reason(client, server_axioms):
+    before = client.get("/axioms").json()["theory"]
+    (server_axioms / "sneaky.lp").write_text('#script (python)\nimport os\n#end.\n')
+    try:
+        r = client.post("/axioms/reload")
+        assert r.status_code == 422 and "sneaky.lp" in r.json()["detail"]
+        assert "python support not available" in r.json()["detail"]
+    finally:
+        (server_axioms / "sneaky.lp").unlink()
+    assert client.get("/axioms").json()["theory"] == before
+
+
+def test_a_solver_that_dies_is_logged_where_the_problem_says(client, server):
+    """Kill the solver in the middle of a hard solve: 500 solver-crashed, and the log line it points to."""
+    from test_limits import ONE_VIEW, _solves, _wait_for
+
+    result = {}
+    thread = threading.Thread(target=lambda: result.update(r=server.client().post("/tableaux", json=ONE_VIEW)))
+    thread.start()
+    _wait_for(lambda: _solves(client)[0] == 1)
+    time.sleep(0.3)
+    solver = _solver_pids(server.process.pid)
+    assert len(solver) == 1, solver
+    os.kill(solver[0], signal.SIGKILL)
+    thread.join(30)
+    problem = result["r"].json()
+    assert result["r"].status_code == 500 and problem["type"].endswith("/solver-crashed")
+    assert "server log" in problem["detail"]
+    assert f"solver process {solver[0]} died during a solve (exit code -9)" in server.log.read_text()
+    _wait_for(lambda: client.get("/health").json()["solvers"] == 1, timeout=30)
+
+
+def _solver_pids(parent: int, memory_mb: int = 2048) -> list[int]:
+    """The server's solver processes: its children whose address space is capped at the solvers' memory
+    (the intake processes have another cap, multiprocessing's resource tracker none)."""
+    children = []
+    for task in Path(f"/proc/{parent}/task").iterdir():
+        children += [int(p) for p in (task / "children").read_text().split()]
+    cap = ["Max", "address", "space", str(memory_mb * 2**20)]
+    return [p for p in children if any(line.split()[:4] == cap for line in Path(f"/proc/{p}/limits").open())]
 
 
 def test_unknown_routes_and_methods_are_problems_too(client):

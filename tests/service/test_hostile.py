@@ -78,7 +78,7 @@ def test_a_100_mb_body_is_refused_before_it_is_read(server, client):
     """Content-Length says 100 MB: the 413 comes back while the client has sent only the first 64 KiB."""
     url = urlsplit(server.url)
     with socket.create_connection((url.hostname, url.port), timeout=10) as s:
-        s.sendall(b"POST /tableaux HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
+        s.sendall(b"POST /tableaux HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\n"
                   b"Content-Length: %d\r\n\r\n" % (100 * 2**20) + b"[" * 65536)
         reply = b""
         while not reply.endswith(b"}"):  # the headers and the problem document may come in two packets
@@ -168,7 +168,32 @@ def test_an_absurd_laser_range_in_meta_is_refused(client):
     assert problem["field"] == "meta.laser.range_max"
 
 
+def test_an_integer_truth_too_large_for_a_float_is_refused(client):
+    body = b'{"format": "bootmap.tableau/1", "steps": [{"view": "a", "truth": ' + b"9" * 4000 + b"}]}"
+    problem = post_raw(client, body, status=422)
+    assert problem["field"] == "steps[0].truth" and "more than a float can hold" in problem["detail"]
+    assert client.post("/tableaux", json=tableau({"view": "a", "truth": 2**60})).status_code == 201
+
+
+@pytest.mark.parametrize("value", [1.7e308, -1.7e308, 1e10])
+def test_image_values_beyond_1e9_are_refused_so_distances_stay_finite(client, paper_id, value):
+    problem = refused(client, 422, "POST", "/tableaux", json=tableau({"image": [value, 1.0], "action": TURN},
+                                                                      {"image": [1.0, 2.0]}))
+    assert problem["field"] == "steps[0].image[0]" and "1000000000" in problem["detail"]
+    problem = refused(client, 422, "POST", f"/tableaux/{paper_id}/recognise", json={"image": [value]})
+    assert problem["field"] == "image[0]"
+
+
+def test_images_at_the_bound_are_clustered_and_recognised_with_finite_distances(client):
+    steps = [{"image": [1e9 if t % 2 else -1e9, 0.0], "action": TURN} for t in range(7)] + [{"image": [-1e9, 0.0]}]
+    r = client.post("/tableaux", json=tableau(*steps))
+    assert r.status_code == 201, r.text
+    far = client.post(f"/tableaux/{r.json()['id']}/recognise", json={"image": [0.0, 1e9]}).json()
+    assert far["distance"] == pytest.approx(2**0.5 * 1e9)
+
+
 @pytest.mark.parametrize("path, status", [("/tableaux/0", 422), ("/tableaux/-1", 422), (f"/tableaux/{2**63}", 422),
-                                          ("/tableaux/1e3", 422), ("/tableaux/999999", 404)])
+                                          ("/tableaux/1e3", 422), ("/tableaux/999999", 404), ("/tableaux/+1", 422),
+                                          ("/tableaux/01", 422), ("/tableaux/%201", 422), ("/tableaux/1_0", 422)])
 def test_absurd_ids_are_refused(client, path, status):
     refused(client, status, "GET", path)

@@ -17,7 +17,7 @@ from pydantic import ValidationError
 from bootmap.service.app import create_app
 from bootmap.service.models import TableauIn
 from bootmap.service.settings import Settings
-from bootmap.tableau import FORMAT, Tableau, schema
+from bootmap.tableau import FORMAT, Tableau, _fast_validator, schema
 
 SOURCE_OF_TRUTH = jsonschema.Draft202012Validator(schema())
 SPEC = create_app(Settings()).openapi()
@@ -31,7 +31,10 @@ def verdicts(doc) -> tuple[bool, bool, bool]:
         model = True
     except ValidationError:
         model = False
-    return SOURCE_OF_TRUTH.is_valid(doc), model, OPENAPI.is_valid(doc)
+    truth = SOURCE_OF_TRUTH.is_valid(doc)
+    # bootmap.tableau's fast path (jsonschema-rs) must give the same verdict as jsonschema itself.
+    assert _fast_validator().is_valid(doc) == truth, "jsonschema-rs and jsonschema disagree"
+    return truth, model, OPENAPI.is_valid(doc)
 
 
 text = st.text(st.characters(exclude_characters="\x00"), max_size=3)

@@ -111,8 +111,9 @@ def check_syntax(files: Iterable[Path]) -> None:
         ctl = clingo.Control(["--warn=none"], logger=lambda _code, msg: messages.append(msg.strip()))
         try:
             ctl.load(str(f))
-        except RuntimeError:
-            raise AxiomError(f"{f} does not parse:\n" + "\n".join(messages)) from None
+        except RuntimeError as e:  # some errors (e.g. #script without Python support) reach only the exception
+            said = [m for m in messages if m] or [str(e).strip() or "clingo gave no reason"]
+            raise AxiomError(f"{f} does not parse:\n" + "\n".join(said)) from None
 
 
 def _labelled_rules(path: Path, level: str) -> list[Rule]:

@@ -9,18 +9,24 @@ from __future__ import annotations
 
 from contextlib import asynccontextmanager
 
+import logging
+
 from fastapi import FastAPI
 from fastapi.concurrency import run_in_threadpool
+from fastapi.middleware.cors import CORSMiddleware
 from fastapi.openapi.utils import get_openapi
 
 from .. import __version__
 from . import problems
+from .auth import Guard
 from .deps import Services
+from .models import AppendIn, TableauIn
 from .models import Problem as ProblemModel
-from .routers import axioms, explanations, health, maps, recognise, tableaux
+from .routers import axioms, explanations, health, maps, recognise, tableaux, tokens
 from .settings import Settings
 
-ROUTERS = (tableaux.router, maps.router, explanations.router, recognise.router, axioms.router, health.router)
+ROUTERS = (tableaux.router, maps.router, explanations.router, recognise.router, axioms.router, tokens.router,
+           health.router)
 
 DESCRIPTION = """\
 Post a robot's experience (a tableau: views or images at distinctive states, and the actions between
@@ -36,6 +42,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     @asynccontextmanager
     async def lifespan(app: FastAPI):
+        _log_through_uvicorn()
         app.state.services = await run_in_threadpool(Services.start, settings)
         try:
             yield
@@ -45,11 +52,28 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app = FastAPI(title="bootmap", version=__version__, description=DESCRIPTION, lifespan=lifespan)
     app.state.settings = settings
     problems.install(app)
-    app.add_middleware(problems.BodyLimit, max_bytes=settings.max_body_bytes)
+    # Added last = outermost: the guard sees a request first, then CORS, then the body limit.
+    app.add_middleware(problems.BodyLimit, max_bytes=settings.max_body_bytes, timeout_s=settings.body_timeout_s,
+                       held_bytes=settings.max_held_body_bytes)
+    if settings.cors_origins:
+        app.add_middleware(CORSMiddleware, allow_origins=settings.cors_origins, allow_methods=["*"],
+                           allow_headers=["Authorization", "Content-Type"], expose_headers=["Location", "Retry-After"])
+    app.add_middleware(Guard, hosts=settings.hosts, origins=settings.cors_origins,
+                       tokens_required=settings.tokens_required)
     for router in ROUTERS:
         app.include_router(router)
     app.openapi = lambda: _openapi(app, settings)  # type: ignore[method-assign]
     return app
+
+
+def _log_through_uvicorn() -> None:
+    """The service's own log lines (a solver that died, an unexpected error) go where uvicorn's go."""
+    ours, theirs = logging.getLogger("bootmap.service"), logging.getLogger("uvicorn.error")
+    if not ours.handlers and theirs.handlers:
+        for handler in theirs.handlers:
+            ours.addHandler(handler)
+        ours.setLevel(logging.INFO)
+        ours.propagate = False
 
 
 def _openapi(app: FastAPI, settings: Settings) -> dict:
@@ -57,8 +81,16 @@ def _openapi(app: FastAPI, settings: Settings) -> dict:
     if app.openapi_schema:
         return app.openapi_schema
     spec = get_openapi(title=app.title, version=app.version, description=app.description, routes=app.routes)
+    spec.setdefault("components", {}).setdefault("securitySchemes", {})["token"] = {
+        "type": "http", "scheme": "bearer", "description": "An API token (bootmap token create NAME); needed "
+        "when the server requires tokens (docs/service.md, Security)."}
+    spec["security"] = [{"token": []}, {}]  # optional on a loopback server without tokens
     schemas = spec.setdefault("components", {}).setdefault("schemas", {})
     schemas["Problem"] = ProblemModel.model_json_schema(ref_template="#/components/schemas/{model}")
+    for model in (TableauIn, AppendIn):  # bodies their routes read themselves (intake): not in FastAPI's list
+        schema = model.model_json_schema(ref_template="#/components/schemas/{model}")
+        schemas.update(schema.pop("$defs", {}))
+        schemas[model.__name__] = schema
     for name, schema in schemas.items():
         props = schema.get("properties", {})
         if name.startswith(("TableauIn", "AppendIn")) and "steps" in props:

@@ -1,4 +1,4 @@
-"""The ``serve`` sub-command; :func:`register` adds it to the ``bootmap`` command.
+"""The ``serve`` and ``token`` sub-commands; :func:`register` adds them to the ``bootmap`` command.
 
 Exit codes: 0 after a clean shutdown, 2 for bad settings or axioms that do not load (the message says
 which), 1 if the server fails.
@@ -9,7 +9,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..errors import EXIT_BAD_INPUT, EXIT_OK
+from ..errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_OK
 
 
 def register(subparsers) -> None:
@@ -26,7 +26,22 @@ def register(subparsers) -> None:
     p.add_argument("--axioms", metavar="DIR", help="axiom directory (default: the shipped asp/)")
     p.add_argument("--time-limit", type=float, metavar="S", dest="solve_time_limit_s",
                    help="seconds per solve (default 30)")
+    p.add_argument("--require-tokens", action="store_true", default=None,
+                   help="every request needs an API token (always so when --host is not loopback)")
     p.set_defaults(handler=cmd_serve)
+
+    t = subparsers.add_parser("token", help="make API tokens for the HTTP service",
+                              description="Manage the service's API tokens, in the database `bootmap serve` uses.")
+    tsub = t.add_subparsers(dest="token_command", required=True, metavar="ACTION")
+    c = tsub.add_parser("create", help="make a token; it is printed once, on the last line",
+                        description="Make an API token named NAME. Only its hash is stored: the token is printed "
+                                    "once, on the last line. Send it as 'Authorization: Bearer <token>'.")
+    c.add_argument("name", metavar="NAME", help="who the token is for (letters, digits, _ . @ -)")
+    c.add_argument("--admin", action="store_true", help="the token may reload axioms and make tokens, and reads "
+                                                        "and changes every tableau")
+    c.add_argument("--db", metavar="PATH_OR_URL", help="SQLite file or SQLAlchemy URL (default DATA_DIR/bootmap.sqlite3)")
+    c.add_argument("--data-dir", metavar="DIR", help="data directory (default ~/.local/share/bootmap)")
+    c.set_defaults(handler=cmd_token_create)
 
 
 def cmd_serve(args: argparse.Namespace) -> int:
@@ -37,9 +52,14 @@ def cmd_serve(args: argparse.Namespace) -> int:
     from .settings import Settings
 
     given = {"host": args.host, "port": args.port, "db": args.db, "data_dir": args.data_dir,
-             "axioms": args.axioms, "solve_time_limit_s": args.solve_time_limit_s}
+             "axioms": args.axioms, "solve_time_limit_s": args.solve_time_limit_s,
+             "require_tokens": args.require_tokens}
     try:
         settings = Settings(**{k: v for k, v in given.items() if v is not None})
+        if settings.host in ("0.0.0.0", "::", "") and not settings.allowed_hosts:
+            print(f"bootmap serve: listening on {settings.host or 'every interface'} needs BOOTMAP_ALLOWED_HOSTS: "
+                  "the host names clients use (or '*' behind a proxy that checks them)", file=sys.stderr)
+            return EXIT_BAD_INPUT
         load_theory(settings.axioms)  # fail here, with the message, rather than inside uvicorn's start-up
         settings.data_dir.mkdir(parents=True, exist_ok=True)
     except ValidationError as e:
@@ -54,6 +74,46 @@ def cmd_serve(args: argparse.Namespace) -> int:
 
     uvicorn.run(create_app(settings), host=settings.host, port=settings.port, log_level=settings.log_level,
                 timeout_graceful_shutdown=5)
+    return EXIT_OK
+
+
+def cmd_token_create(args: argparse.Namespace) -> int:
+    import re
+
+    from pydantic import ValidationError
+
+    from .auth import digest, new_token
+    from .settings import Settings
+    from .store import Conflict, Store
+
+    if not re.fullmatch(r"[A-Za-z0-9_.@-]{1,100}", args.name):
+        print(f"bootmap token create: bad name {args.name!r}: use 1-100 letters, digits, _ . @ -", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    given = {"db": args.db, "data_dir": args.data_dir}
+    try:
+        settings = Settings(**{k: v for k, v in given.items() if v is not None})
+    except ValidationError as e:
+        print(f"bootmap token create: bad setting: {_first_error(e)}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    token = new_token()
+    try:
+        store = Store(settings.database_url)
+        try:
+            store.add_token(args.name, digest(token), args.admin)
+        finally:
+            store.close()
+    except Conflict as e:
+        print(f"bootmap token create: {e}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except Exception as e:  # the database cannot be reached or written: a failure, not bad input
+        print(f"bootmap token create: cannot store the token: {e}", file=sys.stderr)
+        return EXIT_FAILURE
+    kind = "admin token" if args.admin else "token"
+    from sqlalchemy.engine import make_url
+
+    where = make_url(settings.database_url).render_as_string(hide_password=True)
+    print(f"made {kind} {args.name!r} in {where}; it is shown only now:")
+    print(token)
     return EXIT_OK
 
 

@@ -2,18 +2,22 @@
 
 from __future__ import annotations
 
+import re
 import threading
 from collections import OrderedDict
 from dataclasses import dataclass, field
 from typing import Annotated, Any, Callable
 
 from fastapi import Depends, Path, Request
+from fastapi.concurrency import run_in_threadpool
+from pydantic import BeforeValidator
 
 from ..tableau import FORMAT
+from .intake import Intake, Limits, intake_workers
 from .settings import Settings
 from .store import Store
 from .theory import LoadedTheory, Theories
-from .worker import ExplainJob, SolveGate, SolveJob, SolverPool
+from .worker import Explained, ExplainJob, Solved, SolveGate, SolveJob, SolverPool
 
 
 class Cache:
@@ -42,7 +46,13 @@ class Services:
     theories: Theories
     pool: SolverPool
     gate: SolveGate
+    intake: Intake
     recognisers: Cache = field(default_factory=Cache)
+
+    @property
+    def limits(self) -> Limits:
+        s = self.settings
+        return Limits(s.max_steps, s.max_image_len, s.max_meta_bytes, s.max_json_values)
 
     @classmethod
     def start(cls, settings: Settings) -> "Services":
@@ -51,31 +61,64 @@ class Services:
         store = Store(settings.database_url)
         theories = Theories(settings.axioms, settings.data_dir)
         pool = SolverPool(settings.max_concurrent_solves, settings.solver_memory_mb, settings.solve_kill_grace_s)
-        gate = SolveGate(pool, settings.max_concurrent_solves, settings.max_queued_solves, settings.retry_after_s)
-        services = cls(settings, store, theories, pool, gate)
+        gate = SolveGate(pool, settings.max_concurrent_solves, settings.max_queued_solves, settings.retry_after_s,
+                         settings.token_max_running)
+        intake = Intake(intake_workers(), settings.intake_memory_mb)
+        services = cls(settings, store, theories, pool, gate, intake)
+        intake.warm()
         pool.warm(services.job({"format": FORMAT, "steps": [
             {"view": "a", "action": {"type": "travel", "distance_m": 1.0}}, {"view": "b"}]})[0])
         return services
 
     def close(self) -> None:
+        self.intake.close()
         self.pool.close()
         self.store.close()
 
-    def job(self, document: dict) -> tuple[SolveJob, LoadedTheory]:
+    def job(self, document: dict | str) -> tuple[SolveJob, LoadedTheory]:
         """A solve of a tableau document with the current theory, and that theory (its id goes with the map)."""
         theory, s = self.theories.current, self.settings
         return SolveJob(document, str(theory.snapshot), s.solve_time_limit_s, s.quantum_deg, s.max_models), theory
 
 
-    def explain_job(self, document: dict, a: str, b: str, levels: tuple[str, ...] | None) -> ExplainJob:
+    async def solve(self, job: SolveJob | ExplainJob, token_id: int | None, request: Request) -> Solved | Explained:
+        """Solve in the pool, holding one of the token's solve places (shared by every server on the
+        database) meanwhile; stopped if the client goes away."""
+        lease = None
+        if token_id is not None:
+            s = self.settings
+            lease = await run_in_threadpool(self.store.lease_solve, token_id, s.token_max_solves,
+                                            s.solve_time_limit_s + s.solve_kill_grace_s + 60)
+        try:
+            return await self.gate.solve(job, lambda: client_gone(request), token_id)
+        finally:
+            if lease is not None:
+                await run_in_threadpool(self.store.release_solve, lease)
+
+    def explain_job(self, document: dict | str, a: str, b: str, levels: tuple[str, ...] | None) -> ExplainJob:
         """A question about a tableau document, with the current theory."""
         theory, s = self.theories.current, self.settings
         return ExplainJob(document, str(theory.snapshot), s.solve_time_limit_s, a, b, levels, s.quantum_deg)
+
+
+async def client_gone(request: Request) -> None:
+    """Return when the client has closed the connection (its body is read by then: what the server
+    receives next is the disconnect)."""
+    while (await request.receive())["type"] != "http.disconnect":
+        pass
 
 
 def get_services(request: Request) -> Services:
     return request.app.state.services
 
 
+def _canonical_id(value: object) -> object:
+    # "01" and "+1" would parse as 1: one tableau, one path.
+    if isinstance(value, str) and not re.fullmatch(r"[1-9][0-9]{0,18}", value):
+        raise ValueError("should be a positive integer written without sign or leading zeros")
+    return value
+
+
 ServicesDep = Annotated[Services, Depends(get_services)]
-TableauId = Annotated[int, Path(ge=1, le=2**63 - 1, description="The id the tableau was created with.")]
+TableauId = Annotated[int, BeforeValidator(_canonical_id),
+                      Path(ge=1, le=2**63 - 1, description="The id the tableau was created with.")]

@@ -49,9 +49,22 @@ def _integral(x: float) -> float:
     return x
 
 
+def _fits_a_float(x: int) -> int:
+    # The docs promise integers too large for a float are refused: a 4,000-digit truth is no dstate id.
+    try:
+        float(x)
+    except OverflowError:
+        raise ValueError("too large: more than a float can hold") from None
+    return x
+
+
 # JSON Schema's "integer" is a mathematical integer: 3.0 is one. Strict pydantic would refuse it.
-IntegerValued = Annotated[Union[StrictInt, Annotated[float, AfterValidator(_integral)]],
+IntegerValued = Annotated[Union[Annotated[StrictInt, AfterValidator(_fits_a_float)],
+                                Annotated[float, AfterValidator(_integral)]],
                           WithJsonSchema({"type": "integer"})]
+# A sense value: bounded, so that squared distances between images (k-means, recognition) stay finite.
+SENSE_MAX = 1e9
+SenseValue = Annotated[float, Field(ge=-SENSE_MAX, le=SENSE_MAX)]
 
 
 class TurnAction(BaseModel):
@@ -82,8 +95,8 @@ class StepIn(BaseModel):
     view: StrictStr = optional(min_length=1, max_length=200, pattern=NO_NUL,
                                description="The view label (a cluster of images); any text but NUL.")
     action: Action = optional(description="The action to the next step; every step but the last has one.")
-    image: list[float] = optional(min_length=1, description="The sense vector at this dstate "
-                                                            "(e.g. 180 laser ranges in metres).")
+    image: list[SenseValue] = optional(min_length=1, description="The sense vector at this dstate "
+                                                                 "(e.g. 180 laser ranges in metres), values within +-1e9.")
     truth: Union[StrictStr, IntegerValued] = optional(description="The true dstate id, for evaluation only.")
     pose: list[float] = optional(min_length=3, max_length=3, description="[x, y, theta], for evaluation only.")
 
@@ -117,7 +130,8 @@ class RecogniseIn(BaseModel):
     """An image to recognise."""
 
     model_config = STRICT
-    image: list[float] = Field(min_length=1, description="As many values as the stored tableau's images.")
+    image: list[SenseValue] = Field(min_length=1, description="As many values as the stored tableau's images, "
+                                                              "each within +-1e9.")
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -222,6 +236,29 @@ class TableauInfo(Out):
     created: datetime
     updated: datetime
     views_from_images: int | None
+    public: bool = Field(description="Anyone may read it; only its owner or an admin changes it.")
+
+
+class TableauSharing(BaseModel):
+    """Whether anyone may read a tableau and its maps."""
+
+    model_config = STRICT
+    public: bool
+
+
+class TokenIn(BaseModel):
+    """A new API token's name, and whether it is an admin's."""
+
+    model_config = STRICT
+    name: StrictStr = Field(min_length=1, max_length=100, pattern="^[A-Za-z0-9_.@-]+$")
+    admin: bool = False
+
+
+class TokenCreated(Out):
+    id: int
+    name: str
+    admin: bool
+    token: str = Field(description="The token, shown this once: only its hash is stored.")
 
 
 class TableauCreated(TableauInfo):
@@ -326,7 +363,7 @@ class AxiomFile(Out):
 
 class AxiomsOut(Out):
     theory: str = Field(description="Id of this snapshot (a hash of the files).")
-    directory: str
+    directory: str = Field(description="The axiom directory's name (not its path on the server).")
     loaded: datetime
     levels: list[str]
     files: list[AxiomFile]

@@ -14,9 +14,12 @@ from __future__ import annotations
 import json
 import logging
 import re
+from contextlib import asynccontextmanager
 from typing import Any
 
+import anyio
 from fastapi import FastAPI, Request
+from fastapi.concurrency import run_in_threadpool
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from fastapi.routing import APIRoute
@@ -24,8 +27,8 @@ from starlette.exceptions import HTTPException
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from ..errors import AxiomError, BootmapError, ExplainError, InconsistentTableau, SolveTimeout, TableauError
-from .store import Conflict, NotFound
-from .worker import SolverBusy, SolverCrashed, SolverKilled, SolverOutOfMemory
+from .store import Conflict, NotFound, QuotaExceeded
+from .worker import SolveCancelled, SolverBusy, SolverCrashed, SolverKilled, SolverOutOfMemory
 
 PROBLEM_JSON = "application/problem+json"
 TYPE_BASE = "https://bootmap.dev/problems/"
@@ -71,6 +74,8 @@ def invalid(field: str, reason: str, kind: str = "invalid-tableau") -> Problem:
 # Most specific first: SolverKilled is a SolveTimeout.
 _KINDS: list[tuple[type, int, str, str]] = [
     (Conflict, 409, "conflict", "Tableau changed"),
+    (QuotaExceeded, 429, "quota-exceeded", "Over this token's limit"),
+    (SolveCancelled, 400, "client-gone", "The client went away"),
     (SolverBusy, 503, "solvers-busy", "Every solver is busy"),
     (InconsistentTableau, 422, "inconsistent-tableau", "No map satisfies the axioms"),
     (SolveTimeout, 422, "solve-timeout", "Solve ran past its time limit"),
@@ -85,12 +90,13 @@ def from_bootmap_error(e: BootmapError) -> Problem:
     if isinstance(e, TableauError):
         return invalid(e.where.split(": ", 1)[-1] if e.where else "", e.reason)
     if isinstance(e, NotFound):
-        return not_found(e.tableau_id)
+        return not_found(e.tableau_id) if e.tableau_id else Problem(404, "not-found", "Not found", str(e))
     if isinstance(e, ExplainError):
         return Problem(422, "invalid-question", "Invalid question", str(e))
     for cls, status, kind, title in _KINDS:
         if isinstance(e, cls):
-            headers = {"Retry-After": str(e.retry_after_s)} if isinstance(e, SolverBusy) else None
+            retry = getattr(e, "retry_after_s", None)
+            headers = {"Retry-After": str(retry)} if retry is not None else None
             return Problem(status, kind, title, str(e), headers=headers, **_extensions(e))
     return Problem(500, "internal", "Internal error", f"{type(e).__name__}: {e}")
 
@@ -158,12 +164,16 @@ def _message(err: dict) -> str:
 def validation_problem(errors: list[dict]) -> Problem:
     """One 422 for every invalid field; a union's branches that all failed are one field."""
     seen: dict[str, dict] = {}
+    by_type: dict[str, bool] = {}  # was the field's message a union branch's "wrong type"?
     for err in errors:
         field = field_path(err.get("loc", ()))
         item = {"field": field, "detail": _message(err)}
         if err.get("loc", ("",))[0] == "body":
             item["pointer"] = _pointer(err["loc"])  # RFC 9457's suggestion: a JSON Pointer into the body
-        seen.setdefault(field, item)
+        wrong_type = str(err.get("type", "")).endswith("_type")
+        # Of a union's branches, the one whose type matched says what is wrong with the value.
+        if field not in seen or (by_type[field] and not wrong_type):
+            seen[field], by_type[field] = item, wrong_type
     items = list(seen.values())
     first = items[0] if items else {"field": "", "detail": "invalid request"}
     if first["field"] == "" and errors and errors[0].get("type") == "missing":
@@ -184,9 +194,21 @@ def validation_problem(errors: list[dict]) -> Problem:
 _SURROGATE_ESCAPE = re.compile(rb"\\u[dD][89a-fA-F]", re.ASCII)
 
 
-def parse_json(body: bytes) -> Any:
+def count_values(body: bytes) -> int:
+    """An upper bound of the JSON values in ``body``, from its separators (C speed, before parsing): a
+    value after the first in an array follows a comma, an object's value a colon."""
+    return sum(body.count(c) for c in (b",", b":", b"[", b"{")) + 1
+
+
+def parse_json(body: bytes, max_values: int | None = None) -> Any:
     """JSON text -> data, or a 400 saying what is wrong and where. Numbers too long for Python, nesting
-    too deep for its parser and lone UTF-16 surrogates (which no UTF-8 text can carry) are refused here."""
+    too deep for its parser and lone UTF-16 surrogates (which no UTF-8 text can carry) are refused here;
+    a body of more than ``max_values`` values is refused (413) before it is parsed, since each value
+    costs the server far more memory than its text."""
+    if max_values is not None and count_values(body) > max_values:
+        raise Problem(413, "too-many-values", "Too many values",
+                      f"the body holds about {count_values(body)} JSON values, more than this server's limit of "
+                      f"{max_values} per request (BOOTMAP_MAX_JSON_VALUES)", limit_values=max_values)
     try:
         data = json.loads(body)
     except json.JSONDecodeError as e:
@@ -221,31 +243,92 @@ def _check_surrogates(x: Any, path: list) -> None:
             _check_surrogates(v, path + [i])
 
 
+class ByteBudget:
+    """At most ``capacity`` bytes of request bodies parsed at once (a larger body counts as the whole
+    budget): parsing makes Python objects many times the size of the text, so this bounds the memory
+    parsing takes. Others wait their turn; nothing is refused."""
+
+    def __init__(self, capacity: int):
+        self.capacity, self.used = capacity, 0
+        self._changed: anyio.Condition | None = None
+
+    @asynccontextmanager
+    async def hold(self, n: int):
+        n = min(n, self.capacity)
+        if self._changed is None:  # made in the event loop that uses it
+            self._changed = anyio.Condition()
+        async with self._changed:
+            while self.used + n > self.capacity:
+                await self._changed.wait()
+            self.used += n
+        try:
+            yield
+        finally:
+            with anyio.CancelScope(shield=True):
+                async with self._changed:
+                    self.used -= n
+                    self._changed.notify_all()
+
+
+# The bodies FastAPI parses (an image to recognise, sharing, a token's name) are small; tableaux and
+# appends are read by their routes and parsed in an intake process (bootmap.service.intake).
+SMALL_BODY_BYTES = 2**20
+
+
 class _JSONRequest(Request):
+    """A request whose (small) JSON body is parsed and validated against the route's body model in a
+    worker thread, off the event loop: FastAPI then gets the model instance, which it passes without
+    validating again."""
+
+    body_field: Any = None
+
     async def json(self) -> Any:
         if not hasattr(self, "_json"):
-            self._json = parse_json(await self.body())
+            body = await self.body()
+            if len(body) > SMALL_BODY_BYTES:
+                raise Problem(413, "body-too-large", "Request body too large",
+                              f"this request's body may have at most {SMALL_BODY_BYTES} bytes",
+                              limit_bytes=SMALL_BODY_BYTES)
+            self._json = await run_in_threadpool(_parse_and_validate, body, self.body_field,
+                                                 self.app.state.settings.max_json_values)
         return self._json
 
 
+def _parse_and_validate(body: bytes, body_field: Any, max_values: int) -> Any:
+    data = parse_json(body, max_values)
+    if body_field is None:
+        return data
+    model, errors = body_field.validate(data, loc=("body",))
+    if errors:
+        raise validation_problem(list(errors))
+    return model
+
+
 class JSONRoute(APIRoute):
-    """A route whose request body is parsed by :func:`parse_json`."""
+    """A route whose request body is parsed by :func:`parse_json` and validated off the event loop."""
 
     def get_route_handler(self):
         handler = super().get_route_handler()
+        body_field = self.body_field
 
         async def route(request: Request):
-            return await handler(_JSONRequest(request.scope, request.receive))
+            r = _JSONRequest(request.scope, request.receive)
+            r.body_field = body_field
+            return await handler(r)
 
         return route
 
 
 class BodyLimit:
     """Refuse a request body over ``max_bytes``: at once when Content-Length says so, else as soon as the
-    bytes read pass the limit. Nothing over the limit is ever held in memory."""
+    bytes read pass the limit. Nothing over the limit is ever held in memory. A body not received in
+    full within ``timeout_s`` once reading starts is refused (408) and the connection closed. Bodies held
+    at once are bounded by ``held_bytes`` (by Content-Length, else ``max_bytes``): a request whose body
+    does not fit waits for room before it is read."""
 
-    def __init__(self, app: ASGIApp, max_bytes: int):
-        self.app, self.max_bytes = app, max_bytes
+    def __init__(self, app: ASGIApp, max_bytes: int, timeout_s: float = 20.0, held_bytes: int | None = None):
+        self.app, self.max_bytes, self.timeout_s = app, max_bytes, timeout_s
+        self.budget = ByteBudget(held_bytes or 4 * max_bytes)
 
     def _too_large(self) -> Problem:
         return Problem(413, "body-too-large", "Request body too large",
@@ -260,11 +343,28 @@ class BodyLimit:
             response = problem_response(self._too_large() if length.isdigit() else
                                         Problem(400, "bad-request", "Bad request", "invalid Content-Length"))
             return await response(scope, receive, send)
-        seen = 0
+        chunked = b"chunked" in dict(scope["headers"]).get(b"transfer-encoding", b"").lower()
+        size = int(length) if length is not None else (self.max_bytes if chunked else 0)
+        if size == 0:
+            return await self._run(scope, receive, send)
+        async with self.budget.hold(size):  # held until the response is sent: the body lives that long
+            await self._run(scope, receive, send)
+
+    async def _run(self, scope: Scope, receive: Receive, send: Send) -> None:
+        seen, complete = 0, False
+        deadline = anyio.current_time() + self.timeout_s
 
         async def limited() -> Message:
-            nonlocal seen
-            message = await receive()
+            nonlocal seen, complete
+            if complete:  # the body is in; what comes next is the disconnect, whenever it comes
+                return await receive()
+            with anyio.move_on_after(max(0.0, deadline - anyio.current_time())) as timer:
+                message = await receive()
+            if timer.cancelled_caught:
+                raise Problem(408, "body-timeout", "Request body too slow",
+                              f"the request body did not arrive within {self.timeout_s:g} s "
+                              "(BOOTMAP_BODY_TIMEOUT_S)", headers={"Connection": "close"})
+            complete = message["type"] != "http.request" or not message.get("more_body", False)
             seen += len(message.get("body", b""))
             if seen > self.max_bytes:
                 raise self._too_large()  # an HTTPException: FastAPI passes it to the handlers below
@@ -277,8 +377,9 @@ class BodyLimit:
 # Handlers
 # ---------------------------------------------------------------------------------------------------
 
-_TITLES = {400: "Bad request", 404: "Not found", 405: "Method not allowed", 406: "Not acceptable",
-           413: "Request body too large", 415: "Unsupported media type", 422: "Invalid request",
+_TITLES = {400: "Bad request", 401: "Token needed", 403: "Not allowed", 404: "Not found", 405: "Method not allowed",
+           406: "Not acceptable", 408: "Request body too slow", 413: "Request body too large", 415: "Unsupported media type",
+           422: "Invalid request", 429: "Too many requests",
            500: "Internal error", 503: "Service unavailable"}
 
 

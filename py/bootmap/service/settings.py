@@ -6,11 +6,17 @@ README.md ("Service") and docs/service.md lists them.
 
 from __future__ import annotations
 
+import ipaddress
 import os
 from pathlib import Path
+from typing import Annotated
 
-from pydantic import Field
-from pydantic_settings import BaseSettings, SettingsConfigDict
+from pydantic import Field, field_validator
+from pydantic_settings import BaseSettings, NoDecode, SettingsConfigDict
+
+# Names a browser on this machine uses for a loopback server: the only hosts allowed by default.
+LOOPBACK_NAMES = ("127.0.0.1", "localhost", "::1", "[::1]")
+CommaList = Annotated[list[str], NoDecode]  # BOOTMAP_ALLOWED_HOSTS=a.example,b.example
 
 
 def default_data_dir() -> Path:
@@ -46,6 +52,61 @@ class Settings(BaseSettings):
     quantum_deg: float | None = Field(None, gt=0, le=180, description="Round angles to this many degrees; "
                                       "unset: learn the robot's action types from each tableau.")
     log_level: str = Field("info", pattern="^(critical|error|warning|info|debug|trace)$")
+
+    # Who may do what (docs/service.md, "Security").
+    require_tokens: bool = Field(False, description="Every request but /health, the schemas and the docs needs "
+                                 "an API token; always on when the service listens on anything but loopback.")
+    allowed_hosts: CommaList = Field(default_factory=list, description="Host names clients may use (the Host "
+                                     "header), comma-separated; '*.example.org' matches subdomains, '*' any. "
+                                     "Default: the loopback names and the --host address.")
+    cors_origins: CommaList = Field(default_factory=list, description="Web origins allowed to call the API from "
+                                    "a browser (CORS), comma-separated; default none.")
+    # Fair share: limits per token, shared by every server on one database.
+    token_max_solves: int = Field(4, ge=1, description="Solves one token may have running or waiting at once.")
+    token_max_running: int | None = Field(None, ge=1, description="Solvers one token may use at once on one "
+                                          "server; default half of them (at least one), so others find one free.")
+    token_requests_per_minute: int = Field(600, ge=1, description="Requests one token may make per minute.")
+    token_max_stored_bytes: int = Field(256 * 2**20, ge=1024, description="Bytes of tableaux and maps one token "
+                                                                          "may keep stored.")
+    # Bounded memory in the server process.
+    body_timeout_s: float = Field(20.0, gt=0, description="A request body not received within this many "
+                                                          "seconds of its headers is refused (408).")
+    max_meta_bytes: int = Field(64 * 2**10, ge=2, description="Largest 'meta' of a tableau, bytes of JSON.")
+    max_json_values: int = Field(1_000_000, ge=100, description="Most JSON values (numbers, strings, ...) in one "
+                                                                "request body.")
+    max_held_body_bytes: int = Field(32 * 2**20, ge=1024, description="Bytes of request bodies the server holds "
+                                     "at once (by Content-Length, else max_body_bytes); a request whose body "
+                                     "does not fit waits for room before it is read.")
+    intake_memory_mb: int = Field(1024, ge=256, description="Address-space cap of each intake process (where "
+                                                            "posted tableaux are parsed and checked), MiB.")
+
+    @field_validator("allowed_hosts", "cors_origins", mode="before")
+    @classmethod
+    def _split_commas(cls, value):
+        return [x.strip() for x in value.split(",") if x.strip()] if isinstance(value, str) else value
+
+    @property
+    def loopback(self) -> bool:
+        """Does the service listen on loopback only?"""
+        if self.host == "localhost":
+            return True
+        try:
+            return ipaddress.ip_address(self.host.strip("[]")).is_loopback
+        except ValueError:
+            return False
+
+    @property
+    def tokens_required(self) -> bool:
+        """Tokens are optional only for one user on loopback, and only unless asked for."""
+        return self.require_tokens or not self.loopback
+
+    @property
+    def hosts(self) -> list[str]:
+        """The Host header values accepted: as configured, else the loopback names and the --host address."""
+        if self.allowed_hosts:
+            return list(self.allowed_hosts)
+        wildcard = self.host in ("0.0.0.0", "::", "")
+        return list(LOOPBACK_NAMES) + ([] if wildcard or self.host in LOOPBACK_NAMES else [self.host])
 
     @property
     def database_url(self) -> str:

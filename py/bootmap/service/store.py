@@ -11,10 +11,28 @@ writer and concurrent writers wait for each other instead of failing with "datab
 from __future__ import annotations
 
 from dataclasses import dataclass
-from datetime import datetime, timezone
+from datetime import datetime, timedelta, timezone
 from pathlib import Path
+from typing import Iterator
 
-from sqlalchemy import DateTime, ForeignKey, Integer, String, Text, create_engine, event, func, select, text, update
+from sqlalchemy import (
+    BigInteger,
+    Boolean,
+    DateTime,
+    ForeignKey,
+    Integer,
+    String,
+    Text,
+    create_engine,
+    delete,
+    event,
+    func,
+    inspect,
+    or_,
+    select,
+    text,
+    update,
+)
 from sqlalchemy.engine import Engine
 from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column, sessionmaker
 
@@ -24,25 +42,74 @@ SQLITE_BUSY_TIMEOUT_MS = 10_000
 
 
 class NotFound(BootmapError):
-    """No tableau has this id."""
+    """No tableau has this id (or no token this name)."""
 
-    def __init__(self, tableau_id: int):
+    def __init__(self, tableau_id: int, message: str | None = None):
         self.tableau_id = tableau_id
-        super().__init__(f"no tableau has id {tableau_id}")
+        super().__init__(message or f"no tableau has id {tableau_id}")
 
 
 class Conflict(BootmapError):
     """The tableau changed (another append) between reading it and writing the new revision."""
 
 
+class QuotaExceeded(BootmapError):
+    """A token is over one of its limits (solves at once, requests per minute, stored bytes)."""
+
+    def __init__(self, message: str, retry_after_s: int):
+        self.retry_after_s = retry_after_s
+        super().__init__(message)
+
+
+
+
 class Base(DeclarativeBase):
     pass
+
+
+class TokenRow(Base):
+    """An API token: only its SHA-256 is kept (the token itself is shown once, when it is made)."""
+
+    __tablename__ = "tokens"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
+    name: Mapped[str] = mapped_column(String(100), unique=True)
+    digest: Mapped[str] = mapped_column(String(64), unique=True)
+    admin: Mapped[bool] = mapped_column(Boolean, default=False)
+    created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True))
+    # Written by every quota check: the row lock that makes "count, then add" one step for this token,
+    # across every server on the database.
+    touched_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True), nullable=True)
+
+
+class SolveLease(Base):
+    """A solve a token has running or waiting on some server; it expires if that server dies."""
+
+    __tablename__ = "solve_leases"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
+    token_id: Mapped[int] = mapped_column(ForeignKey("tokens.id", ondelete="CASCADE"), index=True)
+    expires_at: Mapped[datetime] = mapped_column(DateTime(timezone=True))
+
+
+class RequestCount(Base):
+    """Requests of a token in one minute (a fixed window)."""
+
+    __tablename__ = "request_counts"
+
+    token_id: Mapped[int] = mapped_column(ForeignKey("tokens.id", ondelete="CASCADE"), primary_key=True)
+    minute: Mapped[int] = mapped_column(BigInteger, primary_key=True)
+    count: Mapped[int] = mapped_column(Integer)
 
 
 class TableauRow(Base):
     __tablename__ = "tableaux"
 
     id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
+    owner_id: Mapped[int | None] = mapped_column(ForeignKey("tokens.id", ondelete="SET NULL"), nullable=True,
+                                                 index=True)
+    public: Mapped[bool] = mapped_column(Boolean, default=False, server_default=text("false"))
+    stored_bytes: Mapped[int] = mapped_column(BigInteger, default=0, server_default=text("0"))
     revision: Mapped[int] = mapped_column(Integer)
     n_steps: Mapped[int] = mapped_column(Integer)
     views_k: Mapped[int | None] = mapped_column(Integer, nullable=True)
@@ -86,6 +153,8 @@ class TableauRecord:
     document: str
     created_at: datetime
     updated_at: datetime
+    owner_id: int | None = None
+    public: bool = False
 
 
 @dataclass(frozen=True)
@@ -99,6 +168,13 @@ class TableauSummary:
     updated_at: datetime
 
 
+@dataclass(frozen=True)
+class TokenRecord:
+    id: int
+    name: str
+    admin: bool
+
+
 def _utc(t: datetime) -> datetime:
     # SQLite returns naive datetimes; every one stored here is UTC.
     return t if t.tzinfo else t.replace(tzinfo=timezone.utc)
@@ -106,7 +182,7 @@ def _utc(t: datetime) -> datetime:
 
 def _record(row: TableauRow) -> TableauRecord:
     return TableauRecord(row.id, row.revision, row.n_steps, row.views_k, row.document, _utc(row.created_at),
-                         _utc(row.updated_at))
+                         _utc(row.updated_at), row.owner_id, bool(row.public))
 
 
 def make_engine(url: str) -> Engine:
@@ -115,7 +191,8 @@ def make_engine(url: str) -> Engine:
         path = url.removeprefix("sqlite:///")
         if path and path != ":memory:":
             Path(path).parent.mkdir(parents=True, exist_ok=True)
-    engine = create_engine(url, pool_pre_ping=not url.startswith("sqlite"))
+    # Streamed reads hold a connection while the client reads: room for as many as the thread pool runs.
+    engine = create_engine(url, pool_pre_ping=not url.startswith("sqlite"), pool_size=10, max_overflow=30)
     if engine.dialect.name == "sqlite":
         event.listen(engine, "connect", _sqlite_pragmas)
     return engine
@@ -129,13 +206,27 @@ def _sqlite_pragmas(dbapi_connection, _record) -> None:
     cursor.close()
 
 
+# Columns added since the first release: added to an older database when it is opened.
+_NEW_COLUMNS = {"owner_id": "INTEGER REFERENCES tokens(id) ON DELETE SET NULL",
+                "public": "BOOLEAN NOT NULL DEFAULT false", "stored_bytes": "BIGINT NOT NULL DEFAULT 0"}
+STREAM_CHUNK = 2**18  # characters per chunk of a streamed read (documents are ASCII JSON)
+
+
 class Store:
     """The repository: every method is one short transaction and returns plain records."""
 
     def __init__(self, url: str):
         self.engine = make_engine(url)
         Base.metadata.create_all(self.engine)
+        self._upgrade()
         self._session = sessionmaker(self.engine, expire_on_commit=False)
+
+    def _upgrade(self) -> None:
+        have = {c["name"] for c in inspect(self.engine).get_columns("tableaux")}
+        with self.engine.begin() as conn:
+            for name, ddl in _NEW_COLUMNS.items():
+                if name not in have:
+                    conn.execute(text(f"ALTER TABLE tableaux ADD COLUMN {name} {ddl}"))
 
     def close(self) -> None:
         self.engine.dispose()
@@ -144,12 +235,18 @@ class Store:
         with self.engine.connect() as conn:
             conn.execute(text("SELECT 1"))
 
-    def add(self, document: str, n_steps: int, views_k: int | None, cmap: MapRecord) -> TableauRecord:
-        """Store a new tableau (revision 1) with its map."""
+    # --- Tableaux and maps ---------------------------------------------------------------------------
+
+    def add(self, document: str, n_steps: int, views_k: int | None, cmap: MapRecord, owner_id: int | None = None,
+            max_bytes: int | None = None, public: bool = False) -> TableauRecord:
+        """Store a new tableau (revision 1) with its map; over the owner's ``max_bytes``, QuotaExceeded."""
         now = datetime.now(timezone.utc)
+        size = _size(document, cmap)
         row = TableauRow(revision=1, n_steps=n_steps, views_k=views_k, document=document, created_at=now,
-                         updated_at=now)
+                         updated_at=now, owner_id=owner_id, public=public, stored_bytes=size)
         with self._session.begin() as s:
+            if owner_id is not None and max_bytes is not None:
+                _check_bytes(s, owner_id, size, max_bytes)
             s.add(row)
             s.flush()  # assigns the id
             s.add(_map_row(row.id, cmap))
@@ -162,6 +259,14 @@ class Store:
                 raise NotFound(tableau_id)
             return _record(row)
 
+    def head(self, tableau_id: int) -> TableauRecord:
+        """The tableau's record without its document (``document`` is empty): who owns it, its revision."""
+        with self._session() as s:
+            row = s.execute(select(*_HEAD).where(TableauRow.id == tableau_id)).first()
+        if row is None:
+            raise NotFound(tableau_id)
+        return _head_record(row)
+
     def get_map(self, tableau_id: int) -> MapRecord:
         with self._session() as s:
             row = s.get(MapRow, tableau_id)
@@ -170,35 +275,219 @@ class Store:
             return MapRecord(row.revision, row.theory, row.dstates, row.places, row.paths, row.document, row.text)
 
     def replace(self, tableau_id: int, document: str, n_steps: int, views_k: int | None,
-                cmap: MapRecord) -> TableauRecord:
+                cmap: MapRecord, max_bytes: int | None = None) -> TableauRecord:
         """Store revision ``cmap.revision`` of the tableau and its map, unless another request stored that
-        revision first (:class:`Conflict`)."""
+        revision first (:class:`Conflict`) or the owner would go over ``max_bytes`` (QuotaExceeded)."""
         now = datetime.now(timezone.utc)
         revision, expected_revision = cmap.revision, cmap.revision - 1
+        size = _size(document, cmap)
         with self._session.begin() as s:
             # Write first, read nothing before: the row lock is taken by this UPDATE, so two appends
             # cannot both pass the revision check.
             done = s.execute(update(TableauRow)
                              .where(TableauRow.id == tableau_id, TableauRow.revision == expected_revision)
                              .values(revision=revision, n_steps=n_steps, views_k=views_k, document=document,
-                                     updated_at=now))
+                                     updated_at=now, stored_bytes=size))
             if done.rowcount != 1:
                 if s.get(TableauRow, tableau_id) is None:
                     raise NotFound(tableau_id)
                 raise Conflict(f"tableau {tableau_id} changed while this request was solved "
                                f"(it is no longer at revision {expected_revision}); send the request again")
+            owner = s.scalar(select(TableauRow.owner_id).where(TableauRow.id == tableau_id))
+            if owner is not None and max_bytes is not None:
+                _check_bytes(s, owner, 0, max_bytes)  # this revision is counted already
             s.merge(_map_row(tableau_id, cmap))
             row = s.get(TableauRow, tableau_id)
             return _record(row)
 
-    def list(self, limit: int, offset: int) -> tuple[int, list[TableauSummary]]:
+    def set_public(self, tableau_id: int, public: bool) -> None:
+        with self._session.begin() as s:
+            if s.execute(update(TableauRow).where(TableauRow.id == tableau_id).values(public=public)).rowcount != 1:
+                raise NotFound(tableau_id)
+
+    def delete(self, tableau_id: int) -> None:
+        with self._session.begin() as s:
+            s.execute(delete(MapRow).where(MapRow.tableau_id == tableau_id))
+            if s.execute(delete(TableauRow).where(TableauRow.id == tableau_id)).rowcount != 1:
+                raise NotFound(tableau_id)
+
+    def list(self, limit: int, offset: int, owner_id: int | None = None,
+             everyone: bool = True) -> tuple[int, list[TableauSummary]]:
+        """Stored tableaux: all of them (``everyone``), else those of ``owner_id`` and the public ones."""
+        visible = True if everyone else or_(TableauRow.owner_id == owner_id, TableauRow.public.is_(True))
         with self._session() as s:
-            total = s.scalar(select(func.count()).select_from(TableauRow)) or 0
+            total = s.scalar(select(func.count()).select_from(TableauRow).where(visible)) or 0
             rows = s.execute(select(TableauRow.id, TableauRow.revision, TableauRow.n_steps, MapRow.dstates,
                                     MapRow.places, MapRow.paths, TableauRow.updated_at)
-                             .join(MapRow, MapRow.tableau_id == TableauRow.id)
+                             .join(MapRow, MapRow.tableau_id == TableauRow.id).where(visible)
                              .order_by(TableauRow.id).limit(limit).offset(offset)).all()
         return total, [TableauSummary(*r[:6], _utc(r[6])) for r in rows]
+
+    def stream(self, tableau_id: int, what: str) -> "Stream":
+        """A stored text (``tableau``, ``map`` or ``text``), read in chunks of STREAM_CHUNK from one
+        snapshot: the server never holds a whole large document for a read. Close it when done."""
+        return Stream(self.engine, tableau_id, what)
+
+    # --- Tokens and quotas ---------------------------------------------------------------------------
+
+    def add_token(self, name: str, digest: str, admin: bool) -> TokenRecord:
+        row = TokenRow(name=name, digest=digest, admin=admin, created_at=datetime.now(timezone.utc))
+        with self._session.begin() as s:
+            if s.scalar(select(TokenRow.id).where(TokenRow.name == name)) is not None:
+                raise Conflict(f"a token named {name!r} exists already")
+            s.add(row)
+        return TokenRecord(row.id, row.name, row.admin)
+
+    def delete_token(self, name: str) -> None:
+        """Revoke a token: it is refused from now on, on every server; its tableaux stay, owned by no one
+        (admins reach them)."""
+        with self._session.begin() as s:
+            token_id = s.scalar(select(TokenRow.id).where(TokenRow.name == name))
+            if token_id is None:
+                raise NotFound(0, f"no token is named {name!r}")
+            s.execute(update(TableauRow).where(TableauRow.owner_id == token_id).values(owner_id=None))
+            s.execute(delete(SolveLease).where(SolveLease.token_id == token_id))
+            s.execute(delete(RequestCount).where(RequestCount.token_id == token_id))
+            s.execute(delete(TokenRow).where(TokenRow.id == token_id))
+
+    def token_by_digest(self, digest: str) -> TokenRecord | None:
+        with self._session() as s:
+            row = s.execute(select(TokenRow.id, TokenRow.name, TokenRow.admin).where(TokenRow.digest == digest)).first()
+        return None if row is None else TokenRecord(row[0], row[1], bool(row[2]))
+
+    def count_request(self, token_id: int, limit: int, now: float) -> None:
+        """Count a request of the token in this minute; over ``limit``, QuotaExceeded until the next one."""
+        minute = int(now // 60)
+        with self._session.begin() as s:
+            _lock_token(s, token_id)
+            done = s.execute(update(RequestCount).where(RequestCount.token_id == token_id,
+                                                        RequestCount.minute == minute)
+                             .values(count=RequestCount.count + 1))
+            if done.rowcount == 0:
+                s.execute(delete(RequestCount).where(RequestCount.token_id == token_id))
+                s.add(RequestCount(token_id=token_id, minute=minute, count=1))
+                return
+            count = s.scalar(select(RequestCount.count).where(RequestCount.token_id == token_id,
+                                                              RequestCount.minute == minute))
+        if count > limit:
+            wait = max(1, int(60 - now % 60 + 0.999))
+            raise QuotaExceeded(f"this token made more than {limit} requests this minute "
+                                f"(BOOTMAP_TOKEN_REQUESTS_PER_MINUTE); retry in {wait} s", wait)
+
+    def lease_solve(self, token_id: int, limit: int, ttl_s: float) -> int:
+        """Take one of the token's ``limit`` solve places (on any server); QuotaExceeded if none is free."""
+        now = datetime.now(timezone.utc)
+        with self._session.begin() as s:
+            _lock_token(s, token_id)
+            s.execute(delete(SolveLease).where(SolveLease.token_id == token_id, SolveLease.expires_at < now))
+            held = s.scalar(select(func.count()).select_from(SolveLease).where(SolveLease.token_id == token_id))
+            if held >= limit:
+                raise QuotaExceeded(f"this token has {held} solves running or waiting, its limit "
+                                    "(BOOTMAP_TOKEN_MAX_SOLVES); retry when one has ended", 2)
+            lease = SolveLease(token_id=token_id, expires_at=now + timedelta(seconds=ttl_s))
+            s.add(lease)
+            s.flush()
+            return lease.id
+
+    def release_solve(self, lease_id: int) -> None:
+        with self._session.begin() as s:
+            s.execute(delete(SolveLease).where(SolveLease.id == lease_id))
+
+
+_HEAD = (TableauRow.id, TableauRow.revision, TableauRow.n_steps, TableauRow.views_k, TableauRow.created_at,
+         TableauRow.updated_at, TableauRow.owner_id, TableauRow.public)
+
+
+def _head_record(row) -> TableauRecord:
+    return TableauRecord(row[0], row[1], row[2], row[3], "", _utc(row[4]), _utc(row[5]), row[6], bool(row[7]))
+
+
+def _size(document: str, cmap: MapRecord) -> int:
+    return len(document) + len(cmap.document) + len(cmap.text)
+
+
+def _lock_token(s, token_id: int) -> None:
+    """Take the token's row lock (a write: SQLite's write lock, PostgreSQL's row lock) so that what
+    follows in the transaction is one step for this token on every server."""
+    s.execute(update(TokenRow).where(TokenRow.id == token_id).values(touched_at=datetime.now(timezone.utc)))
+
+
+def _check_bytes(s, owner_id: int, adding: int, max_bytes: int) -> None:
+    _lock_token(s, owner_id)
+    stored = s.scalar(select(func.coalesce(func.sum(TableauRow.stored_bytes), 0))
+                      .where(TableauRow.owner_id == owner_id)) or 0
+    if stored + adding > max_bytes:
+        raise QuotaExceeded(f"this token would keep {stored + adding} bytes stored, more than its limit of "
+                            f"{max_bytes} (BOOTMAP_TOKEN_MAX_STORED_BYTES); delete tableaux to make room", 60)
+
+
+class Stream:
+    """Chunks of one stored text, from one read snapshot, on one connection held until :meth:`close`.
+
+    SQLite reads the value with incremental blob I/O (only the chunk asked for is read); PostgreSQL with
+    ``substr`` in a REPEATABLE READ transaction."""
+
+    _COLUMNS = {"tableau": (TableauRow, "document", "id"), "map": (MapRow, "document", "tableau_id"),
+                "text": (MapRow, "text", "tableau_id")}
+
+    def __init__(self, engine: Engine, tableau_id: int, what: str):
+        table, self.column, key = self._COLUMNS[what]
+        self.table, self.where = table.__table__, getattr(table, key) == tableau_id
+        self._blob = None
+        self.conn = engine.connect()
+        try:
+            if engine.dialect.name == "postgresql":
+                self.conn = self.conn.execution_options(isolation_level="REPEATABLE READ")
+            self.conn.begin()
+            self.head = _head_record_or_none(self.conn, tableau_id)
+            rowid = self.conn.scalar(select(text("rowid") if engine.dialect.name == "sqlite"
+                                            else func.length(self.table.c[self.column])).where(self.where))
+            if self.head is None or rowid is None:
+                raise NotFound(tableau_id)
+            if engine.dialect.name == "sqlite":  # the blob handle holds its own read snapshot
+                raw = self.conn.connection.dbapi_connection
+                self._blob = raw.blobopen(self.table.name, self.column, rowid, readonly=True)
+                self.length = len(self._blob)  # bytes (the map may hold UTF-8)
+            else:
+                self.length = rowid  # characters, as substr counts them
+            self.whole: bytes | None = None
+            if self.length <= STREAM_CHUNK:  # small (most maps): read at once, the connection goes back
+                self.whole = b"".join(self._chunks())
+                self.close()
+        except BaseException:
+            self.close()
+            raise
+
+    def __iter__(self) -> Iterator[bytes]:
+        if self.whole is not None:
+            yield self.whole
+            return
+        try:
+            yield from self._chunks()
+        finally:
+            self.close()
+
+    def _chunks(self) -> Iterator[bytes]:
+        for start in range(0, self.length, STREAM_CHUNK):
+            if self._blob is not None:
+                yield self._blob.read(STREAM_CHUNK)
+            else:
+                chunk = self.conn.scalar(select(func.substr(self.table.c[self.column], start + 1, STREAM_CHUNK))
+                                         .where(self.where))
+                yield chunk.encode()
+
+    def close(self) -> None:
+        if self._blob is not None:
+            self._blob.close()
+            self._blob = None
+        if not self.conn.closed:
+            self.conn.rollback()
+            self.conn.close()
+
+
+def _head_record_or_none(conn, tableau_id: int) -> TableauRecord | None:
+    row = conn.execute(select(*_HEAD).where(TableauRow.id == tableau_id)).first()
+    return None if row is None else _head_record(row)
 
 
 def _map_row(tableau_id: int, m: MapRecord) -> MapRow:

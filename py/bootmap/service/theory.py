@@ -38,7 +38,8 @@ class LoadedTheory:
             files.append({"level": level, "file": str(path.relative_to(self.snapshot)),
                           "rules": [{"name": r.name, "line": r.line, "text": r.text}
                                     for r in rules if Path(r.file) == path]})
-        return {"theory": self.id, "directory": str(self.source), "loaded": self.loaded,
+        # The name only: the server's file system layout is nobody else's business.
+        return {"theory": self.id, "directory": self.source.name, "loaded": self.loaded,
                 "levels": list(self.theory.levels), "files": files}
 
 

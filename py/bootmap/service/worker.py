@@ -24,13 +24,14 @@ import threading
 import time
 import traceback
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Awaitable, Callable
 
 from ..errors import AxiomError, BootmapError, ExplainError, InconsistentTableau, SolveTimeout, TableauError
 from ..tableau import Tableau
 
 log = logging.getLogger("bootmap.service")
-READY_TIMEOUT_S = 60.0  # a fresh solver imports clingo and scikit-learn; generous for a loaded machine
+READY_TIMEOUT_S = 60.0
+CANCEL_POLL_S = 0.1  # how often a waiting solve looks whether its client went away  # a fresh solver imports clingo and scikit-learn; generous for a loaded machine
 
 
 class SolverBusy(BootmapError):
@@ -57,13 +58,17 @@ class SolverCrashed(BootmapError):
     """The solver process died or failed unexpectedly (a bug: it is logged)."""
 
 
+class SolveCancelled(BootmapError):
+    """The client went away: its solve was stopped and the solver freed."""
+
+
 @dataclass(frozen=True)
 class SolveJob:
     """What a solver needs: the tableau document and the theory snapshot to solve it with. The solver
     validates the document (bootmap.tableau, against the JSON Schema): that takes longer than many solves,
     and is better spent in a solver process than under the server's GIL."""
 
-    document: dict
+    document: dict | str  # the tableau, or its JSON text (the server need not parse it)
     axioms: str
     time_limit_s: float
     quantum_deg: float | None = None
@@ -75,7 +80,7 @@ class ExplainJob:
     """A question about a stored tableau: are time points (or dstates) ``a`` and ``b`` one dstate, and
     why? Solved like a map, in a solver process under the same deadline and memory cap."""
 
-    document: dict
+    document: dict | str
     axioms: str
     time_limit_s: float
     a: str
@@ -150,7 +155,7 @@ def _solve(job: SolveJob, cache: dict) -> tuple:
     start = time.perf_counter()
     deadline = Deadline.after(job.time_limit_s)  # validation and clustering count against it too
     try:
-        tableau, k = _views(Tableau.from_dict(job.document, "tableau"))
+        tableau, k = _views(_tableau(job.document))
         resolver = _cached(cache, ("map", job.axioms, job.quantum_deg, job.max_models), lambda: _resolver(job))
         cmap = resolver.resolve(tableau, deadline)
         return "ok", Solved(cmap.to_dict(), cmap.to_text(), k, time.perf_counter() - start)
@@ -166,7 +171,7 @@ def _explain(job: ExplainJob, cache: dict) -> tuple:
     start = time.perf_counter()
     deadline = Deadline.after(job.time_limit_s)
     try:
-        tableau, _ = _views(Tableau.from_dict(job.document, "tableau"))
+        tableau, _ = _views(_tableau(job.document))
         explainer = _cached(cache, ("explain", job.axioms, job.levels, job.quantum_deg),
                             lambda: Explainer(axioms=job.axioms, levels=job.levels, quantum_deg=job.quantum_deg))
         e = explainer.explain(tableau, job.a, job.b, deadline)
@@ -177,6 +182,10 @@ def _explain(job: ExplainJob, cache: dict) -> tuple:
         return "inconsistent", str(e), e.failing_levels, e.diagnosed
     except SolveTimeout as e:
         return "timeout", str(e), e.lower_bound, None
+
+
+def _tableau(document: dict | str) -> Tableau:
+    return Tableau.loads(document, "tableau") if isinstance(document, str) else Tableau.from_dict(document, "tableau")
 
 
 def _views(tableau: Tableau) -> tuple[Tableau, int | None]:
@@ -220,20 +229,31 @@ class _Worker:
     def alive(self) -> bool:
         return self.process.is_alive()
 
-    def run(self, job: SolveJob, hard_deadline_s: float) -> tuple:
+    def run(self, job: SolveJob, hard_deadline_s: float, cancel: threading.Event | None = None) -> tuple:
+        """Send the job and wait for the reply, at most ``hard_deadline_s``; ``cancel`` set meanwhile
+        (the client went away) kills the solver at once: clingo cannot be interrupted any other way."""
         if not self.ready:
             self._await_ready()
         self.conn.send(job)
-        if not self.conn.poll(hard_deadline_s):
-            self.kill()
-            raise SolverKilled(f"the solver was stopped at the deadline of {hard_deadline_s:g} s (this server's time "
-                               f"limit of {job.time_limit_s:g} s plus grace), still busy: clingo cannot interrupt "
-                               "grounding, and this tableau grounds for longer than that", job.time_limit_s)
+        deadline = time.monotonic() + hard_deadline_s
+        while not self.conn.poll(min(CANCEL_POLL_S, max(0.0, deadline - time.monotonic()))):
+            if cancel is not None and cancel.is_set():
+                self.kill()
+                raise SolveCancelled("the client went away; its solve was stopped")
+            if time.monotonic() >= deadline:
+                self.kill()
+                raise SolverKilled(f"the solver was stopped at the deadline of {hard_deadline_s:g} s (this server's "
+                                   f"time limit of {job.time_limit_s:g} s plus grace), still busy: clingo cannot "
+                                   "interrupt grounding, and this tableau grounds for longer than that",
+                                   job.time_limit_s)
         try:
             return self.conn.recv()
         except (EOFError, OSError):
+            code = self.process.exitcode
             self.kill()
-            raise SolverCrashed("the solver process died during the solve (see the server log)") from None
+            log.error("solver process %s died during a solve (exit code %s)", self.process.pid,
+                      self.process.exitcode if code is None else code)
+            raise SolverCrashed("the solver process died during the solve (the server log says how)") from None
 
     def _await_ready(self) -> None:
         if not self.conn.poll(READY_TIMEOUT_S) or self.conn.recv() != "ready":
@@ -280,13 +300,16 @@ class SolverPool:
         with self._lock:
             return sum(w.alive() for w in self._workers)
 
-    def solve(self, job: SolveJob | ExplainJob) -> Solved | Explained:
-        """Solve (or explain) in a free solver; raises bootmap's exceptions (see :func:`_outcome`)."""
+    def solve(self, job: SolveJob | ExplainJob, cancel: threading.Event | None = None) -> Solved | Explained:
+        """Solve (or explain) in a free solver; raises bootmap's exceptions (see :func:`_outcome`), and
+        SolveCancelled if ``cancel`` is set before the reply."""
         worker = self._idle.get()
         with self._lock:
             self.busy += 1
         try:
-            reply = worker.run(job, job.time_limit_s + self.kill_grace_s)
+            if cancel is not None and cancel.is_set():
+                raise SolveCancelled("the client went away before its solve started")
+            reply = worker.run(job, job.time_limit_s + self.kill_grace_s, cancel)
             if reply[0] == "memory":
                 # After clingo's bad_alloc the process's heap is full and fragmented: whether it can start
                 # its next solve's thread depends on where the allocation failed. A fresh solver can.
@@ -338,28 +361,100 @@ def _outcome(reply: tuple, memory_mb: int) -> Solved | Explained:
 
 
 class SolveGate:
-    """The event loop's door to the pool: solves run in threads, at most ``running`` at once, at most
-    ``waiting`` more queued; beyond that :class:`SolverBusy` is raised at once."""
+    """The event loop's door to the pool: at most ``running`` solves at once (in threads, off the loop),
+    at most ``waiting`` more in line, and beyond that :class:`SolverBusy` at once.
 
-    def __init__(self, pool: SolverPool, running: int, waiting: int, retry_after_s: int):
+    Fair share between callers: one caller (a token) runs at most ``per_caller`` solves at once however
+    many it sends, so a solver stays free for the others; when a solver frees, the longest-waiting solve
+    whose caller is under that bound starts. Callers are keys (a token id, or None for the local user,
+    who is alone and not bounded)."""
+
+    def __init__(self, pool: SolverPool, running: int, waiting: int, retry_after_s: int,
+                 per_caller: int | None = None):
         self.pool, self.running, self.capacity, self.retry_after_s = pool, running, running + waiting, retry_after_s
+        self.per_caller = per_caller or max(1, running // 2)
         self.admitted = 0  # touched only from the event loop thread: no lock needed
-        self._limiter: Any = None
+        self._line: list[tuple[int, Any]] = []  # (ticket, caller) of solves waiting, in arrival order
+        self._started: dict[Any, int] = {}  # caller -> solves running
+        self._tickets = 0
+        self._changed: Any = None
 
     @property
     def waiting(self) -> int:
-        return max(0, self.admitted - self.pool.busy)
+        return len(self._line)
 
-    async def solve(self, job: SolveJob | ExplainJob) -> Solved | Explained:
+    def _next(self) -> int | None:
+        """The ticket that may start now: the first in line whose caller is under its bound."""
+        if sum(self._started.values()) >= self.running:
+            return None
+        for ticket, caller in self._line:
+            if caller is None or self._started.get(caller, 0) < self.per_caller:
+                return ticket
+        return None
+
+    async def _start(self, caller: Any) -> None:
+        import anyio
+
+        if self._changed is None:  # made in the loop that uses it
+            self._changed = anyio.Condition()
+        self._tickets += 1
+        ticket = self._tickets
+        async with self._changed:
+            self._line.append((ticket, caller))
+            try:
+                while self._next() != ticket:
+                    await self._changed.wait()
+            except BaseException:  # cancelled (the client went away): the line moves on without it
+                self._line.remove((ticket, caller))
+                self._changed.notify_all()
+                raise
+            self._line.remove((ticket, caller))
+            self._started[caller] = self._started.get(caller, 0) + 1
+
+    async def _end(self, caller: Any) -> None:
+        import anyio
+
+        self._started[caller] -= 1
+        if not self._started[caller]:
+            del self._started[caller]
+        with anyio.CancelScope(shield=True):
+            async with self._changed:
+                self._changed.notify_all()
+
+    async def solve(self, job: SolveJob | ExplainJob, gone: Callable[[], Awaitable[None]] | None = None,
+                    caller: Any = None) -> Solved | Explained:
+        """Solve in the pool. ``gone`` returns when the client has gone away: then a waiting solve leaves
+        the line at once and a running one is stopped (its solver killed and replaced), and
+        SolveCancelled is raised."""
         import anyio
 
         if self.admitted >= self.capacity:
             raise SolverBusy(f"all {self.running} solvers are busy and {self.capacity - self.running} solves are "
                              f"waiting; retry in {self.retry_after_s} s", self.retry_after_s)
-        if self._limiter is None:  # created in the loop that uses it
-            self._limiter = anyio.CapacityLimiter(self.running)
         self.admitted += 1
+        cancel = threading.Event()
+        outcome: list = []  # the result, or the exception (raised outside the task group, unwrapped)
         try:
-            return await anyio.to_thread.run_sync(self.pool.solve, job, limiter=self._limiter)
+            async with anyio.create_task_group() as tg:
+                async def watch() -> None:
+                    await gone()
+                    cancel.set()  # a running solve: its thread kills the solver and returns at once
+                    tg.cancel_scope.cancel()  # a waiting one: it leaves the line
+
+                if gone is not None:
+                    tg.start_soon(watch)
+                await self._start(caller)
+                try:
+                    outcome.append(await anyio.to_thread.run_sync(self.pool.solve, job, cancel))
+                except Exception as e:
+                    outcome.append(e)
+                finally:
+                    await self._end(caller)
+                tg.cancel_scope.cancel()
         finally:
             self.admitted -= 1
+        if not outcome:
+            raise SolveCancelled("the client went away; its solve was stopped")
+        if isinstance(outcome[0], Exception):
+            raise outcome[0]
+        return outcome[0]

@@ -5,6 +5,7 @@ from __future__ import annotations
 from fastapi import APIRouter
 from fastapi.concurrency import run_in_threadpool
 
+from ..auth import AdminDep
 from ..deps import ServicesDep
 from ..models import AxiomsOut
 from ..problems import JSONRoute, openapi_responses
@@ -19,11 +20,11 @@ def read_axioms(services: ServicesDep) -> AxiomsOut:
     return AxiomsOut.model_validate(services.theories.current.listing())
 
 
-@router.post("/reload", response_model=AxiomsOut, responses=openapi_responses(422, 500),
-             summary="Reload the axiom directory")
-async def reload_axioms(services: ServicesDep) -> AxiomsOut:
+@router.post("/reload", response_model=AxiomsOut, responses=openapi_responses(401, 403, 422, 429, 500),
+             summary="Reload the axiom directory (admin)")
+async def reload_axioms(services: ServicesDep, admin: AdminDep) -> AxiomsOut:
     """Read the axiom directory again after a user edited or added .lp files. A file that does not parse is
-    refused with clingo's message (422) and the theory in use stays as it was. Maps already stored keep
+    refused with clingo's message (422) and the theory in use stays as it was. Only an admin may. Maps already stored keep
     the theory they were solved with (their ``theory`` field); new solves use the reloaded one."""
     loaded = await run_in_threadpool(services.theories.reload)
     return AxiomsOut.model_validate(loaded.listing())

@@ -2,14 +2,14 @@
 
 from __future__ import annotations
 
-import json
 from typing import Annotated
 
-from fastapi import APIRouter, Query
+from fastapi import APIRouter, Query, Request
 from fastapi.concurrency import run_in_threadpool
 
 from ...errors import AxiomError
 from ...mapping.theory import select_levels
+from ..auth import CallerDep, readable
 from ..deps import ServicesDep, TableauId
 from ..models import ExplanationOut
 from ..problems import JSONRoute, invalid, openapi_responses
@@ -21,9 +21,9 @@ POINT = r"^(t?[0-9]{1,9}|S[0-9]{1,9})$"
 Point = Annotated[str, Query(pattern=POINT, description="A time point (t4 or 4) or a dstate (S4).")]
 
 
-@router.get("/why", response_model=ExplanationOut, responses=openapi_responses(404, 422, 500, 503),
+@router.get("/why", response_model=ExplanationOut, responses=openapi_responses(401, 403, 404, 422, 429, 500, 503),
             summary="Why two dstates differ, or why they are the same")
-async def why(tableau_id: TableauId, a: Point, b: Point, services: ServicesDep,
+async def why(tableau_id: TableauId, a: Point, b: Point, services: ServicesDep, caller: CallerDep, request: Request,
               levels: Annotated[str | None, Query(pattern=r"^[a-z][a-z0-9_]*(,[a-z][a-z0-9_]*)*$",
                                                   description="Levels to use, e.g. causal,topological "
                                                               "(default: all); a pair may have a proof at "
@@ -34,9 +34,10 @@ async def why(tableau_id: TableauId, a: Point, b: Point, services: ServicesDep,
     (minimality) and what experience would test it. If minimal maps disagree: which of them keep a and b
     apart. Dstate names (S4) are those of the minimal map with the chosen levels."""
     chosen = _levels(levels, services)
+    await readable(services, caller, tableau_id)
     record = await run_in_threadpool(services.store.get, tableau_id)
-    job = services.explain_job(json.loads(record.document), a, b, chosen)
-    explained = await services.gate.solve(job)
+    job = services.explain_job(record.document, a, b, chosen)  # the solver parses it
+    explained = await services.solve(job, caller.token_id, request)
     return ExplanationOut.model_validate({**explained.explanation, "text": explained.text})
 
 

@@ -8,6 +8,7 @@ from fastapi import APIRouter
 from fastapi.concurrency import run_in_threadpool
 
 from ...tableau import Tableau
+from ..auth import CallerDep, readable
 from ..deps import Services, ServicesDep, TableauId
 from ..models import RecogniseIn, Recognition
 from ..problems import JSONRoute, Problem, invalid, openapi_responses
@@ -15,12 +16,14 @@ from ..problems import JSONRoute, Problem, invalid, openapi_responses
 router = APIRouter(prefix="/tableaux/{tableau_id}", tags=["recognition"], route_class=JSONRoute)
 
 
-@router.post("/recognise", response_model=Recognition, responses=openapi_responses(400, 404, 409, 413, 415, 422),
+@router.post("/recognise", response_model=Recognition, responses=openapi_responses(400, 401, 403, 404, 409, 413, 415, 422, 429),
              summary="Recognise the dstate of an image")
-async def recognise(tableau_id: TableauId, body: RecogniseIn, services: ServicesDep) -> Recognition:
+async def recognise(tableau_id: TableauId, body: RecogniseIn, services: ServicesDep,
+                    caller: CallerDep) -> Recognition:
     """The map labels every stored image with its dstate; a new image gets the dstate of the nearest
     stored one (the paper's section 7), with the Euclidean distance to it: a large distance means an
     unfamiliar image. 409 if the tableau has no images."""
+    await readable(services, caller, tableau_id)
     return await run_in_threadpool(_recognise, services, tableau_id, body.image)
 
 

@@ -1,4 +1,5 @@
-"""Tableaux: create one (it is solved at once), list them, read one, append steps to one.
+"""Tableaux: create one (it is solved at once), list them, read one, append steps to one, publish or
+delete one. Each belongs to the token that created it (docs/service.md, "Security").
 
 A tableau is stored only with its map: when no map can be found (the tableau is inconsistent, the solve
 runs past its limits, every solver is busy) the request fails and nothing is stored, so a stored tableau
@@ -10,88 +11,149 @@ from __future__ import annotations
 import json
 from typing import Annotated
 
-from fastapi import APIRouter, Query, Response
+from fastapi import APIRouter, Query, Request, Response
 from fastapi.concurrency import run_in_threadpool
+from fastapi.responses import StreamingResponse
+from starlette.background import BackgroundTask
 
-from ...tableau import Tableau
+from ..auth import Caller, CallerDep, check_read, writable
 from ..deps import Services, ServicesDep, TableauId
-from ..models import AppendIn, MapOut, TableauCreated, TableauIn, TableauList, TableauListItem, TableauOut
-from ..problems import JSONRoute, invalid, openapi_responses
-from ..settings import Settings
-from ..store import MapRecord, TableauRecord
+from ..intake import prepare_append, prepare_tableau
+from ..models import MapOut, TableauCreated, TableauList, TableauListItem, TableauOut, TableauSharing
+from ..problems import JSONRoute, Problem, openapi_responses
+from ..store import MapRecord, Stream, TableauRecord
 from ..theory import LoadedTheory
 from ..worker import Solved
 
 router = APIRouter(prefix="/tableaux", tags=["tableaux"], route_class=JSONRoute)
-SOLVE_ERRORS = openapi_responses(400, 413, 415, 422, 500, 503)
+SOLVE_ERRORS = openapi_responses(400, 401, 403, 413, 415, 422, 429, 500, 503)
+READ_ERRORS = openapi_responses(401, 403, 404, 422, 429)
+
+
+def streamed(stream: Stream, caller: Caller, before: str = "", after: str = "",
+             media_type: str = "application/json") -> Response:
+    """A stored text streamed to a caller who may read it (else 403, and the stream is closed)."""
+    try:
+        check_read(caller, stream.head)
+    except Exception:
+        stream.close()
+        raise
+
+    if stream.whole is not None:  # small: one response, no streaming
+        return Response(before.encode() + stream.whole + after.encode(), media_type=media_type)
+
+    def chunks():
+        yield before.encode()
+        yield from stream
+        yield after.encode()
+
+    return StreamingResponse(chunks(), media_type=media_type, background=BackgroundTask(stream.close))
+
+
+def json_body(model: str) -> dict:
+    """The OpenAPI request body of a route that reads its body itself (app._openapi adds the model)."""
+    return {"requestBody": {"required": True, "content": {"application/json": {
+        "schema": {"$ref": f"#/components/schemas/{model}"}}}}}
+
+
+async def json_bytes(request: Request) -> bytearray:
+    """The request's body, which must be JSON (415 otherwise; 422 if there is none)."""
+    # Read into one buffer (not a list of chunks joined at the end: a large body is held once, not twice).
+    body = bytearray()
+    async for chunk in request.stream():
+        body += chunk
+    if not body:
+        raise Problem(422, "invalid-request", "Invalid request", "the request needs a JSON body")
+    mime = request.headers.get("content-type", "").split(";")[0].strip().lower()
+    if not (mime == "application/json" or (mime.startswith("application/") and mime.endswith("+json"))):
+        raise Problem(415, "unsupported-media-type", "Send JSON",
+                      "the body must be a JSON object sent with Content-Type: application/json")
+    return body
 
 
 @router.post("", status_code=201, response_model=TableauCreated, responses=SOLVE_ERRORS,
-             summary="Create a tableau and solve it")
-async def create_tableau(body: TableauIn, services: ServicesDep) -> Response:
-    """Store a tableau and return its id and its minimal map. Steps may carry view labels, or images only:
-    then the images are clustered into views first (k-means, k chosen by the measure M), as `bootmap map`
-    does. Fails with 422 when no map satisfies the axioms or the solve runs past its limits (nothing is
-    stored then), and with 503 and Retry-After when every solver is busy."""
-    doc = body.model_dump(mode="json", exclude_unset=True)
-    _check_limits(doc["steps"], len(doc["steps"]), services.settings)
-    solved, theory = await _solve(services, doc)  # the solver validates it with bootmap.tableau first
+             openapi_extra=json_body("TableauIn"), summary="Create a tableau and solve it")
+async def create_tableau(services: ServicesDep, caller: CallerDep, request: Request,
+                         public: Annotated[bool, Query(description="Anyone may read it (not change it).")] = False
+                         ) -> Response:
+    """Store a tableau (TableauIn) and return its id and its minimal map. Steps may carry view labels, or
+    images only: then the images are clustered into views first (k-means, k chosen by the measure M), as
+    `bootmap map` does. Fails with 422 when no map satisfies the axioms or the solve runs past its limits
+    (nothing is stored then), with 503 and Retry-After when every solver is busy, and with 429 when the
+    token is over its limits. The tableau belongs to the caller's token."""
+    # Parsed and checked in an intake process (bootmap.service.intake): the server sees only the text.
+    prepared = await services.intake.run(prepare_tableau, await json_bytes(request), services.limits)
+    solved, theory = await _solve(services, prepared.document, caller, request)
     cmap = await run_in_threadpool(_map_record, solved, 1, theory)
-    record = await run_in_threadpool(services.store.add, json.dumps(doc), len(doc["steps"]), solved.views_k, cmap)
+    record = await run_in_threadpool(services.store.add, prepared.document, prepared.n_steps, solved.views_k, cmap,
+                                     caller.token_id, services.settings.token_max_stored_bytes, public)
     return _with_map(record, cmap, status=201, headers={"Location": f"/tableaux/{record.id}"})
 
 
-@router.get("", response_model=TableauList, responses=openapi_responses(422), summary="List stored tableaux")
-def list_tableaux(services: ServicesDep, limit: Annotated[int, Query(ge=1, le=1000)] = 100,
+@router.get("", response_model=TableauList, responses=openapi_responses(401, 422, 429),
+            summary="List stored tableaux")
+def list_tableaux(services: ServicesDep, caller: CallerDep, limit: Annotated[int, Query(ge=1, le=1000)] = 100,
                   offset: Annotated[int, Query(ge=0, le=2**62)] = 0) -> TableauList:
-    total, rows = services.store.list(limit, offset)
+    """The caller's tableaux and the public ones (an admin's: every one)."""
+    total, rows = services.store.list(limit, offset, caller.token_id, everyone=caller.admin)
     return TableauList(total=total, items=[
         TableauListItem(id=r.id, revision=r.revision, steps=r.n_steps, dstates=r.dstates, places=r.places,
                         paths=r.paths, updated=r.updated_at) for r in rows])
 
 
-@router.get("/{tableau_id}", response_model=TableauOut, responses=openapi_responses(404, 422),
-            summary="Read a stored tableau")
-def read_tableau(tableau_id: TableauId, services: ServicesDep) -> Response:
+@router.get("/{tableau_id}", response_model=TableauOut, responses=READ_ERRORS, summary="Read a stored tableau")
+def read_tableau(tableau_id: TableauId, services: ServicesDep, caller: CallerDep) -> Response:
     """The tableau as stored (images-only tableaux as posted; the views found are in its map)."""
-    record = services.store.get(tableau_id)
-    head = json.dumps(_info(record))
-    # Validated when it was stored: its text is served as it is, not parsed and serialised again.
-    return Response(head[:-1] + ', "tableau": ' + record.document + "}", media_type="application/json")
+    stream = services.store.stream(tableau_id, "tableau")
+    head = json.dumps(_info(stream.head))
+    # Validated when it was stored: its text is streamed as it is, in chunks, never parsed or held whole.
+    return streamed(stream, caller, head[:-1] + ', "tableau": ', "}")
+
+
+@router.delete("/{tableau_id}", status_code=204, responses=READ_ERRORS, summary="Delete a tableau and its map")
+async def delete_tableau(tableau_id: TableauId, services: ServicesDep, caller: CallerDep) -> Response:
+    """Only its owner or an admin may; the bytes it took count no more against the owner's quota."""
+    await writable(services, caller, tableau_id)
+    await run_in_threadpool(services.store.delete, tableau_id)
+    return Response(status_code=204)
+
+
+@router.put("/{tableau_id}/sharing", response_model=TableauSharing, responses=openapi_responses(
+    400, 401, 403, 404, 415, 422, 429), summary="Make a tableau public or private")
+async def share_tableau(tableau_id: TableauId, body: TableauSharing, services: ServicesDep,
+                        caller: CallerDep) -> TableauSharing:
+    """A public tableau (and its maps) may be read by anyone; only its owner or an admin changes it."""
+    await writable(services, caller, tableau_id)
+    await run_in_threadpool(services.store.set_public, tableau_id, body.public)
+    return body
 
 
 @router.post("/{tableau_id}/steps", response_model=TableauCreated, responses=openapi_responses(
-    400, 404, 409, 413, 415, 422, 500, 503), summary="Append steps and solve again")
-async def append_steps(tableau_id: TableauId, body: AppendIn, services: ServicesDep) -> Response:
-    """Exploration went on: add steps after the stored ones (``action`` leads from the stored last step to
-    the first new one), solve the whole tableau again and store it as the next revision. New steps are
-    like the stored ones: view labels, or images only. 409 if another append got there first."""
+    400, 401, 403, 404, 409, 413, 415, 422, 429, 500, 503), openapi_extra=json_body("AppendIn"),
+    summary="Append steps and solve again")
+async def append_steps(tableau_id: TableauId, services: ServicesDep, caller: CallerDep, request: Request) -> Response:
+    """Exploration went on: add steps (AppendIn) after the stored ones (``action`` leads from the stored
+    last step to the first new one), solve the whole tableau again and store it as the next revision. New
+    steps are like the stored ones: view labels, or images only. 409 if another append got there first;
+    403 unless the caller owns the tableau."""
+    await writable(services, caller, tableau_id)
+    body = await json_bytes(request)
     record = await run_in_threadpool(services.store.get, tableau_id)
-    new = body.model_dump(mode="json", exclude_unset=True)
-    _check_limits(new["steps"], record.n_steps + len(new["steps"]), services.settings)
-    doc = await run_in_threadpool(_extended, record, new)
-    solved, theory = await _solve(services, doc)
-    cmap = await run_in_threadpool(_map_record, solved, record.revision + 1, theory)
-    stored = await run_in_threadpool(services.store.replace, tableau_id, json.dumps(doc), len(doc["steps"]),
-                                     solved.views_k, cmap)
+    revision = record.revision + 1
+    prepared = await services.intake.run(prepare_append, record.document, record.n_steps, body, services.limits)
+    del record, body  # the new revision's text is all that is needed from here on
+    solved, theory = await _solve(services, prepared.document, caller, request)
+    cmap = await run_in_threadpool(_map_record, solved, revision, theory)
+    stored = await run_in_threadpool(services.store.replace, tableau_id, prepared.document, prepared.n_steps,
+                                     solved.views_k, cmap, services.settings.token_max_stored_bytes)
     return _with_map(stored, cmap)
 
 
 # ---------------------------------------------------------------------------------------------------
 
-def _check_limits(steps: list[dict], total: int, settings: Settings) -> None:
-    if total > settings.max_steps:
-        raise invalid("steps", f"{total} steps, more than this server's limit of {settings.max_steps} "
-                               "(BOOTMAP_MAX_STEPS)", kind="too-many-steps")
-    for i, step in enumerate(steps):
-        if len(step.get("image", ())) > settings.max_image_len:
-            raise invalid(f"steps[{i}].image", f"{len(step['image'])} values, more than this server's limit of "
-                                               f"{settings.max_image_len} (BOOTMAP_MAX_IMAGE_LEN)", kind="too-large")
-
-
-async def _solve(services: Services, document: dict):
+async def _solve(services: Services, document: str, caller: Caller, request: Request):
     job, theory = services.job(document)
-    return await services.gate.solve(job), theory
+    return await services.solve(job, caller.token_id, request), theory
 
 
 def _map_record(solved: Solved, revision: int, theory: LoadedTheory) -> MapRecord:
@@ -105,7 +167,8 @@ def _map_record(solved: Solved, revision: int, theory: LoadedTheory) -> MapRecor
 
 def _info(record: TableauRecord) -> dict:
     return {"id": record.id, "revision": record.revision, "steps": record.n_steps,
-            "created": _iso(record.created_at), "updated": _iso(record.updated_at), "views_from_images": record.views_k}
+            "created": _iso(record.created_at), "updated": _iso(record.updated_at), "views_from_images": record.views_k,
+            "public": record.public}
 
 
 def _iso(t) -> str:
@@ -117,9 +180,3 @@ def _with_map(record: TableauRecord, cmap: MapRecord, status: int = 200, headers
     head = json.dumps(_info(record))
     return Response(head[:-1] + ', "map": ' + cmap.document + "}", status_code=status, headers=headers,
                     media_type="application/json")
-
-
-def _extended(record: TableauRecord, new: dict) -> dict:
-    """The stored tableau with the new steps after it (Tableau.extend checks them; errors name the
-    request's fields)."""
-    return Tableau.loads(record.document, "stored tableau").extend(new, "request").to_dict()

@@ -1,0 +1,192 @@
+"""Who is calling, and may they: API tokens, owners of tableaux, and the guard against other web sites.
+
+A token is ``bm_`` and 43 random URL-safe characters (256 bits), sent as ``Authorization: Bearer``. Only
+its SHA-256 is stored: a token with that much entropy needs no slow hash, and a stolen database gives no
+usable token. ``bootmap token create NAME`` (or an admin's ``POST /tokens``) makes one and shows it once.
+
+Without tokens (the default on loopback, one user on a laptop) every request is the :data:`LOCAL` caller,
+who may do everything. When tokens are required (``--require-tokens``, or listening on anything but
+loopback) a request without a valid token gets 401, and each tableau belongs to the token that created it.
+
+:class:`Guard`, the outermost middleware, refuses a Host header the server does not answer to (DNS
+rebinding) and a state-changing request that a browser says comes from another site (a cross-site form
+or ``fetch`` needs no preflight when it sends no custom header).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import re
+import secrets
+import time
+from dataclasses import dataclass
+from typing import Annotated
+
+from fastapi import Depends, Request
+from fastapi.concurrency import run_in_threadpool
+from starlette.types import ASGIApp, Receive, Scope, Send
+
+from .deps import Services, ServicesDep
+from .problems import Problem, problem_response
+from .store import TableauRecord
+
+PREFIX = "bm_"
+
+
+def new_token() -> str:
+    return PREFIX + secrets.token_urlsafe(32)
+
+
+def digest(token: str) -> str:
+    return hashlib.sha256(token.encode()).hexdigest()
+
+
+@dataclass(frozen=True)
+class Caller:
+    """Who makes a request: a token (its id and name), or the local user when tokens are off."""
+
+    token_id: int | None
+    name: str
+    admin: bool
+
+    def owns(self, record: TableauRecord) -> bool:
+        return self.admin or (self.token_id is not None and record.owner_id == self.token_id)
+
+
+LOCAL = Caller(None, "local", admin=True)
+
+
+def unauthorized(detail: str) -> Problem:
+    return Problem(401, "unauthorized", "Token needed", detail, headers={"WWW-Authenticate": "Bearer"})
+
+
+def forbidden(detail: str) -> Problem:
+    return Problem(403, "forbidden", "Not allowed", detail)
+
+
+def _bearer(request: Request) -> str | None:
+    header = request.headers.get("authorization")
+    if header is None:
+        return None
+    scheme, _, token = header.partition(" ")
+    if scheme.lower() != "bearer" or not token.strip():
+        raise unauthorized("the Authorization header must be 'Bearer <token>'")
+    return token.strip()
+
+
+async def get_caller(request: Request, services: ServicesDep) -> Caller:
+    """The caller of this request; a token holder's request is counted against its per-minute limit."""
+    token = _bearer(request)
+    if token is None:
+        if services.settings.tokens_required:
+            raise unauthorized("this server needs an API token: send 'Authorization: Bearer <token>' "
+                               "(an admin makes one with 'bootmap token create NAME')")
+        return LOCAL
+    record = await run_in_threadpool(services.store.token_by_digest, digest(token))
+    if record is None:
+        raise unauthorized("this token is not known to the server (mistyped, or made for another database)")
+    await run_in_threadpool(services.store.count_request, record.id, services.settings.token_requests_per_minute,
+                            time.time())
+    return Caller(record.id, record.name, record.admin)
+
+
+CallerDep = Annotated[Caller, Depends(get_caller)]
+
+
+async def get_admin(caller: CallerDep) -> Caller:
+    if not caller.admin:
+        raise forbidden(f"only an admin token may do this; token {caller.name!r} is not one")
+    return caller
+
+
+AdminDep = Annotated[Caller, Depends(get_admin)]
+
+
+async def readable(services: Services, caller: Caller, tableau_id: int) -> TableauRecord:
+    """The tableau's record (no document) if the caller may read it: its owner, an admin, or anyone when
+    it is public; else 403."""
+    record = await run_in_threadpool(services.store.head, tableau_id)
+    check_read(caller, record)
+    return record
+
+
+def check_read(caller: Caller, record: TableauRecord) -> None:
+    if not (record.public or caller.owns(record)):
+        raise forbidden(f"tableau {record.id} belongs to another token and is not public")
+
+
+async def writable(services: Services, caller: Caller, tableau_id: int) -> TableauRecord:
+    """The tableau's record if the caller may change it (append, delete, publish): its owner or an admin."""
+    record = await run_in_threadpool(services.store.head, tableau_id)
+    if not caller.owns(record):
+        raise forbidden(f"tableau {tableau_id} belongs to another token; only its owner or an admin may change it")
+    return record
+
+
+# ---------------------------------------------------------------------------------------------------
+# Host and cross-site guard (ASGI middleware, outermost)
+# ---------------------------------------------------------------------------------------------------
+
+SAFE_METHODS = {"GET", "HEAD", "OPTIONS"}
+# What anyone may read without a token, even when tokens are required.
+OPEN_PATHS = {"/health", "/docs", "/docs/oauth2-redirect", "/redoc", "/openapi.json", "/axioms",
+              "/schemas/tableau-1.schema.json"}
+
+
+def host_allowed(host: str, allowed: list[str]) -> bool:
+    """As Starlette's TrustedHostMiddleware matches: exact names, '*.domain' for subdomains, '*' for any;
+    the port is ignored. IPv6 literals keep their brackets."""
+    form = re.fullmatch(r"(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9._-]+)(:[0-9]{1,5})?", host)
+    if form is None:  # e.g. "127.0.0.1:80@evil.example", which a URL built from it would send elsewhere
+        return False
+    name = form.group(1).lower()
+    for pattern in allowed:
+        if pattern == "*" or name == pattern.lower():
+            return True
+        if pattern.startswith("*.") and name.endswith(pattern[1:].lower()):
+            return True
+    return False
+
+
+class Guard:
+    """The outermost middleware. Refuse (problem details) a Host the server does not answer to (400); a
+    state-changing request a browser marks as coming from another site (403): ``Sec-Fetch-Site:
+    cross-site``, or an ``Origin`` that is neither this server nor a configured CORS origin; and, when
+    tokens are required, a request without one (401) before its body is read. HEAD is answered as GET
+    (uvicorn sends no body for it)."""
+
+    def __init__(self, app: ASGIApp, hosts: list[str], origins: list[str], tokens_required: bool = False):
+        self.app, self.hosts, self.origins, self.tokens_required = app, hosts, set(origins), tokens_required
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http":
+            return await self.app(scope, receive, send)
+        headers = {k.decode("latin-1"): v.decode("latin-1") for k, v in scope["headers"]}
+        host = headers.get("host", "")
+        problem = None
+        if not host_allowed(host, self.hosts):
+            problem = Problem(400, "invalid-host", "Host not allowed",
+                              f"this server does not answer to the host {host[:100]!r} (BOOTMAP_ALLOWED_HOSTS)")
+        elif scope["method"] not in SAFE_METHODS and self._cross_site(headers, host):
+            problem = forbidden("a request from another web site may not change anything here "
+                                "(its Origin is not allowed; see BOOTMAP_CORS_ORIGINS)")
+        elif (self.tokens_required and "authorization" not in headers and scope["method"] != "OPTIONS"
+              and scope["path"] not in OPEN_PATHS):
+            # Before the body is read: a caller without a token costs the server no parsing.
+            problem = unauthorized("this server needs an API token: send 'Authorization: Bearer <token>' "
+                                   "(an admin makes one with 'bootmap token create NAME')")
+        if problem is not None:
+            return await problem_response(problem, scope.get("path"))(scope, receive, send)
+        if scope["method"] == "HEAD":  # answered as GET; the server sends no body for HEAD
+            scope = {**scope, "method": "GET"}
+        await self.app(scope, receive, send)
+
+    def _cross_site(self, headers: dict[str, str], host: str) -> bool:
+        origin = headers.get("origin")
+        if origin is not None and origin in self.origins:
+            return False
+        if headers.get("sec-fetch-site") == "cross-site":
+            return True
+        if origin is None:
+            return False  # not a browser's cross-origin request (browsers send Origin on every such POST)
+        return origin.split("://", 1)[-1] != host

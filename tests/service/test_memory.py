@@ -1,0 +1,167 @@
+"""The server's memory stays bounded and /health stays quick under the red team's load (real uvicorn).
+
+The load: four 16 MB posts at once (a huge string in ``meta``; 3.3 million numbers in it; 950,000 keys;
+95,000 short lists) while twelve clients read a stored 2.5 MB tableau (2,001 steps with 180-value
+images). Before, this took the server from about 100 MB to over 1 GB and stalled /health for 11.7 s.
+Now bodies are parsed in intake processes, at most BOOTMAP_MAX_HELD_BODY_BYTES of bodies are held at
+once and stored tableaux are streamed, so the server process (not its intake and solver processes)
+stays under BOUND_MB: its peak resident set (VmHWM, the whole run) is measured.
+
+/health is timed from a separate process (a client thread beside twelve readers would time its own
+GIL). On this shared 2-core machine /health took 5 ms median and 67 ms at worst during the load at
+load average 2, and 11 ms median, 0.42 s at worst at load average 5; the test allows 0.1 s median and
+1 s for any one answer, generous for a loaded machine yet far from the 11.7 s it was.
+
+Also here: connections stalled in the middle of their body are answered 408 and closed at the body
+time-out (2 s on this server) instead of staying open.
+"""
+
+import json
+import random
+import socket
+import statistics
+import subprocess
+import sys
+import threading
+import time
+from urllib.parse import urlsplit
+
+import pytest
+from service_helpers import Server
+
+from bootmap import examples
+
+BOUND_MB = 300
+MB = 2**20
+
+
+@pytest.fixture(scope="module")
+def memory_server(tmp_path_factory):
+    s = Server(tmp_path_factory.mktemp("memory_server"), solve_time_limit_s=60, body_timeout_s=2).start()
+    yield s
+    s.stop()
+
+
+def vm(pid: int, field: str) -> float:
+    """VmRSS or VmHWM (peak) of a process, MiB."""
+    for line in open(f"/proc/{pid}/status"):
+        if line.startswith(field + ":"):
+            return int(line.split()[1]) / 1024
+    raise KeyError(field)
+
+
+def big_tableau() -> dict:
+    """The paper's world, 250 circuits, each step with its view and a 180-value image (fixed seed)."""
+    doc = examples.notched_rectangle(circuits=250).to_dict()
+    rng = random.Random(0)
+    centres = {v: [rng.uniform(0.5, 4.5) for _ in range(180)] for v in ("V0", "V1", "V2", "V3")}
+    for step in doc["steps"]:
+        step["image"] = [round(x + rng.gauss(0, 0.01), 3) for x in centres[step["view"]]]
+    return doc
+
+
+def hostile_bodies() -> list[bytes]:
+    one = {"format": "bootmap.tableau/1", "steps": [{"view": "a"}]}
+    metas = [{"x": "y" * (16 * MB - 200)}, {"x": [1.5] * (16 * MB // 5 - 20)},
+             {f"k{i}": 1.25 for i in range(950_000)}, {"x": [[1.5] * 9 for _ in range(95_000)]}]
+    return [json.dumps({**one, "meta": m}).encode() for m in metas]
+
+
+HEALTH_TIMER = """
+import httpx, json, sys, time
+took = []
+with httpx.Client(base_url=sys.argv[1]) as c:
+    while not sys.stdin.readline().startswith("stop"):
+        t0 = time.monotonic()
+        assert c.get("/health").status_code == 200
+        took.append(time.monotonic() - t0)
+        print(len(took), flush=True)
+print(json.dumps(took), flush=True)
+"""
+
+
+class HealthTimer:
+    """/health timed from its own process, one request per line written to it."""
+
+    def __init__(self, url: str):
+        self.p = subprocess.Popen([sys.executable, "-c", HEALTH_TIMER, url], stdin=subprocess.PIPE,
+                                  stdout=subprocess.PIPE, text=True)
+        self.running = True
+        self.thread = threading.Thread(target=self._tick)
+        self.thread.start()
+
+    def _tick(self):
+        while self.running:
+            self.p.stdin.write("go\n")
+            self.p.stdin.flush()
+            self.p.stdout.readline()
+            time.sleep(0.02)
+
+    def stop(self) -> list[float]:
+        self.running = False
+        self.thread.join()
+        out, _ = self.p.communicate("stop\n", timeout=30)
+        return json.loads(out.strip().splitlines()[-1])
+
+
+@pytest.mark.slow
+def test_four_16_mb_posts_and_twelve_reads_keep_the_server_under_its_bound(memory_server):
+    s = memory_server
+    with s.client() as c:
+        stored = c.post("/tableaux", json=big_tableau())
+        assert stored.status_code == 201, stored.text[:500]
+        tid = stored.json()["id"]
+        expected = c.get(f"/tableaux/{tid}").content
+    assert len(expected) > 2.5e6
+    bodies = hostile_bodies()
+    assert all(len(b) > 15 * MB for b in bodies[:3])
+    statuses, lengths = [], []
+
+    def post(body: bytes):
+        with s.client() as c:
+            r = c.post("/tableaux", content=body, headers={"content-type": "application/json"})
+            statuses.append((r.status_code, r.json()["type"].rsplit("/", 1)[-1]))
+
+    def read():
+        with s.client() as c:
+            lengths.append(len(c.get(f"/tableaux/{tid}").content))
+
+    timer = HealthTimer(s.url)
+    time.sleep(0.3)
+    clients = [threading.Thread(target=post, args=(b,)) for b in bodies] + [threading.Thread(target=read)
+                                                                          for _ in range(12)]
+    for t in clients:
+        t.start()
+    for t in clients:
+        t.join()
+    time.sleep(0.3)
+    took = timer.stop()
+
+    assert sorted(statuses) == [(413, "too-many-values"), (413, "too-many-values"), (422, "too-large"),
+                                (422, "too-large")]
+    assert lengths == [len(expected)] * 12
+    peak = vm(s.process.pid, "VmHWM")
+    print(f"server peak {peak:.0f} MiB; /health max {max(took):.3f} s, median {statistics.median(took):.3f} s, "
+          f"{len(took)} timed")
+    assert peak < BOUND_MB, f"the server's resident set peaked at {peak:.0f} MiB"
+    assert len(took) >= 10 and max(took) < 1.0 and statistics.median(took) < 0.1, took
+
+
+def test_connections_stalled_mid_body_are_closed_at_the_body_time_out(memory_server):
+    url = urlsplit(memory_server.url)
+    stalled = []
+    for _ in range(50):
+        sock = socket.create_connection((url.hostname, url.port), timeout=15)
+        sock.sendall(b"POST /tableaux HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\n"
+                     b"Content-Length: 100000\r\n\r\n" + b'{"format": "bootmap.tableau/1", "steps": [')
+        stalled.append(sock)
+    t0 = time.monotonic()
+    with memory_server.client() as c:
+        assert c.get("/health").status_code == 200  # others are served meanwhile
+    for sock in stalled:
+        reply = b""
+        while chunk := sock.recv(65536):  # until the server closes the connection
+            reply += chunk
+        assert reply.startswith(b"HTTP/1.1 408") and b"did not arrive within 2 s" in reply
+        sock.close()
+    assert time.monotonic() - t0 < 2 + 5

@@ -1,0 +1,197 @@
+"""Who may do what, against a real uvicorn on 127.0.0.1: tokens, owners, admins, hosts, other web sites.
+
+``tokens_server`` requires tokens (as any server not on loopback does); the session's server runs in the
+default loopback mode without tokens, where the Host and cross-site checks still hold.
+"""
+
+import os
+import subprocess
+import sys
+
+import pytest
+from service_helpers import SESSION_SETTINGS, Server, bearer, make_token
+
+from bootmap import examples
+from bootmap.service.settings import Settings
+from bootmap.tableau import FORMAT
+
+PROBLEM = "application/problem+json"
+SMALL = examples.notched_rectangle(circuits=2).to_dict()
+MORE = {"action": {"type": "turn", "angle_deg": -90}, "steps": [{"view": "V1"}]}
+
+
+@pytest.fixture(scope="module")
+def tokens_server(tmp_path_factory, server_axioms):
+    s = Server(tmp_path_factory.mktemp("tokens_server"), axioms=server_axioms, require_tokens=True,
+               cors_origins="https://app.example", **SESSION_SETTINGS)
+    tokens = {"admin": make_token("root", admin=True, data_dir=s.data_dir),
+              "alice": make_token("alice", data_dir=s.data_dir), "bob": make_token("bob", data_dir=s.data_dir)}
+    s.start()
+    s.tokens = tokens
+    yield s
+    s.stop()
+
+
+@pytest.fixture(scope="module")
+def alices(tokens_server):
+    """A tableau of alice's."""
+    with tokens_server.client() as c:
+        r = c.post("/tableaux", json=SMALL, headers=bearer(tokens_server.tokens["alice"]))
+        assert r.status_code == 201, r.text
+        return r.json()["id"]
+
+
+def problem(r, status: int) -> dict:
+    assert r.status_code == status, r.text
+    assert r.headers["content-type"] == PROBLEM
+    return r.json()
+
+
+# --- Tokens -----------------------------------------------------------------------------------------
+
+def test_token_create_prints_the_token_last_and_stores_only_its_hash(tmp_path):
+    token = make_token("carol", data_dir=tmp_path)
+    assert token.startswith("bm_") and len(token) > 40
+    assert token.encode() not in (tmp_path / "bootmap.sqlite3").read_bytes()
+    env = {k: v for k, v in os.environ.items() if not k.startswith("BOOTMAP_")}
+    again = subprocess.run([sys.executable, "-m", "bootmap.cli", "token", "create", "carol", "--data-dir", str(tmp_path)],
+                           capture_output=True, text=True, env=env)
+    assert again.returncode == 2 and "'carol' exists already" in again.stderr
+    bad = subprocess.run([sys.executable, "-m", "bootmap.cli", "token", "create", "a b", "--data-dir", str(tmp_path)],
+                         capture_output=True, text=True, env=env)
+    assert bad.returncode == 2 and "bad name" in bad.stderr
+
+
+def test_without_a_token_every_write_and_read_of_tableaux_is_401(tokens_server, alices):
+    with tokens_server.client() as c:
+        for method, path, body in [("POST", "/tableaux", SMALL), ("POST", f"/tableaux/{alices}/steps", MORE),
+                                   ("DELETE", f"/tableaux/{alices}", None), ("POST", "/axioms/reload", None),
+                                   ("GET", "/tableaux", None), ("GET", f"/tableaux/{alices}/map", None)]:
+            r = c.request(method, path, json=body)
+            assert problem(r, 401)["type"].endswith("/unauthorized") and r.headers["www-authenticate"] == "Bearer"
+        wrong = c.get("/tableaux", headers=bearer("bm_" + "x" * 43))
+        assert "not known" in problem(wrong, 401)["detail"]
+        assert problem(c.get("/tableaux", headers={"Authorization": "Basic eDp5"}), 401)["detail"].startswith(
+            "the Authorization header must be")
+        assert c.get("/health").status_code == 200 and c.get("/openapi.json").status_code == 200
+        tokens_required = c.get("/tableaux", headers=bearer(tokens_server.tokens["alice"]))
+        assert tokens_required.status_code == 200
+
+
+def test_another_owners_token_gets_403_and_changes_nothing(tokens_server, alices):
+    alice, bob = bearer(tokens_server.tokens["alice"]), bearer(tokens_server.tokens["bob"])
+    with tokens_server.client() as c:
+        before = c.get(f"/tableaux/{alices}", headers=alice).json()
+        for method, path, body in [("POST", f"/tableaux/{alices}/steps", MORE), ("DELETE", f"/tableaux/{alices}", None),
+                                   ("GET", f"/tableaux/{alices}", None), ("GET", f"/tableaux/{alices}/map", None),
+                                   ("GET", f"/tableaux/{alices}/map/text", None), ("GET", f"/tableaux/{alices}/maps", None),
+                                   ("GET", f"/tableaux/{alices}/why?a=0&b=4", None),
+                                   ("PUT", f"/tableaux/{alices}/sharing", {"public": True})]:
+            assert problem(c.request(method, path, json=body, headers=bob), 403)["type"].endswith("/forbidden")
+        assert c.get(f"/tableaux/{alices}", headers=alice).json() == before
+        assert alices not in [t["id"] for t in c.get("/tableaux", headers=bob).json()["items"]]
+        assert alices in [t["id"] for t in c.get("/tableaux", headers=alice).json()["items"]]
+
+
+def test_a_public_tableau_is_read_by_anyone_and_changed_by_its_owner_only(tokens_server):
+    alice, bob = bearer(tokens_server.tokens["alice"]), bearer(tokens_server.tokens["bob"])
+    with tokens_server.client() as c:
+        tid = c.post("/tableaux", json=SMALL, headers=alice).json()["id"]
+        assert c.put(f"/tableaux/{tid}/sharing", json={"public": True}, headers=alice).json() == {"public": True}
+        assert c.get(f"/tableaux/{tid}/map", headers=bob).json()["summary"]["dstates"] == 8
+        assert c.get(f"/tableaux/{tid}", headers=bob).json()["public"] is True
+        problem(c.post(f"/tableaux/{tid}/steps", json=MORE, headers=bob), 403)
+        assert c.post(f"/tableaux/{tid}/steps", json=MORE, headers=alice).status_code == 200
+
+
+def test_owners_and_admins_delete(tokens_server):
+    alice, admin = bearer(tokens_server.tokens["alice"]), bearer(tokens_server.tokens["admin"])
+    with tokens_server.client() as c:
+        first, second = (c.post("/tableaux", json=SMALL, headers=alice).json()["id"] for _ in range(2))
+        assert c.delete(f"/tableaux/{first}", headers=alice).status_code == 204
+        assert c.delete(f"/tableaux/{second}", headers=admin).status_code == 204
+        for tid in (first, second):
+            problem(c.get(f"/tableaux/{tid}/map", headers=alice), 404)
+            problem(c.delete(f"/tableaux/{tid}", headers=alice), 404)
+
+
+def test_only_an_admin_reloads_axioms_and_makes_tokens(tokens_server):
+    with tokens_server.client() as c:
+        r = c.post("/axioms/reload", headers=bearer(tokens_server.tokens["bob"]))
+        assert "not one" in problem(r, 403)["detail"]
+        reloaded = c.post("/axioms/reload", headers=bearer(tokens_server.tokens["admin"]))
+        assert reloaded.status_code == 200 and reloaded.json()["theory"] == c.get("/axioms").json()["theory"]
+        made = c.post("/tokens", json={"name": "dave"}, headers=bearer(tokens_server.tokens["admin"]))
+        assert made.status_code == 201 and made.json()["admin"] is False
+        assert c.get("/tableaux", headers=bearer(made.json()["token"])).status_code == 200  # honoured at once
+        problem(c.post("/tokens", json={"name": "eve", "admin": True}, headers=bearer(made.json()["token"])), 403)
+        problem(c.post("/tokens", json={"name": "dave"}, headers=bearer(tokens_server.tokens["admin"])), 409)
+        # Revoked: refused at once; dave's tableau stays, for admins only.
+        tid = c.post("/tableaux", json=SMALL, headers=bearer(made.json()["token"])).json()["id"]
+        problem(c.delete("/tokens/dave", headers=bearer(made.json()["token"])), 403)
+        assert c.delete("/tokens/dave", headers=bearer(tokens_server.tokens["admin"])).status_code == 204
+        problem(c.get("/tableaux", headers=bearer(made.json()["token"])), 401)
+        problem(c.delete("/tokens/dave", headers=bearer(tokens_server.tokens["admin"])), 404)
+        assert c.get(f"/tableaux/{tid}", headers=bearer(tokens_server.tokens["admin"])).status_code == 200
+        problem(c.get(f"/tableaux/{tid}", headers=bearer(tokens_server.tokens["alice"])), 403)
+
+
+# --- Hosts and other web sites (the default loopback server, no tokens) ------------------------------
+
+@pytest.mark.parametrize("host", ["evil.example", "evil.example:8000", "127.0.0.1.evil.example", "",
+                                  "127.0.0.1:80@evil.example", "localhost:8000/x"])
+def test_a_host_header_that_is_not_allowed_gets_400(client, host):
+    for method, path in [("GET", "/health"), ("GET", "/tableaux/"), ("POST", "/axioms/reload")]:
+        r = client.request(method, path, headers={"Host": host})
+        assert problem(r, 400)["type"].endswith("/invalid-host") and "location" not in r.headers
+
+
+def test_loopback_names_are_allowed_hosts(client):
+    for host in ["127.0.0.1", "localhost:8000", "[::1]:8000"]:
+        assert client.get("/health", headers={"Host": host}).status_code == 200
+
+
+def test_a_cross_site_post_to_reload_fails(client, server):
+    before = client.get("/axioms").json()["loaded"]
+    for headers in [{"Origin": "http://evil.example"}, {"Origin": "null"}, {"Sec-Fetch-Site": "cross-site"},
+                    {"Origin": "http://localhost:9999"}]:
+        r = client.post("/axioms/reload", headers=headers)
+        assert "another web site" in problem(r, 403)["detail"]
+        problem(client.post("/tableaux", json=SMALL, headers=headers), 403)
+    assert client.get("/axioms").json()["loaded"] == before  # nothing was reloaded
+    same_site = client.post("/axioms/reload", headers={"Origin": server.url, "Sec-Fetch-Site": "same-origin"})
+    assert same_site.status_code == 200
+
+
+def test_cors_is_off_unless_configured(client):
+    r = client.options("/tableaux", headers={"Origin": "http://evil.example", "Access-Control-Request-Method": "POST"})
+    assert "access-control-allow-origin" not in r.headers
+
+
+def test_a_configured_origin_may_call_from_a_browser(tokens_server):
+    app = {"Origin": "https://app.example"}
+    with tokens_server.client() as c:
+        pre = c.options("/tableaux", headers={**app, "Access-Control-Request-Method": "POST",
+                                              "Access-Control-Request-Headers": "authorization, content-type"})
+        assert pre.status_code == 200 and pre.headers["access-control-allow-origin"] == "https://app.example"
+        r = c.post("/tableaux", json=SMALL, headers={**app, **bearer(tokens_server.tokens["alice"])})
+        assert r.status_code == 201 and r.headers["access-control-allow-origin"] == "https://app.example"
+        other = c.post("/tableaux", json=SMALL, headers={"Origin": "https://elsewhere.example",
+                                                         **bearer(tokens_server.tokens["alice"])})
+        problem(other, 403)
+
+
+def test_any_address_but_loopback_requires_tokens_and_named_hosts(tmp_path):
+    assert not Settings(host="127.0.0.1").tokens_required and Settings(host="127.0.0.1", require_tokens=True).tokens_required
+    assert Settings(host="0.0.0.0").tokens_required and Settings(host="192.168.1.5").tokens_required
+    assert Settings(host="192.168.1.5").hosts[-1] == "192.168.1.5"
+    env = {k: v for k, v in os.environ.items() if not k.startswith("BOOTMAP_")}
+    out = subprocess.run([sys.executable, "-m", "bootmap.cli", "serve", "--host", "0.0.0.0", "--data-dir", str(tmp_path)],
+                         capture_output=True, text=True, env=env, timeout=60)
+    assert out.returncode == 2 and "BOOTMAP_ALLOWED_HOSTS" in out.stderr
+
+
+def test_without_tokens_on_loopback_the_local_user_does_everything(client):
+    created = client.post("/tableaux", json={"format": FORMAT, "steps": [{"view": "a"}]})
+    assert created.status_code == 201
+    assert client.delete(f"/tableaux/{created.json()['id']}").status_code == 204
