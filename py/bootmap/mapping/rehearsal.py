@@ -35,6 +35,7 @@ from itertools import combinations
 from ..tableau import Tableau
 from .cogmap import CognitiveMap
 from .facts import action_symbol, read_actions
+from .grounding import Deadline
 from .resolver import Resolver
 from .vocabulary import action_word
 
@@ -134,10 +135,11 @@ class Rehearsal:
     resolver: Resolver | None = None
     max_length: int = 10
 
-    def plan(self, tableau: Tableau, cmap: CognitiveMap | None = None) -> Plan:
-        """The plan for this tableau (its minimal maps from ``cmap`` when given)."""
+    def plan(self, tableau: Tableau, cmap: CognitiveMap | None = None, deadline: Deadline | None = None) -> Plan:
+        """The plan for this tableau (its minimal maps from ``cmap`` when given, else resolved by
+        ``deadline``)."""
         resolver = self.resolver or Resolver()
-        cmap = cmap or resolver.resolve(tableau)
+        cmap = cmap or resolver.resolve(tableau, deadline)
         maps = [cmap.dstate_of] + list(cmap.alternatives)
         if len(maps) == 1:
             return Plan([])

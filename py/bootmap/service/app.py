@@ -22,10 +22,10 @@ from .auth import Guard
 from .deps import Services
 from .models import AppendIn, TableauIn
 from .models import Problem as ProblemModel
-from .routers import axioms, explanations, health, maps, recognise, tableaux, tokens
+from .routers import axioms, explanations, health, maps, recognise, rehearsals, tableaux, tokens
 from .settings import Settings
 
-ROUTERS = (tableaux.router, maps.router, explanations.router, recognise.router, axioms.router, tokens.router,
+ROUTERS = (tableaux.router, maps.router, explanations.router, rehearsals.router, recognise.router, axioms.router, tokens.router,
            health.router)
 
 DESCRIPTION = """\

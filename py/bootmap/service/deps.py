@@ -17,7 +17,7 @@ from .intake import Intake, Limits, intake_workers
 from .settings import Settings
 from .store import Store
 from .theory import LoadedTheory, Theories
-from .worker import Explained, ExplainJob, Solved, SolveGate, SolveJob, SolverPool
+from .worker import Explained, ExplainJob, Job, Rehearsed, RehearseJob, Solved, SolveGate, SolveJob, SolverPool
 
 
 class Cache:
@@ -81,7 +81,7 @@ class Services:
         return SolveJob(document, str(theory.snapshot), s.solve_time_limit_s, s.quantum_deg, s.max_models), theory
 
 
-    async def solve(self, job: SolveJob | ExplainJob, token_id: int | None, request: Request) -> Solved | Explained:
+    async def solve(self, job: Job, token_id: int | None, request: Request) -> Solved | Explained | Rehearsed:
         """Solve in the pool, holding one of the token's solve places (shared by every server on the
         database) meanwhile; stopped if the client goes away."""
         lease = None
@@ -99,6 +99,11 @@ class Services:
         """A question about a tableau document, with the current theory."""
         theory, s = self.theories.current, self.settings
         return ExplainJob(document, str(theory.snapshot), s.solve_time_limit_s, a, b, levels, s.quantum_deg)
+
+    def rehearse_job(self, document: dict | str, max_length: int) -> RehearseJob:
+        """What to do next for a tableau document, with the current theory."""
+        theory, s = self.theories.current, self.settings
+        return RehearseJob(document, str(theory.snapshot), s.solve_time_limit_s, max_length, s.quantum_deg)
 
 
 async def client_gone(request: Request) -> None:

@@ -349,6 +349,26 @@ class ExplanationOut(Out):
     text: str = Field(description="The whole explanation as text.")
 
 
+class HypothesisOut(Out):
+    at: str = Field(description="The dstate this minimal map puts the robot at now.")
+    predicts: list[str | None] = Field(description="The view it predicts after each planned action "
+                                                   "(null where it cannot say).")
+
+
+class RehearsalOut(Out):
+    """What to do when the minimal maps disagree (as `bootmap rehearse` plans it)."""
+
+    kind: Literal["nothing", "distinguish", "partial", "test", "explore"] = Field(
+        description="nothing: the map is unique; distinguish: the plan tells every map apart; partial: some "
+                    "pairs; test: some maps predict views where others cannot say; explore: it leads to an "
+                    "action not yet taken there.")
+    actions: list[str] = Field(description="The actions to take from where the robot is now.")
+    separated_pairs: int
+    pairs: int
+    hypotheses: list[HypothesisOut] = Field(description="Per minimal map: where the robot is, what it predicts.")
+    text: str = Field(description="The plan as text.")
+
+
 class RuleOut(Out):
     name: str
     line: int

@@ -90,6 +90,24 @@ class ExplainJob:
 
 
 @dataclass(frozen=True)
+class RehearseJob:
+    """What to do next when a stored tableau's minimal maps disagree (`bootmap rehearse`)."""
+
+    document: dict | str
+    axioms: str
+    time_limit_s: float
+    max_length: int = 10
+    quantum_deg: float | None = None
+
+
+@dataclass(frozen=True)
+class Rehearsed:
+    plan: dict            # Plan.to_dict()
+    text: str             # Plan.to_text(), as `bootmap rehearse` prints it
+    seconds: float
+
+
+@dataclass(frozen=True)
 class Explained:
     explanation: dict     # Explanation.to_dict()
     text: str             # Explanation.to_text(), as `bootmap why` prints it
@@ -134,11 +152,16 @@ def _serve(conn, memory_mb: int) -> None:
             return
 
 
-def _run(job: SolveJob | ExplainJob, cache: dict) -> tuple:
+Job = SolveJob | ExplainJob | RehearseJob
+
+
+def _run(job: Job, cache: dict) -> tuple:
     """One job -> ("ok", Solved | Explained) or a tagged error tuple (exceptions with custom fields do not
     pickle)."""
     try:
-        return _explain(job, cache) if isinstance(job, ExplainJob) else _solve(job, cache)
+        if isinstance(job, ExplainJob):
+            return _explain(job, cache)
+        return _rehearse(job, cache) if isinstance(job, RehearseJob) else _solve(job, cache)
     except TableauError as e:
         return "tableau", e.reason, e.where
     except AxiomError as e:
@@ -184,6 +207,23 @@ def _explain(job: ExplainJob, cache: dict) -> tuple:
         return "timeout", str(e), e.lower_bound, None
 
 
+def _rehearse(job: RehearseJob, cache: dict) -> tuple:
+    from ..mapping import Deadline
+    from ..mapping.rehearsal import Rehearsal
+
+    start = time.perf_counter()
+    deadline = Deadline.after(job.time_limit_s)
+    try:
+        tableau, _ = _views(_tableau(job.document))
+        resolver = _cached(cache, ("map", job.axioms, job.quantum_deg, 10), lambda: _resolver(job))
+        plan = Rehearsal(resolver, job.max_length).plan(tableau, deadline=deadline)
+        return "ok", Rehearsed(plan.to_dict(), plan.to_text(), time.perf_counter() - start)
+    except InconsistentTableau as e:
+        return "inconsistent", str(e), e.failing_levels, e.diagnosed
+    except SolveTimeout as e:
+        return "timeout", str(e), e.lower_bound, None
+
+
 def _tableau(document: dict | str) -> Tableau:
     return Tableau.loads(document, "tableau") if isinstance(document, str) else Tableau.from_dict(document, "tableau")
 
@@ -199,7 +239,7 @@ def _views(tableau: Tableau) -> tuple[Tableau, int | None]:
 def _resolver(job: SolveJob):
     from ..mapping import Resolver
 
-    return Resolver(axioms=job.axioms, quantum_deg=job.quantum_deg, max_models=job.max_models)
+    return Resolver(axioms=job.axioms, quantum_deg=job.quantum_deg, max_models=getattr(job, "max_models", 10))
 
 
 def _cached(cache: dict, key: tuple, make):
@@ -300,7 +340,7 @@ class SolverPool:
         with self._lock:
             return sum(w.alive() for w in self._workers)
 
-    def solve(self, job: SolveJob | ExplainJob, cancel: threading.Event | None = None) -> Solved | Explained:
+    def solve(self, job: Job, cancel: threading.Event | None = None) -> Solved | Explained | Rehearsed:
         """Solve (or explain) in a free solver; raises bootmap's exceptions (see :func:`_outcome`), and
         SolveCancelled if ``cancel`` is set before the reply."""
         worker = self._idle.get()
@@ -339,7 +379,7 @@ class SolverPool:
             w.stop()
 
 
-def _outcome(reply: tuple, memory_mb: int) -> Solved | Explained:
+def _outcome(reply: tuple, memory_mb: int) -> Solved | Explained | Rehearsed:
     kind, *rest = reply
     if kind == "ok":
         return rest[0]
@@ -421,7 +461,7 @@ class SolveGate:
             async with self._changed:
                 self._changed.notify_all()
 
-    async def solve(self, job: SolveJob | ExplainJob, gone: Callable[[], Awaitable[None]] | None = None,
+    async def solve(self, job: Job, gone: Callable[[], Awaitable[None]] | None = None,
                     caller: Any = None) -> Solved | Explained:
         """Solve in the pool. ``gone`` returns when the client has gone away: then a waiting solve leaves
         the line at once and a running one is stopped (its solver killed and replaced), and
