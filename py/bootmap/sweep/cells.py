@@ -67,10 +67,10 @@ def _experiment_row(cell: Cell) -> dict:
     """The experiment itself (in the child) and its row; the learning curves ride along for the figures."""
     from ..errors import BootmapError
     from ..experiment import run_experiment
-    from ..sim.world import load_world
+    from ..sim.world import loads_world
 
     try:
-        world = load_world(cell.world_path, dict(cell.noise.settings))
+        world = loads_world(cell.world_text, cell.world_path, dict(cell.noise.settings))
         r = run_experiment(world, circuits=cell.circuits, steps=cell.steps, seed=cell.seed, k_max=cell.k_max,
                            time_limit=cell.time_limit, levels=None if cell.levels is None else list(cell.levels),
                            quantum_deg=cell.quantum_deg, clusterer=cell.clusterer, learner=cell.learner)

@@ -59,7 +59,8 @@ class Cell:
     (it travels to worker processes and Dask workers by pickle)."""
 
     world: str                        # as the sweep file names it (shown in tables)
-    world_path: str                   # the file it was read from
+    world_path: str                   # the file it was read from (for messages)
+    world_text: str = field(repr=False)  # the file itself: workers need no copy of it
     seed: int
     noise: Noise
     clusterer: str = "kmeans"
@@ -76,7 +77,8 @@ class Cell:
     def id(self) -> str:
         """Stable across runs and machines: readable axes, then a hash of every parameter (so a cell whose
         run options changed is not taken for a finished one on ``--resume``)."""
-        digest = hashlib.sha1(json.dumps(asdict(self), sort_keys=True, default=str).encode()).hexdigest()[:10]
+        params = {k: v for k, v in asdict(self).items() if k != "world_path"}  # where it lies is no parameter
+        digest = hashlib.sha1(json.dumps(params, sort_keys=True, default=str).encode()).hexdigest()[:10]
         return f"{self.world}/seed{self.seed}/{self.noise.name}/{self.clusterer}/{self.learner}/" \
                f"{self.levels_text}/{self.quantum_text}/{digest}"
 
@@ -128,8 +130,9 @@ def loads_spec(text: str, source: str = "sweep", base: Path | None = None) -> Sw
     levels = [_levels(v, f"grid.levels[{i}]", at) for i, v in enumerate(_list(grid, "levels", at) or ["all"])]
     quanta = [_quantum(v, f"grid.quantum[{i}]", at) for i, v in enumerate(_list(grid, "quantum", at) or ["learned"])]
     policies = _check_worlds(worlds, noises, at)
+    texts = {wp: Path(wp).read_text(encoding="utf-8") for _, wp in worlds}  # read (and checked) just above
     cells = tuple(
-        Cell(world=w, world_path=wp, seed=s, noise=n, clusterer=c, learner=le, levels=lv, quantum_deg=q,
+        Cell(world=w, world_path=wp, world_text=texts[wp], seed=s, noise=n, clusterer=c, learner=le, levels=lv, quantum_deg=q,
              circuits=run["circuits"] if policies[w] != "explore" else None,
              steps=run["steps"] if policies[w] == "explore" else None,
              k_max=run["k_max"], time_limit=run["time_limit"], cell_timeout=run["cell_timeout"])
