@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import resource
 import statistics
 import sys
 import tempfile
@@ -44,25 +45,32 @@ time_limit = 20
 """
 
 
-def serial(spec, blas_threads: int | None = 1) -> tuple[float, list[dict]]:
-    """Every cell in this process, one after another: seconds and rows."""
+def cpu_seconds() -> float:
+    """CPU time of this process and of its children that have ended (the pool's workers, once it is shut
+    down, with the cells they forked and waited for)."""
+    own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
+
+
+def serial(spec, blas_threads: int | None = 1) -> tuple[float, float, list[dict]]:
+    """Every cell in this process, one after another: wall seconds, CPU seconds and rows."""
     rows = []
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), cpu_seconds()
     for cell in spec.cells:
         r = run_experiment(cell.world, circuits=cell.circuits, seed=cell.seed, time_limit=cell.time_limit,
                            blas_threads=blas_threads)
         rows.append(experiment_row(cell, r))
-    return time.perf_counter() - start, rows
+    return time.perf_counter() - start, cpu_seconds() - cpu, rows
 
 
-def pooled(spec, workers: int) -> tuple[float, list[dict]]:
+def pooled(spec, workers: int) -> tuple[float, float, list[dict]]:
     with tempfile.TemporaryDirectory() as out:
-        start = time.perf_counter()
+        start, cpu = time.perf_counter(), cpu_seconds()
         result = run_sweep(spec, out, workers=workers)
         seconds = time.perf_counter() - start
         print(f"          (pool: {result.seconds:.1f} s from starting the workers to the last cell's row; "
               f"then the table, summary and figures)", flush=True)
-        return seconds, result.table
+        return seconds, cpu_seconds() - cpu, result.table
 
 
 def same(a: list[dict], b: list[dict]) -> bool:
@@ -85,19 +93,24 @@ def main() -> int:
     print(f"{n} cells: notched_rectangle, {args.circuits} circuits, seeds {args.seeds[0]}-{args.seeds[-1]}; "
           f"{os.cpu_count()} cores, load average {os.getloadavg()[0]:.2f} at the start", flush=True)
     serial(loads_spec(SPEC.format(seeds=[0], circuits=2), "warm-up"))  # imports, caches: not the loop's cost
-    times = {"serial": [], "pool": []}
+    times, cpu = {"serial": [], "pool": []}, {"serial": [], "pool": []}
     tables = {}
     for i in range(args.repeat):
         for name, run in (("serial", lambda: serial(spec)), ("pool", lambda: pooled(spec, args.workers))):
-            seconds, tables[name] = run()
+            seconds, cpu_s, tables[name] = run()
             times[name].append(seconds)
-            print(f"  run {i + 1}: {name:6} {seconds:6.1f} s  {n / seconds * 60:6.1f} cells/min", flush=True)
+            cpu[name].append(cpu_s)
+            print(f"  run {i + 1}: {name:6} {seconds:6.1f} s  {n / seconds * 60:6.1f} cells/min  "
+                  f"CPU {cpu_s / n:5.2f} s/cell  load average {os.getloadavg()[0]:.2f}", flush=True)
     rate = {k: n / statistics.median(v) * 60 for k, v in times.items()}
-    print(f"serial loop:          {rate['serial']:6.1f} cells/min (median of {args.repeat})")
-    print(f"local pool, {args.workers} workers: {rate['pool']:6.1f} cells/min (median of {args.repeat})")
+    per_cell = {k: statistics.median(v) / n for k, v in cpu.items()}
+    print(f"serial loop:          {rate['serial']:6.1f} cells/min, CPU {per_cell['serial']:.2f} s a cell "
+          f"(medians of {args.repeat})")
+    print(f"local pool, {args.workers} workers: {rate['pool']:6.1f} cells/min, CPU {per_cell['pool']:.2f} s a cell "
+          f"(workers' start, warm-up and report included)")
     if args.old_threads:
         few = loads_spec(SPEC.format(seeds=args.seeds[:args.old_threads], circuits=args.circuits), "old")
-        seconds, _ = serial(few, blas_threads=None)
+        seconds, _, _ = serial(few, blas_threads=None)
         print(f"serial loop, default BLAS/OpenMP threads (as before sweeps), {args.old_threads} cells: "
               f"{args.old_threads / seconds * 60:6.1f} cells/min")
     print(f"load average at the end: {os.getloadavg()[0]:.2f} (other jobs on this machine count in it)")
