@@ -34,7 +34,7 @@ def register(subparsers) -> None:
     p.add_argument("--resume", action="store_true",
                    help="go on with the sweep in DIR: run only the cells it has no result for")
     p.add_argument("--retry-failed", action="store_true",
-                   help="with --resume, run failed and timed-out cells again too")
+                   help="resume, and run the failed and timed-out cells again too")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(handler=cmd_sweep)
 
@@ -43,7 +43,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     from . import run_sweep
 
     result = run_sweep(args.spec, args.output, workers=args.workers, scheduler=args.scheduler,
-                       resume=args.resume, retry_failed=args.retry_failed, progress=not args.no_progress)
+                       resume=args.resume or args.retry_failed, retry_failed=args.retry_failed,
+                       progress=not args.no_progress)
     table = result.table
     exact = sum(bool(r["map_exact"]) for r in table)
     print(f"{len(table)} cells ({result.ran} run now, {result.skipped} done before) in {result.seconds:.1f} s; "
