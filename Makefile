@@ -12,7 +12,7 @@ venv: $(STAMP)
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
-	$(BIN)/pip install --quiet -e '.[dev,bench,logs]'
+	$(BIN)/pip install --quiet -e '.[dev,bench,logs,dask]'
 	touch $(STAMP)
 
 demo: $(STAMP)

@@ -119,8 +119,22 @@ def test_same_random_state_gives_same_views(blobs):
 
 
 def test_constructor_only_stores_parameters():
-    model = ViewClusterer(k_max=3, n_init=2, random_state=5, max_range=8.0)
-    assert vars(model) == {"k_max": 3, "n_init": 2, "random_state": 5, "max_range": 8.0}
+    model = ViewClusterer(k_max=3, n_init=2, random_state=5, max_range=8.0, method="ward")
+    assert vars(model) == {"k_max": 3, "n_init": 2, "random_state": 5, "max_range": 8.0, "method": "ward"}
+
+
+@pytest.mark.parametrize("method", ["kmeans", "gaussian-mixture", "ward"])
+def test_every_clustering_method_finds_the_four_views_and_m_chooses_four(blobs, method):
+    images, dstates = blobs
+    model = ViewClusterer(k_max=6, method=method).fit(images, dstates)
+    assert model.k_ == 4 and model.largest_k_with_u1_ == 4  # eight aliased dstates, four views
+    # every view's centre is the mean of its images, so predict puts each training image in its view
+    assert np.array_equal(model.predict(images), model.labels_)
+
+
+def test_an_unknown_clustering_method_is_refused_by_name(blobs):
+    with pytest.raises(ValueError, match="unknown clustering method 'dbscan'; known: kmeans"):
+        ViewClusterer(method="dbscan").fit(*blobs)
 
 
 def test_drop_outs_do_not_change_the_chosen_k(blobs):

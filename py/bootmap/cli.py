@@ -326,7 +326,8 @@ def _register_optional(sub) -> None:
     surfaces."""
     import importlib
 
-    for module in ("bootmap.sim.commands", "bootmap.service.commands", "bootmap.logs.commands"):
+    for module in ("bootmap.sim.commands", "bootmap.service.commands", "bootmap.logs.commands",
+                   "bootmap.sweep.commands"):
         try:
             register = importlib.import_module(module).register
         except ModuleNotFoundError as e:

@@ -56,6 +56,16 @@ class LogError(BadInput, ValueError):
         super().__init__(f"{where}: {message}" if where else message)
 
 
+class SweepError(BadInput, ValueError):
+    """A sweep file is malformed, or a sweep cannot start (its output directory holds another sweep).
+    ``where`` names the file and the key (``sweeps/paper.toml: grid.seeds``)."""
+
+    def __init__(self, message: str, where: str = ""):
+        self.where = where
+        self.reason = message
+        super().__init__(f"{where}: {message}" if where else message)
+
+
 class ExplainError(BadInput, ValueError):
     """A question the explainer cannot take, e.g. a time point or dstate the map does not have."""
 

@@ -351,11 +351,16 @@ def compare_learners(images, dstates, at: Sequence[int] = (30, 60, 90), random_s
         ``accuracy_std`` (lists, one per size, over folds), ``fit_time`` (mean seconds per fit, one per
         size), and flat ``acc@N`` entries per size for tables.
     """
+    from threadpoolctl import threadpool_limits
+
     learners = default_learners(random_state) if learners is None else learners
     rows = []
     for name, learner in learners.items():
-        curve = learning_curve_cv(images, dstates, sizes=at, learner=learner, n_splits=n_splits,
-                                  random_state=random_state)
+        # One BLAS/OpenMP thread, as in run_experiment: a few hundred images gain nothing from threads, and
+        # beside a busy core the threads wait on each other (its test took 80 s in the loaded suite, 15 s so).
+        with threadpool_limits(limits=1):
+            curve = learning_curve_cv(images, dstates, sizes=at, learner=learner, n_splits=n_splits,
+                                      random_state=random_state)
         row = {"learner": name, "sizes": curve.sizes.tolist(), "accuracy": curve.mean.tolist(),
                "accuracy_std": curve.std.tolist(), "fit_time": curve.fit_times.mean(axis=1).tolist()}
         row.update({f"acc@{n}": float(a) for n, a in zip(curve.sizes, curve.mean)})

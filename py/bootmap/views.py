@@ -14,13 +14,13 @@ from __future__ import annotations
 from typing import Hashable, Sequence
 
 import numpy as np
-from sklearn.cluster import KMeans
+from sklearn.cluster import AgglomerativeClustering, KMeans
 from sklearn.metrics import completeness_score, pairwise_distances_argmin
 from sklearn.utils import check_random_state
 
 from .images import as_images
 
-__all__ = ["ViewClusterer", "internal_measure", "repair_dropouts", "uncertainty_coefficient",
+__all__ = ["CLUSTERERS", "ViewClusterer", "internal_measure", "repair_dropouts", "uncertainty_coefficient",
            "view_labels", "view_table"]
 
 
@@ -234,6 +234,37 @@ def _holes(at_max: np.ndarray) -> list[tuple[int, int]]:
     return [(a, b) for a, b in zip(starts, ends) if a > 0 and b < len(at_max)]
 
 
+def _kmeans(x: np.ndarray, k: int, n_init: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    km = KMeans(n_clusters=k, n_init=n_init, algorithm="lloyd", random_state=seed).fit(x)
+    return km.labels_.astype(int), km.cluster_centers_
+
+
+def _gaussian_mixture(x: np.ndarray, k: int, n_init: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    from sklearn.mixture import GaussianMixture
+
+    # Diagonal covariances: 180 beams and a few hundred images are too few for full ones; reg_covar keeps
+    # the near-constant beams (wall at the same distance in every image) from collapsing a component.
+    model = GaussianMixture(n_components=k, covariance_type="diag", n_init=max(1, n_init // 3), reg_covar=1e-4,
+                            random_state=seed)
+    return _with_means(x, model.fit_predict(x))
+
+
+def _ward(x: np.ndarray, k: int, n_init: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    return _with_means(x, AgglomerativeClustering(n_clusters=k, linkage="ward").fit_predict(x))  # deterministic
+
+
+def _with_means(x: np.ndarray, labels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Labels renumbered 0..n-1 (a mixture can leave a component empty) and each cluster's mean image,
+    the centre :meth:`ViewClusterer.predict` assigns new images to."""
+    labels = np.unique(labels, return_inverse=True)[1].astype(int)
+    return labels, np.array([x[labels == c].mean(axis=0) for c in range(int(labels.max()) + 1)])
+
+
+#: How images are clustered into views for a given k (``ViewClusterer(method=...)``); k is then chosen by M
+#: whichever clusters them. The paper's is k-means.
+CLUSTERERS = {"kmeans": _kmeans, "gaussian-mixture": _gaussian_mixture, "ward": _ward}
+
+
 class ViewClusterer:
     """Cluster dstate images into views by k-means, choosing k by the paper's internal measure M.
 
@@ -249,6 +280,9 @@ class ViewClusterer:
         k-means restarts per k (the best inertia is kept).
     random_state : int, RandomState instance or None, default=0
         Seeds k-means; an int gives the same views on every run.
+    method : {"kmeans", "gaussian-mixture", "ward"}, default="kmeans"
+        How images are clustered for each k (:data:`CLUSTERERS`): the paper's k-means, a diagonal
+        Gaussian mixture, or agglomerative clustering with Ward linkage. k is chosen by M for every method.
     max_range : float, optional
         The laser's maximum range. When given, readings are clipped to it and isolated drop-outs are filled
         in before clustering (and before :meth:`predict`), see :func:`repair_dropouts`. Without it the
@@ -287,11 +321,13 @@ class ViewClusterer:
 
     U_TOLERANCE = 1e-9
 
-    def __init__(self, k_max: int = 12, n_init: int = 10, random_state=0, max_range: float | None = None):
+    def __init__(self, k_max: int = 12, n_init: int = 10, random_state=0, max_range: float | None = None,
+                 method: str = "kmeans"):
         self.k_max = k_max
         self.n_init = n_init
         self.random_state = random_state
         self.max_range = max_range
+        self.method = method
 
     def _prepare(self, images) -> np.ndarray:
         x = as_images(images)
@@ -314,6 +350,8 @@ class ViewClusterer:
         """
         if self.k_max < 1:
             raise ValueError(f"k_max must be at least 1, got {self.k_max}")
+        if self.method not in CLUSTERERS:
+            raise ValueError(f"unknown clustering method {self.method!r}; known: {', '.join(CLUSTERERS)}")
         x = self._prepare(images)
         if len(x) == 0:
             raise ValueError("no images")
@@ -331,9 +369,7 @@ class ViewClusterer:
                 labels = np.zeros(len(x), dtype=int)
                 centers = x.mean(axis=0, keepdims=True)
             else:
-                km = KMeans(n_clusters=int(k), n_init=self.n_init, algorithm="lloyd",
-                            random_state=int(seed)).fit(x)
-                labels, centers = km.labels_.astype(int), km.cluster_centers_
+                labels, centers = CLUSTERERS[self.method](x, int(k), self.n_init, int(seed))
             labels_per_k[int(k)] = labels
             centers_per_k[int(k)] = centers
             internal[i] = internal_measure(x, labels)
