@@ -63,22 +63,13 @@ def test_report_says_what_holds(taylor):
 
 
 @pytest.mark.slow
-def test_taylor_hall_holds_on_four_seeds(tmp_path):
-    out = run_seeds("taylor_hall", [1, 3, 4, 5], out_dir=tmp_path)
+def test_taylor_hall_holds_on_five_seeds(tmp_path):
+    # Seed 2 reads three turn-arounds at +198 to +222 degrees: the tail of its turn-arounds, not a
+    # primitive of their own (bootmap.mapping.motion).
+    out = run_seeds("taylor_hall", [1, 2, 3, 4, 5], out_dir=tmp_path)
     for r in out["runs"]:
         assert r["checks"] == {c.id: True for c in CHECKS}, r["seed"]
         assert r["views"]["k"] == 8
     summary = (tmp_path / "summary.md").read_text()
     assert "All of it holds on every seed." in summary
-    assert "| k by M | 8 | 8, 8, 8, 8 | 8 | 8 - 8 |" in summary
-
-
-@pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="a known limit of the learned action types (issue 12): with a real "
-                   "robot's odometry, seed 2 measures three turn-arounds at +198 to +222 degrees; the three "
-                   "form a type of their own (-150) and the map splits dstates. With the true angles the "
-                   "same views give the true map (bench/paper_seeds_bench.py). Strict: when the resolver "
-                   "absorbs such readings this test passes and must become part of the one above.")
-def test_taylor_hall_seed_2_holds_under_a_real_robots_odometry():
-    r = run_experiment("taylor_hall", seed=2)
-    assert r["checks"]["map_is_true_topology"]
+    assert "| k by M | 8 | 8, 8, 8, 8, 8 | 8 | 8 - 8 |" in summary
