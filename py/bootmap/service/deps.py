@@ -75,10 +75,12 @@ class Services:
         self.pool.close()
         self.store.close()
 
-    def job(self, document: dict | str) -> tuple[SolveJob, LoadedTheory]:
-        """A solve of a tableau document with the current theory, and that theory (its id goes with the map)."""
+    def job(self, document: dict | str, stream: int | None = None) -> tuple[SolveJob, LoadedTheory]:
+        """A solve of a tableau document with the current theory, and that theory (its id goes with the map).
+        ``stream``: the stored tableau's id, when the document extends it (its map is then kept current)."""
         theory, s = self.theories.current, self.settings
-        return SolveJob(document, str(theory.snapshot), s.solve_time_limit_s, s.quantum_deg, s.max_models), theory
+        return SolveJob(document, str(theory.snapshot), s.solve_time_limit_s, s.quantum_deg, s.max_models,
+                        stream), theory
 
 
     async def solve(self, job: Job, token_id: int | None, request: Request) -> Solved | Explained | Rehearsed:

@@ -73,6 +73,7 @@ class SolveJob:
     time_limit_s: float
     quantum_deg: float | None = None
     max_models: int = 10
+    stream: int | None = None  # a stored tableau's id: its map is kept current as steps are appended
 
 
 @dataclass(frozen=True)
@@ -180,7 +181,14 @@ def _solve(job: SolveJob, cache: dict) -> tuple:
     try:
         tableau, k = _views(_tableau(job.document))
         resolver = _cached(cache, ("map", job.axioms, job.quantum_deg, job.max_models), lambda: _resolver(job))
-        cmap = resolver.resolve(tableau, deadline)
+        if job.stream is None:
+            cmap = resolver.resolve(tableau, deadline)
+        else:  # the same map as a resolve, sooner when the steps repeat what this solver saw last time
+            from ..mapping.stream import MapStream
+
+            stream = _cached(cache, ("stream", job.axioms, job.quantum_deg, job.max_models, job.stream),
+                             lambda: MapStream(resolver))
+            cmap = stream.update(tableau, deadline)
         return "ok", Solved(cmap.to_dict(), cmap.to_text(), k, time.perf_counter() - start)
     except InconsistentTableau as e:  # the resolver names the failing levels within the same deadline
         return "inconsistent", str(e), e.failing_levels, e.diagnosed

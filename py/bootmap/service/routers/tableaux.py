@@ -133,7 +133,9 @@ async def share_tableau(tableau_id: TableauId, body: TableauSharing, services: S
     summary="Append steps and solve again")
 async def append_steps(tableau_id: TableauId, services: ServicesDep, caller: CallerDep, request: Request) -> Response:
     """Exploration went on: add steps (AppendIn) after the stored ones (``action`` leads from the stored
-    last step to the first new one), solve the whole tableau again and store it as the next revision. New
+    last step to the first new one), bring the map up to date and store it as the next revision: the map
+    a fresh solve would give, found by extending the last one where the new steps repeat known ones
+    (bootmap.mapping.stream), else by solving the whole tableau again. New
     steps are like the stored ones: view labels, or images only. 409 if another append got there first;
     403 unless the caller owns the tableau."""
     await writable(services, caller, tableau_id)
@@ -142,7 +144,7 @@ async def append_steps(tableau_id: TableauId, services: ServicesDep, caller: Cal
     revision = record.revision + 1
     prepared = await services.intake.run(prepare_append, record.document, record.n_steps, body, services.limits)
     del record, body  # the new revision's text is all that is needed from here on
-    solved, theory = await _solve(services, prepared.document, caller, request)
+    solved, theory = await _solve(services, prepared.document, caller, request, stream=tableau_id)
     cmap = await run_in_threadpool(_map_record, solved, revision, theory)
     stored = await run_in_threadpool(services.store.replace, tableau_id, prepared.document, prepared.n_steps,
                                      solved.views_k, cmap, services.settings.token_max_stored_bytes)
@@ -151,8 +153,8 @@ async def append_steps(tableau_id: TableauId, services: ServicesDep, caller: Cal
 
 # ---------------------------------------------------------------------------------------------------
 
-async def _solve(services: Services, document: str, caller: Caller, request: Request):
-    job, theory = services.job(document)
+async def _solve(services: Services, document: str, caller: Caller, request: Request, stream: int | None = None):
+    job, theory = services.job(document, stream)
     return await services.solve(job, caller.token_id, request), theory
 
 
