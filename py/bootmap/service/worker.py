@@ -297,10 +297,17 @@ class _Worker:
         try:
             return self.conn.recv()
         except (EOFError, OSError):
+            self.process.join(timeout=2)  # its exit code
             code = self.process.exitcode
             self.kill()
-            log.error("solver process %s died during a solve (exit code %s)", self.process.pid,
-                      self.process.exitcode if code is None else code)
+            if code in (-signal.SIGABRT, 127):
+                # Under the address-space cap an allocation that fails outside Python ends the process:
+                # glibc exits 127 when a solve thread's thread-local data cannot be allocated; Rust's
+                # allocator and an uncaught std::bad_alloc abort. The solve ran out of memory, as when
+                # clingo raises it.
+                log.warning("solver process %s aborted during a solve: out of memory", self.process.pid)
+                return ("memory",)
+            log.error("solver process %s died during a solve (exit code %s)", self.process.pid, code)
             raise SolverCrashed("the solver process died during the solve (the server log says how)") from None
 
     def _await_ready(self) -> None:
