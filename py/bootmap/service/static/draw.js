@@ -53,8 +53,10 @@ export function drawMap(svg, drawing, handlers) {
 
   for (const [name, p] of Object.entries(layout.paths)) {
     const pts = shorten(p.points.map(at), 16);
-    const line = el("polyline", { class: "path", "data-path": name, points: pts.map((q) => q.join(",")).join(" "),
-                                  "marker-end": "url(#arrow)" }, paths);
+    const line = el("g", { class: "path", "data-path": name }, paths);
+    const points = pts.map((q) => q.join(",")).join(" ");
+    el("polyline", { class: "line", points, "marker-end": "url(#arrow)" }, line);
+    el("polyline", { class: "hit", points }, line);  // a wide, invisible stroke: easy to hover
     const mid = pts[Math.floor((pts.length - 1) / 2)], next = pts[Math.floor((pts.length - 1) / 2) + 1] || mid;
     text(paths, (mid[0] + next[0]) / 2 + 6, (mid[1] + next[1]) / 2 - 6, name, "path-label");
     const describe = () => `<b>${name}</b>: ${p.places.join(" → ")}<br>right of it: ${(rel.right[name] || []).join(", ") || "—"}` +

@@ -1,0 +1,179 @@
+"""The viewer in a real headless browser: Debian's chromium driven by Playwright, against a real uvicorn.
+
+The system's chromium is launched by path (``playwright install`` downloads a browser of its own, which
+this project never does); as root it needs ``--no-sandbox``. Without chromium these tests skip and say
+how to get it. Every test fails if the page logged an error to the console.
+
+With ``BOOTMAP_SCREENSHOTS=1`` the tests write the README's screenshots to docs/viewer/.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+from pathlib import Path
+
+import pytest
+from service_helpers import REPO, SESSION_SETTINGS, Server
+
+from bootmap import examples
+
+sync_api = pytest.importorskip("playwright.sync_api", reason="playwright not installed: pip install -e '.[dev]'")
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+SHOTS = REPO / "docs" / "viewer" if os.environ.get("BOOTMAP_SCREENSHOTS") == "1" else None
+pytestmark = pytest.mark.skipif(CHROMIUM is None, reason="chromium not installed: apt-get install chromium")
+
+
+@pytest.fixture(scope="module")
+def runs_dir(tmp_path_factory) -> Path:
+    return tmp_path_factory.mktemp("runs")
+
+
+@pytest.fixture(scope="module")
+def viewer_server(tmp_path_factory, runs_dir):
+    """A server of the module's own, with a runs directory (empty until a test runs an experiment)."""
+    s = Server(tmp_path_factory.mktemp("viewer_server"), runs_dir=runs_dir, **SESSION_SETTINGS).start()
+    yield s
+    s.stop()
+
+
+@pytest.fixture(scope="module")
+def paper(viewer_server) -> int:
+    with viewer_server.client() as c:
+        r = c.post("/tableaux", json=examples.notched_rectangle(circuits=50).to_dict())
+        assert r.status_code == 201, r.text
+        return r.json()["id"]
+
+
+@pytest.fixture(scope="module")
+def browser():
+    with sync_api.sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"], headless=True)
+        yield b
+        b.close()
+
+
+@pytest.fixture
+def page(browser):
+    """A fresh tab; the test fails if the page logs a console error or throws (``page.allowed_errors``
+    lists the messages a test expects)."""
+    context = browser.new_context(viewport={"width": 1280, "height": 1000})
+    tab = context.new_page()
+    tab.errors, tab.allowed_errors = [], []
+    tab.on("console", lambda m: m.type == "error" and tab.errors.append(m.text))
+    tab.on("pageerror", lambda e: tab.errors.append(f"uncaught: {e}"))
+    yield tab
+    context.close()
+    unexpected = [e for e in tab.errors if not any(a in e for a in tab.allowed_errors)]
+    assert not unexpected, f"console errors: {unexpected}"
+
+
+def _open(page, server, tableau_id, levels=None):
+    query = f"?tableau={tableau_id}" + (f"&levels={levels}" if levels else "")
+    page.goto(server.url + "/" + query)
+    page.wait_for_selector("body[data-drawn]", state="attached", timeout=20_000)
+
+
+def _shot(page, name):
+    if SHOTS is not None:
+        SHOTS.mkdir(parents=True, exist_ok=True)
+        page.screenshot(path=str(SHOTS / name), full_page=False)
+
+
+def test_the_paper_map_shows_4_places_and_4_paths_and_hovering_a_path_shows_its_sides(page, viewer_server, paper):
+    _open(page, viewer_server, paper)
+    assert page.locator("#map .place").count() == 4
+    assert page.locator("#map .path").count() == 4
+    assert page.locator("#map .dstate").count() == 8
+    assert page.locator("#tableau tbody tr").count() == 401
+    assert "8 dstates, 4 places, 4 paths" in page.locator("#summary").inner_text()
+    # P2 is right of Pa1 facing pos (the map's right_of): hovering Pa1 colours it and says so.
+    # force: a straight path's box is a line (no area), which Playwright counts as not visible.
+    page.locator('#map .path[data-path="Pa1"] .hit').hover(force=True)
+    assert page.locator('#map .place.right-of').evaluate_all("ns => ns.map(n => n.dataset.place)") == ["P2"]
+    assert "right of it: P2" in page.locator("#hover").inner_text()
+    _shot(page, "map.png")
+
+
+def test_clicking_S0_and_S4_shows_the_proof_by_on_path_no_side_on_t0_to_t4(page, viewer_server, paper):
+    _open(page, viewer_server, paper, levels="causal,topological")
+    page.locator('#map .dstate[data-dstate="S0"] circle').click()
+    assert page.locator("#map .dstate.lit").evaluate_all("ns => ns.map(n => n.dataset.dstate)") == ["S0"]
+    page.locator('#map .dstate[data-dstate="S4"] circle').click()
+    page.wait_for_selector("body[data-why=different]", state="attached", timeout=20_000)
+    why = page.locator("#why").inner_text()
+    assert "DIFFERENT" in why and "levels causal,topological" in why
+    assert page.locator("#why .axioms .rule").all_inner_texts() == ["on_path_no_side"]
+    assert "topological.lp:" in page.locator("#why .axioms").inner_text()
+    assert page.locator("#tableau tr.evidence").evaluate_all("rs => rs.map(r => r.dataset.t)") == [
+        "0", "1", "2", "3", "4"]
+    # The rule chain names each rule with its file and line.
+    chain = page.locator("#why .proof").inner_text()
+    assert "turn_link" in chain and "causal.lp:" in chain
+    _shot(page, "why.png")
+
+
+def test_clicking_a_time_point_lights_its_dstate(page, viewer_server, paper):
+    _open(page, viewer_server, paper)
+    page.locator('#tableau tbody tr[data-t="13"]').click()  # t13 is S5 (13 mod 8)
+    assert page.locator("#map .dstate.lit").evaluate_all("ns => ns.map(n => n.dataset.dstate)") == ["S5"]
+
+
+def test_appended_steps_show_up_without_a_reload(page, viewer_server):
+    with viewer_server.client() as c:
+        tid = c.post("/tableaux", json=examples.notched_rectangle(circuits=1).to_dict()).json()["id"]
+        _open(page, viewer_server, tid)
+        assert page.locator("#tableau tbody tr").count() == 9
+        page.evaluate("window.__sameDocument = true")
+        r = c.post(f"/tableaux/{tid}/steps", json={"action": {"type": "turn", "angle_deg": -90}, "steps": [
+            {"view": "V1", "action": {"type": "travel", "distance_m": 4.0}}, {"view": "V2"}]})
+        assert r.status_code == 200, r.text
+    page.wait_for_selector('body[data-drawn="2"]', state="attached", timeout=10_000)
+    assert page.evaluate("window.__sameDocument") is True
+    assert page.locator("#tableau tbody tr").count() == 11
+    assert "revision 2" in page.locator("#summary").inner_text()
+
+
+@pytest.mark.slow
+def test_the_experiments_figures_are_viewable(page, viewer_server, runs_dir, paper):
+    from bootmap.experiment import run_experiment
+
+    run_experiment("notched_rectangle", circuits=5, seed=1, out_dir=runs_dir / "nr")  # 5-10 s: a real run
+    _open(page, viewer_server, paper)
+    page.locator("#runs-panel summary").first.click()
+    page.wait_for_function("document.querySelectorAll('#runs img').length >= 3 && "
+                           "[...document.querySelectorAll('#runs img')].every(i => i.complete && i.naturalWidth > 0)")
+    names = page.locator("#runs figcaption").all_inner_texts()
+    assert {"views_M_U.png", "learning_curves.png", "world_map.png"} <= set(names)
+    assert "notched_rectangle, seed 1" in page.locator("#runs summary").first.inner_text()
+
+
+def test_a_token_is_asked_for_on_401_kept_and_sent_on_every_request(page, viewer_server, paper):
+    # Today's service has no tokens: a 401 is played by the browser's own request routing, once.
+    sent, refused = [], []
+
+    def first_refused(route):
+        if not refused:
+            refused.append(route.request.url)
+            return route.fulfill(status=401, content_type="application/problem+json",
+                                 body='{"type": "about:blank", "title": "Token needed", "status": 401, '
+                                      '"detail": "this server needs an API token"}')
+        return route.continue_()
+
+    page.allowed_errors.append("401")  # chromium logs the refused request itself
+    page.route("**/tableaux?limit=*", first_refused)
+    page.on("request", lambda r: sent.append((r.url, r.headers.get("authorization"))))
+    page.goto(f"{viewer_server.url}/?tableau={paper}")
+    page.locator("#token-dialog").wait_for()
+    assert "needs an API token" in page.locator("#token-reason").inner_text()
+    page.locator("#token-input").fill("bm_test_token")
+    before = len(sent)
+    page.locator("#token-ok").click()
+    page.wait_for_selector("body[data-drawn]", state="attached", timeout=20_000)
+    api = [(url, auth) for url, auth in sent[before:] if "/viewer/" not in url]
+    assert any("/tableaux?limit=" in url for url, _ in api)  # the refused request, asked again
+    assert any("/layout" in url for url, _ in api)
+    assert all(auth == "Bearer bm_test_token" for _, auth in api), api
+    assert all(auth is None for url, auth in sent[:before])
+    assert page.evaluate("sessionStorage.getItem('bootmap.token')") == "bm_test_token"
