@@ -13,10 +13,12 @@ import os
 import shutil
 from pathlib import Path
 
+import numpy as np
 import pytest
 from service_helpers import REPO, SESSION_SETTINGS, Server
 
 from bootmap import examples
+from bootmap.testing.gridworld import random_world, walk
 
 sync_api = pytest.importorskip("playwright.sync_api", reason="playwright not installed: pip install -e '.[dev]'")
 
@@ -75,10 +77,12 @@ def _open(page, server, tableau_id, levels=None):
     page.wait_for_selector("body[data-drawn]", state="attached", timeout=20_000)
 
 
-def _shot(page, name):
+def _shot(page, name, full_page=False):
     if SHOTS is not None:
         SHOTS.mkdir(parents=True, exist_ok=True)
-        page.screenshot(path=str(SHOTS / name), full_page=False)
+        if name != "map.png":  # the map's picture shows a path's hover box; the others none
+            page.mouse.move(0, 0)
+        page.screenshot(path=str(SHOTS / name), full_page=full_page)
 
 
 def test_the_paper_map_shows_4_places_and_4_paths_and_hovering_a_path_shows_its_sides(page, viewer_server, paper):
@@ -111,7 +115,7 @@ def test_clicking_S0_and_S4_shows_the_proof_by_on_path_no_side_on_t0_to_t4(page,
     # The rule chain names each rule with its file and line.
     chain = page.locator("#why .proof").inner_text()
     assert "turn_link" in chain and "causal.lp:" in chain
-    _shot(page, "why.png")
+    _shot(page, "why.png", full_page=True)
 
 
 def test_clicking_a_time_point_lights_its_dstate(page, viewer_server, paper):
@@ -120,19 +124,31 @@ def test_clicking_a_time_point_lights_its_dstate(page, viewer_server, paper):
     assert page.locator("#map .dstate.lit").evaluate_all("ns => ns.map(n => n.dataset.dstate)") == ["S5"]
 
 
-def test_appended_steps_show_up_without_a_reload(page, viewer_server):
+def test_appended_steps_show_up_without_a_reload_beside_the_true_trajectory(page, viewer_server):
+    # A walk through a random grid world with landmarks (true poses on every step): its first 40 steps
+    # are posted, the page opened, then the next 20 appended through the API.
+    rng = np.random.default_rng(3)
+    steps = walk(random_world(rng, 3, 3, extra_edges=1, landmarks=1.0), 60, rng, policy="explore").to_dict()["steps"]
+    first = [*steps[:39], {k: v for k, v in steps[39].items() if k != "action"}]
     with viewer_server.client() as c:
-        tid = c.post("/tableaux", json=examples.notched_rectangle(circuits=1).to_dict()).json()["id"]
+        r = c.post("/tableaux", json={"format": "bootmap.tableau/1", "steps": first})
+        assert r.status_code == 201, r.text
+        tid = r.json()["id"]
         _open(page, viewer_server, tid)
-        assert page.locator("#tableau tbody tr").count() == 9
+        assert page.locator("#tableau tbody tr").count() == 40
+        assert page.locator("#truth-panel").is_visible() and page.locator("#trajectory polyline").count() == 1
         page.evaluate("window.__sameDocument = true")
-        r = c.post(f"/tableaux/{tid}/steps", json={"action": {"type": "turn", "angle_deg": -90}, "steps": [
-            {"view": "V1", "action": {"type": "travel", "distance_m": 4.0}}, {"view": "V2"}]})
+        r = c.post(f"/tableaux/{tid}/steps", json={"action": steps[39]["action"], "steps": steps[40:]})
         assert r.status_code == 200, r.text
+        places = r.json()["map"]["summary"]["places"]
     page.wait_for_selector('body[data-drawn="2"]', state="attached", timeout=10_000)
     assert page.evaluate("window.__sameDocument") is True
-    assert page.locator("#tableau tbody tr").count() == 11
+    assert page.locator("#tableau tbody tr").count() == 60
+    assert page.locator("#map .place").count() == places
     assert "revision 2" in page.locator("#summary").inner_text()
+    # The trajectory drawn has a point per step: 60 now.
+    assert len(page.locator("#trajectory polyline").get_attribute("points").split()) == 60
+    _shot(page, "live.png")
 
 
 @pytest.mark.slow

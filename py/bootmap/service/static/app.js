@@ -74,9 +74,11 @@ async function refresh() {
   const id = state.id;
   const got = await getJSON(`/tableaux/${id}/layout`, { etag: state.etag });
   if (got.notModified || id !== state.id) return false;
+  const revised = state.drawing !== null;
   state.etag = got.etag;
   state.drawing = got.data;
   draw();
+  if (revised) listTableaux(id).catch(fail);  // the list shows steps and counts: new ones now
   return true;
 }
 

@@ -87,7 +87,7 @@ export function drawMap(svg, drawing, handlers) {
       // The label further out along the spoke, anchored on the side away from the place.
       const len = Math.hypot(dx - x, dy - y) || 1, ux = (dx - x) / len, uy = (dy - y) / len;
       const label = text(dg, dx + ux * 10, dy + uy * 10 + (Math.abs(ux) > 0.3 ? 4 : uy > 0 ? 10 : -2),
-                         `${d} ${info.view}`, "dstate-label");
+                         info.view.length <= 4 ? `${d} ${info.view}` : d, "dstate-label");  // long views: on hover
       label.setAttribute("text-anchor", ux < -0.3 ? "end" : ux > 0.3 ? "start" : "middle");
       const heading = info.heading_deg === null ? "" : `, heading ${info.heading_deg}°`;
       el("title", {}, dg).textContent = `${d}: view ${info.view}${heading}` +
