@@ -81,3 +81,13 @@ def test_places_sit_where_the_world_has_them_up_to_the_robots_starting_frame(see
         x, y, _ = tableau.steps[t].pose
         expected = turn @ np.array([x - x0, y - y0])
         assert np.allclose(drawn["places"][row["place"]]["xy"], expected, atol=1e-3), (t, row["place"])
+
+
+def test_a_map_of_one_place_is_drawn_at_the_origin_with_its_dstates_around_it():
+    # Turns only: one place, three dstates facing 0, 90 and 180 degrees; no travel to lay anything out by.
+    steps = [Step(view="a", action=Turn(90.0)), Step(view="b", action=Turn(90.0)), Step(view="c")]
+    drawn = _drawn(Tableau(tuple(steps), "one place"))
+    assert drawn["method"] == "graph" and list(drawn["places"]) == ["P0"]
+    assert drawn["places"]["P0"] == {"xy": [0, 0], "dstates": ["S0", "S1", "S2"]}
+    assert [drawn["dstates"][d]["xy"] for d in ("S0", "S1", "S2")] == [[0.22, 0], [0, 0.22], [-0.22, 0]]
+    assert drawn["bounds"] == [-0.22, 0, 0.22, 0.22]
