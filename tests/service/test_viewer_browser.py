@@ -151,11 +151,10 @@ def test_appended_steps_show_up_without_a_reload_beside_the_true_trajectory(page
     _shot(page, "live.png")
 
 
-@pytest.mark.slow
 def test_the_experiments_figures_are_viewable(page, viewer_server, runs_dir, paper):
     from bootmap.experiment import run_experiment
 
-    run_experiment("notched_rectangle", circuits=5, seed=1, out_dir=runs_dir / "nr")  # 5-10 s: a real run
+    run_experiment("notched_rectangle", circuits=2, seed=1, out_dir=runs_dir / "nr")  # a real run: 3-5 s
     _open(page, viewer_server, paper)
     page.locator("#runs-panel summary").first.click()
     page.wait_for_function("document.querySelectorAll('#runs img').length >= 3 && "

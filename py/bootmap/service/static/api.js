@@ -8,8 +8,15 @@ export function token() {
   return sessionStorage.getItem(KEY);
 }
 
+let asking = null;  // one dialog at a time: requests refused together wait for the same answer
+
 // Ask for a token in the page's dialog; resolves true when one was given.
 export function askToken(reason) {
+  if (!asking) asking = showDialog(reason).finally(() => { asking = null; });
+  return asking;
+}
+
+function showDialog(reason) {
   const dialog = document.getElementById("token-dialog");
   const input = document.getElementById("token-input");
   if (reason) document.getElementById("token-reason").textContent = reason;

@@ -160,6 +160,7 @@ function poll() {
       if (!document.hidden && await refresh()) status(`revision ${state.drawing.revision} drawn`);
     } catch (e) {
       fail(e);
+      if (e instanceof ApiError && e.status === 404) return;  // the tableau is gone: stop asking
     }
     if (id === state.id) poll();
   }, POLL_MS);
