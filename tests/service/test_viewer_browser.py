@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from service_helpers import REPO, SESSION_SETTINGS, Server
+from service_helpers import REPO, SESSION_SETTINGS, Server, bearer, make_token
 
 from bootmap import examples
 from bootmap.testing.gridworld import random_world, walk
@@ -164,31 +164,32 @@ def test_the_experiments_figures_are_viewable(page, viewer_server, runs_dir, pap
     assert "notched_rectangle, seed 1" in page.locator("#runs summary").first.inner_text()
 
 
-def test_a_token_is_asked_for_on_401_kept_and_sent_on_every_request(page, viewer_server, paper):
-    # Today's service has no tokens: a 401 is played by the browser's own request routing, once.
-    sent, refused = [], []
-
-    def first_refused(route):
-        if not refused:
-            refused.append(route.request.url)
-            return route.fulfill(status=401, content_type="application/problem+json",
-                                 body='{"type": "about:blank", "title": "Token needed", "status": 401, '
-                                      '"detail": "this server needs an API token"}')
-        return route.continue_()
-
-    page.allowed_errors.append("401")  # chromium logs the refused request itself
-    page.route("**/tableaux?limit=*", first_refused)
-    page.on("request", lambda r: sent.append((r.url, r.headers.get("authorization"))))
-    page.goto(f"{viewer_server.url}/?tableau={paper}")
-    page.locator("#token-dialog").wait_for()
-    assert "needs an API token" in page.locator("#token-reason").inner_text()
-    page.locator("#token-input").fill("bm_test_token")
-    before = len(sent)
-    page.locator("#token-ok").click()
-    page.wait_for_selector("body[data-drawn]", state="attached", timeout=20_000)
-    api = [(url, auth) for url, auth in sent[before:] if "/viewer/" not in url]
-    assert any("/tableaux?limit=" in url for url, _ in api)  # the refused request, asked again
-    assert any("/layout" in url for url, _ in api)
-    assert all(auth == "Bearer bm_test_token" for _, auth in api), api
-    assert all(auth is None for url, auth in sent[:before])
-    assert page.evaluate("sessionStorage.getItem('bootmap.token')") == "bm_test_token"
+def test_on_a_server_that_needs_tokens_the_page_asks_once_and_sends_it_on_every_request(page, tmp_path_factory):
+    # A real server with tokens required: the page and its files load without one; the first data request
+    # answers 401, the page asks, and every later request carries "Authorization: Bearer".
+    s = Server(tmp_path_factory.mktemp("tokens_viewer"), require_tokens=True, **SESSION_SETTINGS).start()
+    try:
+        token = make_token("viewer", data_dir=s.data_dir)
+        with s.client() as c:
+            r = c.post("/tableaux", json=examples.notched_rectangle(circuits=2).to_dict(), headers=bearer(token))
+            assert r.status_code == 201, r.text
+            tid = r.json()["id"]
+        sent = []
+        page.allowed_errors.append("401")  # chromium logs the refused request itself
+        page.on("request", lambda r: sent.append((r.url, r.headers.get("authorization"))))
+        page.goto(f"{s.url}/?tableau={tid}")
+        page.locator("#token-dialog").wait_for()
+        assert "needs an API token" in page.locator("#token-reason").inner_text()
+        before = len(sent)
+        page.locator("#token-input").fill(token)
+        page.locator("#token-ok").click()
+        page.wait_for_selector("body[data-drawn]", state="attached", timeout=20_000)
+        assert page.locator("#map .place").count() == 4
+        page.wait_for_timeout(1500)  # a poll of the layout, with the token too
+        api = [(url, auth) for url, auth in sent[before:] if "/viewer/" not in url]
+        assert any("/tableaux?limit=" in url for url, _ in api) and any("/layout" in url for url, _ in api)
+        assert all(auth == f"Bearer {token}" for _, auth in api), api
+        assert all(auth is None for url, auth in sent[:before])
+        assert page.evaluate("sessionStorage.getItem('bootmap.token')") == token
+    finally:
+        s.stop()

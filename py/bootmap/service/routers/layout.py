@@ -15,6 +15,7 @@ from fastapi import APIRouter, Request, Response
 from pydantic import Field
 
 from ...layout import layout
+from ..auth import CallerDep, check_read
 from ..deps import Services, ServicesDep, TableauId
 from ..models import MapOut, Out
 from ..problems import JSONRoute, openapi_responses
@@ -60,12 +61,13 @@ class Drawing(Out):
     map: MapOut
 
 
-@router.get("/layout", response_model=Drawing, responses={**openapi_responses(404, 422), 304: {
+@router.get("/layout", response_model=Drawing, responses={**openapi_responses(401, 403, 404, 422, 429), 304: {
     "description": "The revision named by If-None-Match is still the current one."}},
             summary="The map laid out for drawing (the viewer's data)")
-def read_layout(tableau_id: TableauId, services: ServicesDep, request: Request) -> Response:
+def read_layout(tableau_id: TableauId, services: ServicesDep, caller: CallerDep, request: Request) -> Response:
     """The map and where to draw its places, dstates and paths (and the true trajectory when the steps
     have poses). ETag: the revision and the theory; with a matching If-None-Match, 304 and no body."""
+    check_read(caller, services.store.head(tableau_id))  # as /map: its owner, an admin, or public
     cmap = services.store.get_map(tableau_id)
     etag = f'"r{cmap.revision}-{cmap.theory}"'
     if etag in request.headers.get("if-none-match", ""):

@@ -4,7 +4,8 @@ The page (``service/static/``) is plain HTML, CSS and ES modules shipped in the 
 build. It reads the service's own resources (``/tableaux``, ``/tableaux/{id}/layout``, ``/why``,
 ``/axioms``) with the user's token when one is given. Experiment runs (``bootmap experiment -o DIR``)
 are found under the ``runs_dir`` setting, read-only: a run is a directory with a ``results.json``, at
-most two levels down (``--seeds`` writes ``DIR/seed_N``); only the PNG files listed are ever served.
+most two levels down (``--seeds`` writes ``DIR/seed_N``); only the PNG files listed are ever served. Any
+valid token may see them (runs belong to the server, not to a token); the page and its files need none.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from fastapi import APIRouter, Query
 from fastapi.responses import FileResponse
 from pydantic import Field
 
+from ..auth import CallerDep
 from ..deps import ServicesDep
 from ..models import Out
 from ..problems import JSONRoute, Problem, openapi_responses
@@ -67,8 +69,9 @@ class Runs(Out):
     runs: list[Run]
 
 
-@router.get("/runs", response_model=Runs, tags=["viewer"], summary="Experiment runs with figures")
-def list_runs(services: ServicesDep) -> Runs:
+@router.get("/runs", response_model=Runs, tags=["viewer"], summary="Experiment runs with figures",
+            responses=openapi_responses(401, 429))
+def list_runs(services: ServicesDep, caller: CallerDep) -> Runs:
     """Runs written by `bootmap experiment -o DIR` under the server's runs directory, with their figures
     (M and U against k, learning curves, the world and the run)."""
     root = services.settings.runs_dir
@@ -76,8 +79,8 @@ def list_runs(services: ServicesDep) -> Runs:
 
 
 @router.get("/runs/figure", response_class=FileResponse, tags=["viewer"], summary="A figure of a run",
-            responses={200: {"content": {"image/png": {}}}, **openapi_responses(404, 422)})
-def read_figure(services: ServicesDep,
+            responses={200: {"content": {"image/png": {}}}, **openapi_responses(401, 404, 422, 429)})
+def read_figure(services: ServicesDep, caller: CallerDep,
                 run: Annotated[str, Query(max_length=200, description="A run's name, as /runs lists it.")],
                 name: Annotated[str, Query(max_length=100, description="A PNG file of that run.")]) -> FileResponse:
     """The PNG itself. Only files /runs lists are served."""
