@@ -5,6 +5,7 @@ import subprocess
 import sys
 import sysconfig
 import venv
+import zipfile
 from pathlib import Path
 
 import pytest
@@ -24,6 +25,10 @@ def test_built_wheel_carries_the_axioms_and_maps_a_tableau(tmp_path):
     subprocess.run([sys.executable, "-m", "build", "--wheel", "--no-isolation", "--outdir", str(dist), str(REPO)],
                    check=True, capture_output=True, timeout=300)
     wheel = next(dist.glob("bootmap-*.whl"))
+    # The viewer's page and modules ship in the package: nothing for a user to build.
+    shipped = set(zipfile.ZipFile(wheel).namelist())
+    assert {f"bootmap/service/static/{f}" for f in ("index.html", "app.js", "api.js", "draw.js", "table.js",
+                                                     "why.js", "viewer.css")} <= shipped
     env_dir = tmp_path / "clean"
     venv.create(env_dir, with_pip=False)
     py = env_dir / "bin" / "python"

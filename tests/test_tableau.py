@@ -134,3 +134,24 @@ def test_a_nul_in_a_view_label_is_refused():
     with pytest.raises(TableauError, match=r"steps\[0\]\.view: .*NUL"):
         Tableau.from_dict(doc)
     assert Tableau.from_dict({"format": "bootmap.tableau/1", "steps": [{"view": "a). #script (python)"}]})
+
+
+BAD_STEPS = [{"view": "V9", "action": {"type": "jump"}}, {"view": 3, "action": {"type": "turn", "angle_deg": 0}},
+             {"action": {"type": "turn", "angle_deg": 0}}, {"view": "V9", "action": {"type": "turn", "angle_deg": 999}},
+             {"view": "V9", "action": {"type": "turn", "angle_deg": 90}, "colour": "red"}]
+
+
+@given(st.integers(2, 60), st.integers(0, 59), st.sampled_from(BAD_STEPS))
+def test_a_bad_step_among_repeated_good_ones_is_named_by_its_own_index(laps, where, bad):
+    # Repeated steps are schema-checked once each; the error must still name the bad step where it is,
+    # with the message the plain check gives.
+    good = [OK_STEPS[0], OK_STEPS[1]] * laps + [OK_STEPS[2]]
+    where = where % (len(good) - 1)
+    steps = good[:where] + [bad] + good[where + 1:]
+    with pytest.raises(TableauError) as repeated:
+        Tableau.from_dict(doc(steps))
+    with pytest.raises(TableauError) as alone:
+        Tableau.from_dict(doc([bad, OK_STEPS[2]]))
+    assert repeated.value.where.startswith(f"tableau: steps[{where}]")
+    assert repeated.value.reason == alone.value.reason
+    assert Tableau.from_dict(doc(good)).steps[:2] == Tableau.from_dict(doc(OK_STEPS)).steps[:2]

@@ -9,6 +9,7 @@ Python checker (bootmap.testing.check) rejects every partition of it that puts a
 import itertools
 import json
 import shutil
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -268,3 +269,21 @@ def test_cli_why_out_of_time_exits_1(tmp_path, capsys):
     path.write_text(notched_rectangle(50).dumps())
     assert main(["why", str(path), "S0", "S4", "--levels", "causal,topological", "--time-limit", "1e-6"]) == 1
     assert "time limit" in capsys.readouterr().err
+
+
+def test_questions_about_one_experience_resolve_it_once_and_new_experience_again(monkeypatch):
+    # The viewer asks about pair after pair of one tableau: the minimal map is resolved the first time
+    # only. Appended steps are new experience, and images or truth that the axioms never see are not.
+    calls = []
+    resolve = Resolver.resolve
+    monkeypatch.setattr(Resolver, "resolve", lambda self, tableau, deadline: calls.append(len(tableau))
+                        or resolve(self, tableau, deadline))
+    explainer = Explainer(levels=["causal", "topological"])
+    tableau = notched_rectangle(2)
+    first = explainer.explain(tableau, "S0", "S4")
+    again = explainer.explain(tableau, "t1", "t5")
+    assert (first.verdict, again.verdict) == ("different", "different") and calls == [17]
+    relabelled = Tableau(tuple(replace(s, truth=f"x{i}") for i, s in enumerate(tableau.steps)), tableau.world)
+    assert explainer.explain(relabelled, "t0", "t8").verdict == "same" and calls == [17]
+    longer = tableau.extend({"action": {"type": "turn", "angle_deg": -90}, "steps": [{"view": "V1"}]}, "test")
+    assert explainer.explain(longer, "t0", "t4").evidence == first.evidence and calls == [17, 18]

@@ -31,10 +31,12 @@ Example
 from __future__ import annotations
 
 import re
+import threading
 import time
+from collections import OrderedDict
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Sequence
+from typing import Callable, Hashable, Sequence
 
 from clingo import String, Symbol
 
@@ -188,9 +190,18 @@ class Explainer:
     time_limit: float | None = 60.0
     max_window: int = 32
     resolver: Resolver = field(init=False, repr=False, compare=False)
+    maps: "_Memo" = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "resolver", Resolver(self.axioms, self.levels, self.quantum_deg, self.time_limit))
+        object.__setattr__(self, "maps", _Memo(size=4))
+
+    def minimal_map(self, tableau: Tableau, deadline: Deadline) -> CognitiveMap:
+        """The minimal map the questions are about, resolved once per experience (views and actions):
+        a person asking about several pairs of one tableau (the viewer's clicks) waits for the resolver
+        only the first time."""
+        experience = (tuple(s.view for s in tableau.steps), tuple(s.action for s in tableau.steps))
+        return self.maps.get(experience, lambda: self.resolver.resolve(tableau, deadline))
 
     def explain(self, tableau: Tableau, a: int | str, b: int | str, deadline: Deadline | None = None) -> Explanation:
         """Explain whether ``a`` and ``b`` (time points, ``"t4"``, or dstate names such as ``"S4"``) are
@@ -198,7 +209,7 @@ class Explainer:
         names the map does not have, :class:`SolveTimeout` when out of time."""
         start = time.perf_counter()
         deadline = deadline or Deadline.after(self.time_limit)
-        cmap = self.resolver.resolve(tableau, deadline)
+        cmap = self.minimal_map(tableau, deadline)
         q = _Question(self, tableau, deadline, cmap)
         a, b = _time_points(cmap, a, b)
         maps = [cmap.dstate_of] + cmap.alternatives
@@ -219,7 +230,7 @@ class Explainer:
 
     def explain_step(self, tableau: Tableau, t: int | str, deadline: Deadline | None = None) -> StepExplanation:
         """Why the map reads the view seen at ``t`` as seen, or as a misread."""
-        cmap = self.resolver.resolve(tableau, deadline or Deadline.after(self.time_limit))
+        cmap = self.minimal_map(tableau, deadline or Deadline.after(self.time_limit))
         t, _ = _time_points(cmap, t, t)
         angles, _ = read_actions(tableau, self.quantum_deg)
         actions = [action_symbol(s.action, a) for s, a in zip(tableau.steps, angles)]
@@ -241,6 +252,26 @@ class Explainer:
         """Drop steps one at a time (farthest from a and b first) while a and b still cannot be one
         dstate: what is left is subset-minimal evidence."""
         return _Question(self, tableau, deadline or Deadline.after(self.time_limit)).minimal_evidence(a, b, keep)
+
+
+class _Memo:
+    """The last few values made, by key (thread-safe; a value is made outside the lock, so two threads
+    asking at once may both make it, which is harmless)."""
+
+    def __init__(self, size: int):
+        self.size, self._items, self._lock = size, OrderedDict(), threading.Lock()
+
+    def get(self, key: Hashable, make: Callable[[], CognitiveMap]) -> CognitiveMap:
+        with self._lock:
+            if key in self._items:
+                self._items.move_to_end(key)
+                return self._items[key]
+        value = make()
+        with self._lock:
+            self._items[key] = value
+            while len(self._items) > self.size:
+                self._items.popitem(last=False)
+        return value
 
 
 class _Question:

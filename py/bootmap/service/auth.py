@@ -130,7 +130,9 @@ async def writable(services: Services, caller: Caller, tableau_id: int) -> Table
 SAFE_METHODS = {"GET", "HEAD", "OPTIONS"}
 # What anyone may read without a token, even when tokens are required.
 OPEN_PATHS = {"/health", "/docs", "/docs/oauth2-redirect", "/redoc", "/openapi.json", "/axioms",
-              "/schemas/tableau-1.schema.json"}
+              "/schemas/tableau-1.schema.json", "/"}
+# The map viewer's page and files: no data in them, and the page asks for the token itself.
+OPEN_PREFIXES = ("/viewer/",)
 
 
 def host_allowed(host: str, allowed: list[str]) -> bool:
@@ -171,7 +173,7 @@ class Guard:
             problem = forbidden("a request from another web site may not change anything here "
                                 "(its Origin is not allowed; see BOOTMAP_CORS_ORIGINS)")
         elif (self.tokens_required and "authorization" not in headers and scope["method"] != "OPTIONS"
-              and scope["path"] not in OPEN_PATHS):
+              and scope["path"] not in OPEN_PATHS and not scope["path"].startswith(OPEN_PREFIXES)):
             # Before the body is read: a caller without a token costs the server no parsing.
             problem = unauthorized("this server needs an API token: send 'Authorization: Bearer <token>' "
                                    "(an admin makes one with 'bootmap token create NAME')")

@@ -28,6 +28,7 @@ def register(subparsers) -> None:
                    help="seconds per solve (default 30)")
     p.add_argument("--require-tokens", action="store_true", default=None,
                    help="every request needs an API token (always so when --host is not loopback)")
+    p.add_argument("--runs-dir", metavar="DIR", help="experiment runs whose figures the viewer shows (read-only)")
     p.set_defaults(handler=cmd_serve)
 
     t = subparsers.add_parser("token", help="make API tokens for the HTTP service",
@@ -53,7 +54,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
 
     given = {"host": args.host, "port": args.port, "db": args.db, "data_dir": args.data_dir,
              "axioms": args.axioms, "solve_time_limit_s": args.solve_time_limit_s,
-             "require_tokens": args.require_tokens}
+             "require_tokens": args.require_tokens, "runs_dir": args.runs_dir}
     try:
         settings = Settings(**{k: v for k, v in given.items() if v is not None})
         if settings.host in ("0.0.0.0", "::", "") and not settings.allowed_hosts:

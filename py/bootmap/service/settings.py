@@ -51,6 +51,8 @@ class Settings(BaseSettings):
     max_models: int = Field(10, ge=1, le=1000, description="Minimal maps enumerated before the count is capped.")
     quantum_deg: float | None = Field(None, gt=0, le=180, description="Round angles to this many degrees; "
                                       "unset: learn the robot's action types from each tableau.")
+    runs_dir: Path | None = Field(None, description="Directory of experiment runs (bootmap experiment -o DIR) "
+                                  "whose figures the viewer shows, read-only; unset: none.")
     log_level: str = Field("info", pattern="^(critical|error|warning|info|debug|trace)$")
 
     # Who may do what (docs/service.md, "Security").

@@ -1,0 +1,208 @@
+// The viewer: pick a tableau, draw its map, link the table to it, ask why, follow appended steps.
+//
+// Live updates poll the layout once a second with If-None-Match: the server answers 304 (no body, one
+// read of the stored map) until an append makes a new revision. Polling rather than server-sent events
+// because EventSource cannot send the Authorization header, and because an append may land through
+// another server process on the same database, which a per-process event stream would not hear of.
+
+import { ApiError, askToken, getJSON, objectURL } from "./api.js";
+import { drawMap, drawTrajectory, light } from "./draw.js";
+import { fillTable, markRows } from "./table.js";
+import { renderWhy } from "./why.js";
+
+const POLL_MS = 1000;
+const $ = (id) => document.getElementById(id);
+const state = { id: null, etag: null, drawing: null, picks: [], poll: null, levels: [], whyAsked: 0 };
+
+function status(message, isError = false) {
+  $("status").textContent = message;
+  $("status").classList.toggle("error", isError);
+}
+
+function fail(e) {
+  // An ApiError is the service's own answer (problem details): shown, not thrown to the console.
+  status(e instanceof ApiError ? `${e.status}: ${e.message}` : `error: ${e.message}`, true);
+}
+
+async function listTableaux(selected) {
+  const { data } = await getJSON("/tableaux?limit=1000");
+  const select = $("tableaux");
+  select.innerHTML = data.items.length ? "" : "<option value=''>no tableaux stored yet</option>";
+  for (const it of data.items) {
+    const o = new Option(`#${it.id}: ${it.steps} steps, ${it.dstates} dstates, ${it.places} places, ` +
+                         `${it.paths} paths (rev ${it.revision})`, it.id);
+    select.add(o);
+  }
+  const pick = selected ?? data.items[0]?.id;
+  if (pick !== undefined) select.value = String(pick);
+  return pick;
+}
+
+async function loadLevels(chosen) {
+  const { data } = await getJSON("/axioms");
+  const box = $("levels");
+  box.querySelectorAll("label").forEach((l) => l.remove());
+  for (const level of data.levels) {
+    const label = document.createElement("label");
+    const input = Object.assign(document.createElement("input"), { type: "checkbox", value: level, name: "level" });
+    input.checked = !chosen || chosen.includes(level);
+    label.append(input, ` ${level}`);
+    box.append(label);
+  }
+  state.levels = data.levels;
+}
+
+function chosenLevels() {
+  const on = [...$("levels").querySelectorAll("input:checked")].map((i) => i.value);
+  return on.length === state.levels.length ? null : on;  // null: the service's default, every level
+}
+
+async function openTableau(id) {
+  clearTimeout(state.poll);
+  Object.assign(state, { id, etag: null, drawing: null, picks: [] });
+  $("why").replaceChildren();
+  if (id === undefined || id === null || id === "") return;
+  const url = new URL(location.href);
+  url.searchParams.set("tableau", id);
+  history.replaceState(null, "", url);
+  await refresh();
+  poll();
+}
+
+// Fetch the layout; redraw when it changed (a new revision). Returns whether it did.
+async function refresh() {
+  const id = state.id;
+  const got = await getJSON(`/tableaux/${id}/layout`, { etag: state.etag });
+  if (got.notModified || id !== state.id) return false;
+  const revised = state.drawing !== null;
+  state.etag = got.etag;
+  state.drawing = got.data;
+  draw();
+  if (revised) listTableaux(id).catch(fail);  // the list shows steps and counts: new ones now
+  return true;
+}
+
+function draw() {
+  const d = state.drawing, m = d.map, s = m.summary;
+  drawMap($("map"), d, { onDstate: (name) => pick({ dstate: name }), onHover: hover });
+  $("layout-method").textContent = d.layout.method === "metrical"
+    ? `(laid out by headings and travels; closes to ${d.layout.closure_rms_m.toFixed(3)} m RMS)`
+    : "(laid out by travel distances: no headings, or the travels do not close)";
+  $("summary").textContent = `${s.dstates} dstates, ${s.places} places, ${s.paths} paths; revision ${d.revision}` +
+    (s.unique ? "; unique minimal map" : `; ${s.minimal_maps}${s.minimal_maps_capped ? "+" : ""} minimal maps`);
+  // Measured by the tests and the benchmark: the map is on the page.
+  document.body.dataset.drawn = String(d.revision);
+  window.bootmapTimes = { ...(window.bootmapTimes || {}), drawn: performance.now() };
+  fillTable($("tableau"), m.steps, (t) => pick({ t }));
+  const traj = d.layout.trajectory;
+  $("truth-panel").hidden = !traj;
+  if (traj) drawTrajectory($("trajectory"), traj);
+  showPicks();
+}
+
+function hover(html, x, y) {
+  const box = $("hover");
+  if (!html) { box.hidden = true; return; }
+  box.innerHTML = html;
+  box.style.left = `${x + 14}px`;
+  box.style.top = `${y + 14}px`;
+  box.hidden = false;
+}
+
+// A click on a dstate or a time point. The first lights up; the second asks why.
+function pick(p) {
+  const rows = state.drawing.map.steps;
+  const t = p.t ?? rows.findIndex((r) => r.dstate === p.dstate);  // a dstate stands for its first visit
+  const picked = { t, label: p.dstate ?? `t${t}`, dstate: rows[t].dstate };
+  state.picks = state.picks.length >= 2 ? [picked] : [...state.picks, picked];
+  showPicks();
+  if (state.picks.length === 2) why(state.picks[0], state.picks[1]);
+}
+
+function showPicks() {
+  if (!state.drawing) return;
+  const picks = state.picks.filter((p) => p.t < state.drawing.map.steps.length);
+  light($("map"), "lit", picks.map((p) => p.dstate));
+  markRows($("tableau"), "picked", picks.map((p) => p.t), true);
+  $("selection").textContent = picks.length === 0 ? "Click two dstates (on the map) or two time points (rows)."
+    : picks.length === 1 ? `${picks[0].label} (${picks[0].dstate} at t${picks[0].t}): click another.`
+    : `${picks[0].label} and ${picks[1].label}:`;
+}
+
+async function why(a, b) {
+  const asked = ++state.whyAsked;
+  const started = performance.now();
+  document.body.dataset.why = "asking";
+  $("why").innerHTML = "<p class='busy'>asking the solver…</p>";
+  // Time points, not dstate names: the map with other levels may name its dstates differently.
+  const q = new URLSearchParams({ a: `t${a.t}`, b: `t${b.t}` });
+  const levels = chosenLevels();
+  if (levels) q.set("levels", levels.join(","));
+  try {
+    const { data } = await getJSON(`/tableaux/${state.id}/why?${q}`);
+    if (asked !== state.whyAsked) return;
+    renderWhy($("why"), data, (t) => markRows($("tableau"), "focus", [t], true));
+    markRows($("tableau"), "evidence", data.evidence);
+    document.body.dataset.why = data.verdict;
+    window.bootmapTimes = { ...(window.bootmapTimes || {}), why: performance.now() - started };
+  } catch (e) {
+    if (asked !== state.whyAsked) return;
+    $("why").replaceChildren();
+    document.body.dataset.why = "failed";
+    fail(e);
+  }
+}
+
+function poll() {
+  state.poll = setTimeout(async () => {
+    const id = state.id;
+    try {
+      if (!document.hidden && await refresh()) status(`revision ${state.drawing.revision} drawn`);
+    } catch (e) {
+      fail(e);
+      if (e instanceof ApiError && e.status === 404) return;  // the tableau is gone: stop asking
+    }
+    if (id === state.id) poll();
+  }, POLL_MS);
+}
+
+async function loadRuns() {
+  const { data } = await getJSON("/runs");
+  if (!data.runs.some((r) => r.figures.length)) return;
+  const box = $("runs");
+  for (const run of data.runs.filter((r) => r.figures.length)) {
+    const details = document.createElement("details");
+    details.className = "run";
+    details.innerHTML = `<summary>${run.name}${run.world ? ` — ${run.world}` : ""}` +
+                        `${run.seed !== null ? `, seed ${run.seed}` : ""} (${run.figures.length} figures)</summary>`;
+    details.addEventListener("toggle", async () => {
+      if (!details.open || details.dataset.loaded) return;
+      details.dataset.loaded = "1";
+      for (const name of run.figures) {
+        const fig = document.createElement("figure");
+        const img = Object.assign(document.createElement("img"), { alt: name });
+        fig.append(img, Object.assign(document.createElement("figcaption"), { textContent: name }));
+        details.append(fig);
+        img.src = await objectURL(`/runs/figure?${new URLSearchParams({ run: run.name, name })}`);
+      }
+    });
+    box.append(details);
+  }
+  $("runs-panel").hidden = false;
+}
+
+async function main() {
+  const params = new URLSearchParams(location.search);
+  $("token-button").addEventListener("click", () => askToken("The API token this tab sends (kept until the tab closes)."));
+  $("tableaux").addEventListener("change", (e) => openTableau(e.target.value).catch(fail));
+  try {
+    await loadLevels(params.get("levels")?.split(","));
+    const id = await listTableaux(params.get("tableau"));
+    await openTableau(id);
+    loadRuns().catch(fail);
+  } catch (e) {
+    fail(e);
+  }
+}
+
+main();

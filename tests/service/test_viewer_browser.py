@@ -1,0 +1,195 @@
+"""The viewer in a real headless browser: Debian's chromium driven by Playwright, against a real uvicorn.
+
+The system's chromium is launched by path (``playwright install`` downloads a browser of its own, which
+this project never does); as root it needs ``--no-sandbox``. Without chromium these tests skip and say
+how to get it. Every test fails if the page logged an error to the console.
+
+With ``BOOTMAP_SCREENSHOTS=1`` the tests write the README's screenshots to docs/viewer/.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+from service_helpers import REPO, SESSION_SETTINGS, Server, bearer, make_token
+
+from bootmap import examples
+from bootmap.testing.gridworld import random_world, walk
+
+sync_api = pytest.importorskip("playwright.sync_api", reason="playwright not installed: pip install -e '.[dev]'")
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+SHOTS = REPO / "docs" / "viewer" if os.environ.get("BOOTMAP_SCREENSHOTS") == "1" else None
+pytestmark = pytest.mark.skipif(CHROMIUM is None, reason="chromium not installed: apt-get install chromium")
+
+
+@pytest.fixture(scope="module")
+def runs_dir(tmp_path_factory) -> Path:
+    return tmp_path_factory.mktemp("runs")
+
+
+@pytest.fixture(scope="module")
+def viewer_server(tmp_path_factory, runs_dir):
+    """A server of the module's own, with a runs directory (empty until a test runs an experiment)."""
+    s = Server(tmp_path_factory.mktemp("viewer_server"), runs_dir=runs_dir, **SESSION_SETTINGS).start()
+    yield s
+    s.stop()
+
+
+@pytest.fixture(scope="module")
+def paper(viewer_server) -> int:
+    with viewer_server.client() as c:
+        r = c.post("/tableaux", json=examples.notched_rectangle(circuits=50).to_dict())
+        assert r.status_code == 201, r.text
+        return r.json()["id"]
+
+
+@pytest.fixture(scope="module")
+def browser():
+    with sync_api.sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"], headless=True)
+        yield b
+        b.close()
+
+
+@pytest.fixture
+def page(browser):
+    """A fresh tab; the test fails if the page logs a console error or throws (``page.allowed_errors``
+    lists the messages a test expects)."""
+    context = browser.new_context(viewport={"width": 1280, "height": 1000})
+    tab = context.new_page()
+    tab.errors, tab.allowed_errors = [], []
+    tab.on("console", lambda m: m.type == "error" and tab.errors.append(m.text))
+    tab.on("pageerror", lambda e: tab.errors.append(f"uncaught: {e}"))
+    yield tab
+    context.close()
+    unexpected = [e for e in tab.errors if not any(a in e for a in tab.allowed_errors)]
+    assert not unexpected, f"console errors: {unexpected}"
+
+
+def _open(page, server, tableau_id, levels=None):
+    query = f"?tableau={tableau_id}" + (f"&levels={levels}" if levels else "")
+    page.goto(server.url + "/" + query)
+    page.wait_for_selector("body[data-drawn]", state="attached", timeout=20_000)
+
+
+def _shot(page, name, full_page=False):
+    if SHOTS is not None:
+        SHOTS.mkdir(parents=True, exist_ok=True)
+        if name != "map.png":  # the map's picture shows a path's hover box; the others none
+            page.mouse.move(0, 0)
+        page.screenshot(path=str(SHOTS / name), full_page=full_page)
+
+
+def test_the_paper_map_shows_4_places_and_4_paths_and_hovering_a_path_shows_its_sides(page, viewer_server, paper):
+    _open(page, viewer_server, paper)
+    assert page.locator("#map .place").count() == 4
+    assert page.locator("#map .path").count() == 4
+    assert page.locator("#map .dstate").count() == 8
+    assert page.locator("#tableau tbody tr").count() == 401
+    assert "8 dstates, 4 places, 4 paths" in page.locator("#summary").inner_text()
+    # P2 is right of Pa1 facing pos (the map's right_of): hovering Pa1 colours it and says so.
+    # force: a straight path's box is a line (no area), which Playwright counts as not visible.
+    page.locator('#map .path[data-path="Pa1"] .hit').hover(force=True)
+    assert page.locator('#map .place.right-of').evaluate_all("ns => ns.map(n => n.dataset.place)") == ["P2"]
+    assert "right of it: P2" in page.locator("#hover").inner_text()
+    _shot(page, "map.png")
+
+
+def test_clicking_S0_and_S4_shows_the_proof_by_on_path_no_side_on_t0_to_t4(page, viewer_server, paper):
+    _open(page, viewer_server, paper, levels="causal,topological")
+    page.locator('#map .dstate[data-dstate="S0"] circle').click()
+    assert page.locator("#map .dstate.lit").evaluate_all("ns => ns.map(n => n.dataset.dstate)") == ["S0"]
+    page.locator('#map .dstate[data-dstate="S4"] circle').click()
+    page.wait_for_selector("body[data-why=different]", state="attached", timeout=20_000)
+    why = page.locator("#why").inner_text()
+    assert "DIFFERENT" in why and "levels causal,topological" in why
+    assert page.locator("#why .axioms .rule").all_inner_texts() == ["on_path_no_side"]
+    assert "topological.lp:" in page.locator("#why .axioms").inner_text()
+    assert page.locator("#tableau tr.evidence").evaluate_all("rs => rs.map(r => r.dataset.t)") == [
+        "0", "1", "2", "3", "4"]
+    # The rule chain names each rule with its file and line.
+    chain = page.locator("#why .proof").inner_text()
+    assert "turn_link" in chain and "causal.lp:" in chain
+    _shot(page, "why.png", full_page=True)
+
+
+def test_clicking_a_time_point_lights_its_dstate(page, viewer_server, paper):
+    _open(page, viewer_server, paper)
+    page.locator('#tableau tbody tr[data-t="13"]').click()  # t13 is S5 (13 mod 8)
+    assert page.locator("#map .dstate.lit").evaluate_all("ns => ns.map(n => n.dataset.dstate)") == ["S5"]
+
+
+def test_appended_steps_show_up_without_a_reload_beside_the_true_trajectory(page, viewer_server):
+    # A walk through a random grid world with landmarks (true poses on every step): its first 40 steps
+    # are posted, the page opened, then the next 20 appended through the API.
+    rng = np.random.default_rng(3)
+    steps = walk(random_world(rng, 3, 3, extra_edges=1, landmarks=1.0), 60, rng, policy="explore").to_dict()["steps"]
+    first = [*steps[:39], {k: v for k, v in steps[39].items() if k != "action"}]
+    with viewer_server.client() as c:
+        r = c.post("/tableaux", json={"format": "bootmap.tableau/1", "steps": first})
+        assert r.status_code == 201, r.text
+        tid = r.json()["id"]
+        _open(page, viewer_server, tid)
+        assert page.locator("#tableau tbody tr").count() == 40
+        assert page.locator("#truth-panel").is_visible() and page.locator("#trajectory polyline").count() == 1
+        page.evaluate("window.__sameDocument = true")
+        r = c.post(f"/tableaux/{tid}/steps", json={"action": steps[39]["action"], "steps": steps[40:]})
+        assert r.status_code == 200, r.text
+        places = r.json()["map"]["summary"]["places"]
+    page.wait_for_selector('body[data-drawn="2"]', state="attached", timeout=10_000)
+    assert page.evaluate("window.__sameDocument") is True
+    assert page.locator("#tableau tbody tr").count() == 60
+    assert page.locator("#map .place").count() == places
+    assert "revision 2" in page.locator("#summary").inner_text()
+    # The trajectory drawn has a point per step: 60 now.
+    assert len(page.locator("#trajectory polyline").get_attribute("points").split()) == 60
+    _shot(page, "live.png")
+
+
+def test_the_experiments_figures_are_viewable(page, viewer_server, runs_dir, paper):
+    from bootmap.experiment import run_experiment
+
+    run_experiment("notched_rectangle", circuits=2, seed=1, out_dir=runs_dir / "nr")  # a real run: 3-5 s
+    _open(page, viewer_server, paper)
+    page.locator("#runs-panel summary").first.click()
+    page.wait_for_function("document.querySelectorAll('#runs img').length >= 3 && "
+                           "[...document.querySelectorAll('#runs img')].every(i => i.complete && i.naturalWidth > 0)")
+    names = page.locator("#runs figcaption").all_inner_texts()
+    assert {"views_M_U.png", "learning_curves.png", "world_map.png"} <= set(names)
+    assert "notched_rectangle, seed 1" in page.locator("#runs summary").first.inner_text()
+
+
+def test_on_a_server_that_needs_tokens_the_page_asks_once_and_sends_it_on_every_request(page, tmp_path_factory):
+    # A real server with tokens required: the page and its files load without one; the first data request
+    # answers 401, the page asks, and every later request carries "Authorization: Bearer".
+    s = Server(tmp_path_factory.mktemp("tokens_viewer"), require_tokens=True, **SESSION_SETTINGS).start()
+    try:
+        token = make_token("viewer", data_dir=s.data_dir)
+        with s.client() as c:
+            r = c.post("/tableaux", json=examples.notched_rectangle(circuits=2).to_dict(), headers=bearer(token))
+            assert r.status_code == 201, r.text
+            tid = r.json()["id"]
+        sent = []
+        page.allowed_errors.append("401")  # chromium logs the refused request itself
+        page.on("request", lambda r: sent.append((r.url, r.headers.get("authorization"))))
+        page.goto(f"{s.url}/?tableau={tid}")
+        page.locator("#token-dialog").wait_for()
+        assert "needs an API token" in page.locator("#token-reason").inner_text()
+        before = len(sent)
+        page.locator("#token-input").fill(token)
+        page.locator("#token-ok").click()
+        page.wait_for_selector("body[data-drawn]", state="attached", timeout=20_000)
+        assert page.locator("#map .place").count() == 4
+        page.wait_for_timeout(1500)  # a poll of the layout, with the token too
+        api = [(url, auth) for url, auth in sent[before:] if "/viewer/" not in url]
+        assert any("/tableaux?limit=" in url for url, _ in api) and any("/layout" in url for url, _ in api)
+        assert all(auth == f"Bearer {token}" for _, auth in api), api
+        assert all(auth is None for url, auth in sent[:before])
+        assert page.evaluate("sessionStorage.getItem('bootmap.token')") == token
+    finally:
+        s.stop()
