@@ -200,7 +200,8 @@ class Explainer:
         """The minimal map the questions are about, resolved once per experience (views and actions):
         a person asking about several pairs of one tableau (the viewer's clicks) waits for the resolver
         only the first time."""
-        experience = (tuple(s.view for s in tableau.steps), tuple(s.action for s in tableau.steps))
+        # The images too: their margins price misreads.
+        experience = tuple((s.view, s.action, s.image) for s in tableau.steps)
         return self.maps.get(experience, lambda: self.resolver.resolve(tableau, deadline))
 
     def explain(self, tableau: Tableau, a: int | str, b: int | str, deadline: Deadline | None = None) -> Explanation:
