@@ -200,9 +200,12 @@ class Explainer:
         """The minimal map the questions are about, resolved once per experience (views and actions):
         a person asking about several pairs of one tableau (the viewer's clicks) waits for the resolver
         only the first time."""
-        # The images too: their margins price misreads.
-        experience = tuple((s.view, s.action, s.image) for s in tableau.steps)
-        return self.maps.get(experience, lambda: self.resolver.resolve(tableau, deadline))
+        return self.maps.get(_experience(tableau), lambda: self.resolver.resolve(tableau, deadline))
+
+    def remember(self, tableau: Tableau, cmap: CognitiveMap) -> None:
+        """Take ``cmap`` as the minimal map of ``tableau`` (resolved elsewhere with this explainer's
+        settings), so that questions about it need not resolve it again."""
+        self.maps.get(_experience(tableau), lambda: cmap)
 
     def explain(self, tableau: Tableau, a: int | str, b: int | str, deadline: Deadline | None = None) -> Explanation:
         """Explain whether ``a`` and ``b`` (time points, ``"t4"``, or dstate names such as ``"S4"``) are
@@ -253,6 +256,11 @@ class Explainer:
         """Drop steps one at a time (farthest from a and b first) while a and b still cannot be one
         dstate: what is left is subset-minimal evidence."""
         return _Question(self, tableau, deadline or Deadline.after(self.time_limit)).minimal_evidence(a, b, keep)
+
+
+def _experience(tableau: Tableau) -> tuple:
+    """What a map depends on: views, actions, and images (their margins price misreads)."""
+    return tuple((s.view, s.action, s.image) for s in tableau.steps)
 
 
 class _Memo:

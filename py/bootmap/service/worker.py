@@ -189,11 +189,23 @@ def _solve(job: SolveJob, cache: dict) -> tuple:
             stream = _cached(cache, ("stream", job.axioms, job.quantum_deg, job.max_models, job.stream),
                              lambda: MapStream(resolver))
             cmap = stream.update(tableau, deadline)
+        _remember(cache, job, tableau, cmap)
         return "ok", Solved(cmap.to_dict(), cmap.to_text(), k, time.perf_counter() - start)
     except InconsistentTableau as e:  # the resolver names the failing levels within the same deadline
         return "inconsistent", str(e), e.failing_levels, e.diagnosed
     except SolveTimeout as e:
         return "timeout", str(e), e.lower_bound, e.best_map
+
+
+def _remember(cache: dict, job: SolveJob, tableau: Tableau, cmap) -> None:
+    """Questions about this tableau on all levels (the viewer's first click) need not resolve it again in
+    this solver: its explainer, made with the same settings, takes the map just found."""
+    if job.max_models != 10:  # the explainer's resolver enumerates the default 10 minimal maps
+        return
+    from ..mapping import Explainer
+
+    _cached(cache, ("explain", job.axioms, None, job.quantum_deg),
+            lambda: Explainer(axioms=job.axioms, quantum_deg=job.quantum_deg)).remember(tableau, cmap)
 
 
 def _explain(job: ExplainJob, cache: dict) -> tuple:
