@@ -302,10 +302,15 @@ class _Search:
     def _suspects(self, found: CognitiveMap | None) -> list[Suspect]:
         """The views the search may take as misreads: none unless allowed; where one dstate per class
         explains the experience, only views with one or two images (each made a dstate of its own)."""
-        if not self.resolver.misreads or (found and not rare_views(self.tableau.views, typical=RARE_AMONG)):
+        images = _images(self.tableau)
+        if not self.resolver.misreads or (found and not _rare_images(self.tableau, images)):
             return []
         actions = [action_symbol(s.action, a) for s, a in zip(self.tableau.steps, self.angles)]
-        suspects = find_suspects(self.tableau.views, actions, _images(self.tableau))
+        suspects = find_suspects(self.tableau.views, actions, images)
+        if images is None:
+            # A rare view is suspect where views come from clustering images (one image a passer-by
+            # filled); a label given with no image is the user's word (a landmark seen once).
+            suspects = [s for s in suspects if s.reason != RARE_VIEW]
         # A view is surprising in its context only against experience the robot has repeated: not
         # where one dstate per class explains it, nor in early exploration (few visits per class).
         repeated = not found and len(self.tableau) >= MIN_VISITS * self.classes.count
@@ -415,6 +420,11 @@ class _Search:
         return SolveTimeout(f"time limit of {limit:g} s reached while looking for {what}; "
                             f"at least {self.proved} dstates are proved necessary; {found}",
                             lower_bound=self.proved, best_map=self.best, time_limit_s=limit, stage=what)
+
+
+def _rare_images(tableau: Tableau, images: np.ndarray | None) -> bool:
+    """Some view was clustered from only one or two images (suspect: see :func:`.misreads.rare_views`)."""
+    return images is not None and bool(rare_views(tableau.views, typical=RARE_AMONG))
 
 
 def _images(tableau: Tableau) -> np.ndarray | None:
