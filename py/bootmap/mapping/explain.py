@@ -392,7 +392,9 @@ class _Question:
     def feature_failure(self, a: int, b: int, evidence: list[int]) -> tuple[list[RuleRef], list[Failure]]:
         """a and b differ in a feature every time point shows: no supposition needed, the features'
         own derivations are the proof."""
-        facts, _ = self.with_misreads(excerpt_facts(self.facts, evidence), evidence)
+        facts = excerpt_facts(self.facts, evidence)
+        if any(t in self.misreads for t in evidence):  # else no prepass is needed: nothing to add
+            facts, _ = self.with_misreads(facts, evidence)
         traced = Grounding(self.theory, facts, self.depth, instrumented=True).ground()
         inst = traced.rules
         symbols = [sa.symbol for sa in traced.control.symbolic_atoms if sa.is_fact]

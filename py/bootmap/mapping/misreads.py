@@ -41,6 +41,7 @@ from typing import Hashable, Sequence
 import numpy as np
 from clingo import Symbol
 
+from ..tableau import Tableau
 from .vocabulary import DSTATE_COST, action_word
 
 
@@ -156,6 +157,17 @@ def rare_views(views: Sequence[Hashable], at_most: int = 2, typical: int = 5) ->
     if len(views) < typical * len(at):
         return {}
     return {v: ts for v, ts in at.items() if len(ts) <= at_most}
+
+
+def has_images(tableau: Tableau) -> bool:
+    """Every step of the tableau has an image (its views were, or can be, clustered from them)."""
+    return bool(tableau.steps) and all(s.image is not None for s in tableau.steps)
+
+
+def rare_clustered_views(tableau: Tableau) -> bool:
+    """Some view of a tableau of images has only one or two of them (:func:`rare_views`): a suspect. A
+    label given without an image is the user's word (a landmark seen once), not a suspect."""
+    return has_images(tableau) and bool(rare_views(tableau.views, typical=RARE_AMONG))
 
 
 class _Contexts:

@@ -49,7 +49,7 @@ from .diagnosis import diagnosed
 from .facts import action_symbol, read_actions, tableau_facts
 from .grounding import Classes, Deadline, Grounding, key_with_view, prepass
 from .theory import Theory, load_theory
-from .misreads import DSTATE_COST, MIN_VISITS, RARE_AMONG, RARE_VIEW, Suspect, find_suspects, rare_views
+from .misreads import DSTATE_COST, MIN_VISITS, RARE_VIEW, Suspect, find_suspects, has_images, rare_clustered_views
 from .vocabulary import FUTURE_DEPTH, MAY_BE, MINIMISE_DSTATES, ONE_PER_CLASS, SUSPECT
 
 
@@ -302,9 +302,9 @@ class _Search:
     def _suspects(self, found: CognitiveMap | None) -> list[Suspect]:
         """The views the search may take as misreads: none unless allowed; where one dstate per class
         explains the experience, only views with one or two images (each made a dstate of its own)."""
-        images = _images(self.tableau)
-        if not self.resolver.misreads or (found and not _rare_images(self.tableau, images)):
+        if not self.resolver.misreads or (found and not rare_clustered_views(self.tableau)):
             return []
+        images = _images(self.tableau)
         actions = [action_symbol(s.action, a) for s, a in zip(self.tableau.steps, self.angles)]
         suspects = find_suspects(self.tableau.views, actions, images)
         if images is None:
@@ -422,14 +422,9 @@ class _Search:
                             lower_bound=self.proved, best_map=self.best, time_limit_s=limit, stage=what)
 
 
-def _rare_images(tableau: Tableau, images: np.ndarray | None) -> bool:
-    """Some view was clustered from only one or two images (suspect: see :func:`.misreads.rare_views`)."""
-    return images is not None and bool(rare_views(tableau.views, typical=RARE_AMONG))
-
-
 def _images(tableau: Tableau) -> np.ndarray | None:
     """The tableau's images when every step has one (their margins price misreads), else None."""
-    if not tableau.steps or any(s.image is None for s in tableau.steps):
+    if not has_images(tableau):
         return None
     return as_images([s.image for s in tableau.steps])
 

@@ -42,8 +42,8 @@ from ..tableau import Tableau
 from .cogmap import CognitiveMap, SolveStats, Try, build_map
 from .facts import action_symbol, read_actions, tableau_facts
 from .grounding import Deadline, Grounding, prepass
-from .misreads import MIN_VISITS, find_suspects
-from .resolver import Resolver, _images, _rare_images
+from .misreads import MIN_VISITS, find_suspects, rare_clustered_views
+from .resolver import Resolver
 from .vocabulary import FIXED
 
 __all__ = ["MapStream"]
@@ -101,7 +101,7 @@ class MapStream:
         angles, types = read_actions(tableau, self.resolver.quantum_deg)
         if angles[:n - 1] != self._angles[:n - 1]:
             return None  # the action types learned from the longer experience read an old action anew
-        if self.resolver.misreads and _rare_images(tableau, _images(tableau)):
+        if self.resolver.misreads and rare_clustered_views(tableau):
             return None  # the resolver weighs views of one or two images against any map: let it
         dstate_of = _by_determinism(cmap, tableau, angles, n)
         if dstate_of is None:
