@@ -138,8 +138,9 @@ def find_suspects(views: Sequence[Hashable], actions: Sequence[Hashable],
             # the search still takes a misread only where it saves dstates.
             evidence = min(side[2] for side in sides)
             cost = base if clear else int(round(base * max(1.0, FULL_EVIDENCE / max(evidence, 1))))
-            found.append(Suspect(t, cost, _expected(sides), "unlike what the experience around it shows"
-                                 + ("" if clear else " on one side"), clear, tuple(side[3] for side in sides)))
+            reason = "unlike what the experience around it shows" + ("" if clear else " on one side")
+            found.append(Suspect(t, cost, _expected(sides), reason, clear,
+                                 tuple(contexts.describe(side[3]) for side in sides)))
     return found
 
 
@@ -208,7 +209,9 @@ class _Contexts:
         return self._side(t, ahead=True)
 
     def _side(self, t: int, ahead: bool):
-        """The most surprising reading of t's view in its contexts on one side (None at the end)."""
+        """The most surprising reading of t's view in its contexts on one side (None at the end): its
+        share, the other views seen there, how often, and the context's key (:meth:`describe` words it:
+        only suspects need the words, and they are most of the cost)."""
         found = []
         for depth in self.DEPTHS:
             key = self._key(t, depth, ahead)
@@ -217,9 +220,9 @@ class _Contexts:
         if not found:
             return None
         share, others, n, key = min(found, key=lambda f: (f[0], -f[2]))
-        return share, tuple(self.view_names[v] for v in others), n, self._describe(key)
+        return share, tuple(self.view_names[v] for v in others), n, key
 
-    def _describe(self, key) -> str:
+    def describe(self, key) -> str:
         """A context and what was seen in it, e.g. "after V0, turn -90: V1 12 times, V3 once"."""
         ahead, views, actions = key
         views = [self.view_names[v] for v in views]
