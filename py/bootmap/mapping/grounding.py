@@ -127,17 +127,26 @@ class Grounding:
         """Per class, a set of time points that pairwise disagree on a feature only some of them show
         (e.g. the view seen after the same actions): no two of them can share a dstate. Time points
         ``left_out`` (suspect views, which may be at a dstate of another class) are not counted."""
+        partial = self._partial_features(classes.times)
+        return [_apart_clique(ts, partial) for ts in _members(classes, leave_out)]
+
+    def loners(self, classes: "Classes") -> list[int]:
+        """Time points that disagree with every other time point of their class: read as seen, each is
+        a dstate of its own."""
+        partial = self._partial_features(classes.times)
+        return sorted(t for ts in _members(classes) if len(ts) > 1 for t in ts
+                      if all(_apart(partial[t], partial[m]) for m in ts if m != t))
+
+    def _partial_features(self, times: Sequence[int]) -> dict[int, dict[int, set[int]]]:
+        """Each time point's features that only some time points show, as small ints (comparing clingo
+        symbols costs a C call each)."""
         grouping = {args[0] for args in SHOWN_BY_ALL.facts_in(self.control)}
-        ids: dict[Symbol, int] = {}  # small ints: comparing clingo symbols costs a C call each
-        partial: dict[int, dict[int, set[int]]] = {t: defaultdict(set) for t in classes.times}
+        ids: dict[Symbol, int] = {}
+        partial: dict[int, dict[int, set[int]]] = {t: defaultdict(set) for t in times}
         for t, key, value in FEATURE.facts_in(self.control):
             if key not in grouping:
                 partial[t.number][ids.setdefault(key, len(ids))].add(ids.setdefault(value, len(ids)))
-        members: list[list[int]] = [[] for _ in classes.sizes]
-        for t, c in zip(classes.times, classes.of_time):
-            if t not in leave_out:
-                members[c].append(t)
-        return [_apart_clique(ts, partial) for ts in members]
+        return partial
 
 
 def prepass(theory: Theory, facts: Sequence[Symbol], future_depth: int) -> Grounding:
@@ -197,6 +206,15 @@ def key_with_view(key: Symbol, view: Symbol) -> Symbol:
     if feature.type == clingo.SymbolType.Function and feature.name == "view" and not feature.arguments:
         value = view
     return Function("k", [feature, value, key_with_view(rest, view)])
+
+
+def _members(classes: "Classes", leave_out: Collection[int] = ()) -> list[list[int]]:
+    """The time points of each class, but those left out."""
+    members: list[list[int]] = [[] for _ in classes.sizes]
+    for t, c in zip(classes.times, classes.of_time):
+        if t not in leave_out:
+            members[c].append(t)
+    return members
 
 
 def _apart(a: dict, b: dict) -> bool:

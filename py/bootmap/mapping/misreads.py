@@ -66,6 +66,8 @@ MIN_STEPS = 100
 MIN_VISITS = 5
 #: Why a rare view is suspect.
 RARE_VIEW = "a view with one or two images"
+#: Why a view no rule here suspected became a suspect (the resolver finds these: :meth:`_ghosts`).
+GHOST = "a dstate of its own in a first map"
 #: A misread costs more where its contexts showed the other views fewer times than this (3 times: double).
 FULL_EVIDENCE = 6
 #: With images, the cost runs from the boundary's to the cluster core's.
