@@ -155,3 +155,35 @@ def test_proofs_argue_from_the_views_the_map_reads_not_from_its_misreads():
     # Without the map's misreads, the same question is answered from the misread view.
     assert t in _Question(explainer, tableau, Deadline.after(60)).minimal_evidence(
         a, b, list(range(b, t + 1)))
+
+
+def _loop_with_one_misread(laps: int, u: int):
+    """A loop of four dstates seen as X, Y, Z, V (turns -90 between: a square), lap after lap, but for one
+    view read as W at time point u."""
+    from bootmap.tableau import Tableau
+
+    views = ["XYZV"[t % 4] for t in range(4 * laps)]
+    views[u] = "W"
+    steps = [{"view": v, "action": {"type": "turn", "angle_deg": -90}} for v in views[:-1]] + [{"view": views[-1]}]
+    return Tableau.from_dict({"format": "bootmap.tableau/1", "steps": steps})
+
+
+@pytest.mark.parametrize("u", [14, 29, 35])
+def test_the_view_that_raises_its_predecessors_bounds_is_the_one_inflator(u):
+    from bootmap.mapping.facts import tableau_facts
+    from bootmap.mapping.grounding import prepass
+
+    tableau = _loop_with_one_misread(15, u)
+    resolver = Resolver()
+    grounded = prepass(resolver.theory, tableau_facts(tableau), resolver.future_depth)
+    classes = grounded.classes(range(len(tableau)))
+    # The eight time points before the W saw it (one and two laps on) where their class-mates saw another
+    # view: each of the four classes needs three dstates (W's one).
+    assert sorted(grounded.lower_bounds(classes)) == [1, 3, 3, 3, 3]
+    assert grounded.inflators(classes) == [u]
+    # Loners are time points before u that saw W where all their class-mates saw another view (those
+    # whose class ends the tableau agree with its last, which sees only a few actions ahead).
+    loners = grounded.loners(classes)
+    assert loners and set(loners) <= set(range(u - resolver.future_depth, u))
+    # Leaving u out (a suspect) leaves nothing to inflate.
+    assert grounded.inflators(classes, leave_out={u}) == []

@@ -12,7 +12,7 @@ asks its questions through the same class.
 from __future__ import annotations
 
 import time
-from collections import defaultdict
+from collections import ChainMap, defaultdict
 from dataclasses import dataclass
 from typing import Callable, Collection, Sequence
 
@@ -137,16 +137,43 @@ class Grounding:
         return sorted(t for ts in _members(classes) if len(ts) > 1 for t in ts
                       if all(_apart(partial[t], partial[m]) for m in ts if m != t))
 
-    def _partial_features(self, times: Sequence[int]) -> dict[int, dict[int, set[int]]]:
+    def inflators(self, classes: "Classes", leave_out: Collection[int] = ()) -> list[int]:
+        """Time points whose view, as the time points before them saw it later, raises the lower bounds
+        of those time points' classes: without that view (as if it were a misread), fewer dstates are
+        proved. A misread no rule suspected shows so: the time points before it saw another view, at
+        its distance, than their class-mates did. Time points ``left_out`` are suspects already."""
+        partial, seen_from = self._partial_features(classes.times, sources=True)
+        members = _members(classes, leave_out)
+        lower = [_apart_clique(ts, partial) for ts in members]
+        class_of = dict(zip(classes.times, classes.of_time))
+        found = []
+        for u, seers in sorted(seen_from.items()):
+            if u in leave_out:
+                continue
+            # What the time points before u show, but for the views they saw at u.
+            without = {t: {k: v for k, v in partial[t].items() if k not in seers[t]} for t in seers}
+            features = ChainMap(without, partial)
+            affected = {class_of[t] for t in seers if t not in leave_out}
+            if any(_apart_clique(members[c], features) < lower[c] for c in affected):
+                found.append(u)
+        return found
+
+    def _partial_features(self, times: Sequence[int], sources: bool = False):
         """Each time point's features that only some time points show, as small ints (comparing clingo
-        symbols costs a C call each)."""
+        symbols costs a C call each). With ``sources``, also the time point each view seen later was
+        seen at (``after(S)`` of causal.lp is seen len(S) actions on): that time point -> {time point
+        before it: the features it shows from there}."""
         grouping = {args[0] for args in SHOWN_BY_ALL.facts_in(self.control)}
         ids: dict[Symbol, int] = {}
         partial: dict[int, dict[int, set[int]]] = {t: defaultdict(set) for t in times}
+        seen_from: dict[int, dict[int, set]] = defaultdict(lambda: defaultdict(set))
         for t, key, value in FEATURE.facts_in(self.control):
             if key not in grouping:
-                partial[t.number][ids.setdefault(key, len(ids))].add(ids.setdefault(value, len(ids)))
-        return partial
+                k = ids.setdefault(key, len(ids))
+                partial[t.number][k].add(ids.setdefault(value, len(ids)))
+                if sources and key.name == "after":
+                    seen_from[t.number + _actions_in(key.arguments[0])][t.number].add(k)
+        return (partial, seen_from) if sources else partial
 
 
 def prepass(theory: Theory, facts: Sequence[Symbol], future_depth: int) -> Grounding:
@@ -208,6 +235,14 @@ def key_with_view(key: Symbol, view: Symbol) -> Symbol:
     return Function("k", [feature, value, key_with_view(rest, view)])
 
 
+def _actions_in(sequence: Symbol) -> int:
+    """The number of actions in a sequence ``c(A, c(A2, ... nil))`` (causal.lp's futures)."""
+    n = 0
+    while sequence.type == clingo.SymbolType.Function and sequence.name == "c" and len(sequence.arguments) == 2:
+        n, sequence = n + 1, sequence.arguments[1]
+    return n
+
+
 def _members(classes: "Classes", leave_out: Collection[int] = ()) -> list[list[int]]:
     """The time points of each class, but those left out."""
     members: list[list[int]] = [[] for _ in classes.sizes]
@@ -224,10 +259,11 @@ def _apart(a: dict, b: dict) -> bool:
 
 
 def _apart_clique(times: list[int], partial: dict[int, dict]) -> int:
-    """Size of a set of time points that pairwise disagree (greedy, forwards and backwards; at least 1
-    unless there are none)."""
+    """Size of a set of time points that pairwise disagree (greedy, forwards, backwards and the time points
+    showing most features first, since those disagree most; at least 1 unless there are none)."""
     best = min(1, len(times))
-    for order in (times, times[::-1]):
+    richest = sorted(times, key=lambda t: -len(partial[t]))
+    for order in (times, times[::-1], richest):
         clique: list[int] = []
         for t in order:
             if all(_apart(partial[t], partial[m]) for m in clique):

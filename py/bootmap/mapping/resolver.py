@@ -269,10 +269,13 @@ class _Search:
         seen takes a dstate of its own (and splits those determinism carries it back to), so the suspects
         allowed so far cannot reach the bound. Such a time point, or the one before it, disagrees with
         every other time point of its class (a *loner*; the clear suspects' views already set aside):
-        each loner and the time point after it become suspects too. Few are (4-6 in a 600-step
-        exploration with 2% misreads, the dstates seen once among them)."""
+        each loner and the time point after it become suspects too. So do the time points whose view,
+        as the ones before them saw it later, raises their classes' lower bounds (*inflators*). Few are
+        (4-6 loners, 1-13 inflators in a 600-step exploration with 2% misreads)."""
         loners = self.prepassed.loners(self.classes)
-        times = sorted({u for t in loners for u in (t, t + 1) if u < len(self.tableau)} - set(self.suspects))
+        inflators = self.prepassed.inflators(self.classes, leave_out=self.suspects)
+        times = sorted(({u for t in loners for u in (t, t + 1) if u < len(self.tableau)} | set(inflators))
+                       - set(self.suspects))
         return [Suspect(t, MISREAD_COST, (), GHOST) for t in times]
 
     def _within_share(self, work):
