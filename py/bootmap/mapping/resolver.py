@@ -292,6 +292,7 @@ class _Search:
     def _allow_misreads(self, exact_facts: list[Symbol], suspects: list[Suspect]) -> int:
         """Let these suspects be misreads from now on; the classes' lower bounds without them, and what
         that proves. Returns the dstates the search aims at: the bound the suspects leave."""
+        self._check_clock("the lower bounds with misreads")
         self.suspects = {s.t: s for s in suspects}
         self.facts = exact_facts + [SUSPECT(s.t, s.cost) for s in suspects] + self._may_be(suspects)
         grounded = self.prepassed = prepass(self.resolver.theory, self.facts, self.depth)
