@@ -6,8 +6,8 @@ odometry) that brought it there; it answers with the next action - travel along 
 
 * :class:`Circuits` - the paper's circuits of a room: follow the wall on one side, and at each corner
   turn away from it (clockwise circuits keep the wall on the left and turn right).
-* :class:`RandomWalk` - at every dstate, travel on or turn towards an open side, uniformly at random
-  (the baseline an active explorer must beat).
+* :class:`RandomWalk` - at every place, travel on, or turn towards an open side or back and travel,
+  uniformly at random (the baseline an active explorer must beat).
 * :class:`Explore` - a systematic hallway explorer: it takes every unexplored path direction at every
   place and turns around at dead ends, then walks back to the nearest place with an untried direction.
   Places are told apart by dead reckoning on a 90-degree grid (turns are rounded to quarter turns, since
@@ -84,14 +84,15 @@ class Circuits:
 
 
 class RandomWalk:
-    """A random walk of a hallway network: at every dstate, one of the moves open there - travel on (the
-    path ahead is open), turn left or right (that side is open), turn around - chosen uniformly by the
-    simulation's generator. It never stops by itself: give the run a number of steps.
+    """A random walk of a hallway network: at every place, one of the directions open there - the path
+    ahead, a side opening, or back the way it came - chosen uniformly by the simulation's generator, then
+    a travel that way (a turn is always followed by a travel). It never stops by itself: give the run a
+    number of steps.
 
     Parameters
     ----------
     turn_around : bool
-        Count turning around among the moves (always taken where nothing else is open).
+        Count going back among the choices (always taken where nothing else is open).
     """
 
     junctions = True
@@ -104,6 +105,8 @@ class RandomWalk:
         self.rng = rng
 
     def decide(self, obs: Observation) -> Decision:
+        if isinstance(obs.action, TurnAction):
+            return TRAVEL  # the direction was chosen before the turn
         p = obs.percept
         moves = ([TRAVEL] if obs.front_open else []) + \
             ([Decision("turn", math.pi / 2)] if p.left_open else []) + \

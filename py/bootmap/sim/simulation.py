@@ -34,7 +34,12 @@ MOVE_PROBABILITY = 0.2  # chance that a jittery clutter object has moved when th
 
 
 class SimulationError(BootmapError):
-    """The robot got stuck: a control law did not reach its fixed point in time."""
+    """The robot got stuck: a control law did not reach its fixed point in time.
+
+    Raised from :meth:`Simulation.run` once a dstate has been recorded, it carries ``run``: the
+    :class:`Run` up to the last dstate reached."""
+
+    run: "Run | None" = None
 
 
 @dataclass
@@ -137,7 +142,14 @@ class Simulation:
             if decision is None:
                 break
             law = self._law(decision, policy)
-            image, percept = self._execute(law)
+            try:
+                image, percept = self._execute(law)
+            except SimulationError as e:
+                # Keep the experience up to the dstate where the robot got stuck (benchmarks score it).
+                e.run = Run(self._tableau(rec, policy), np.array(self._trajectory), self.time,
+                            self.robot.contacts, time.perf_counter() - started)
+                bar.close()
+                raise
             self._record(rec, image, law.action(self.robot.odometry))
             bar.update(1)
         bar.close()
