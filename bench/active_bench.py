@@ -141,12 +141,13 @@ def figure(rows: list[dict], worlds: list, path: str) -> None:
     width = 0.26
     colours = {"active": "tab:green", "explore": "tab:blue", "random": "tab:grey"}
     for j, p in enumerate(POLICIES):
+        ax.bar(0, 0, 0, color=colours[p], label=p, alpha=0.8)  # in the legend even where no bar is drawn
         for i, w in enumerate(worlds):
             vals = [r.get("until_true") for r in rows if r["world"] == w.name and r["policy"] == p]
             got = [v for v in vals if v is not None]
             x = i + (j - 1) * width
             if got:
-                ax.bar(x, statistics.mean(got), width, color=colours[p], label=p if i == 0 else None, alpha=0.8)
+                ax.bar(x, statistics.mean(got), width, color=colours[p], alpha=0.8)
                 ax.scatter([x] * len(got), got, s=10, color="black", zorder=3)
             missed = len(vals) - len(got)
             if missed:
