@@ -40,6 +40,9 @@ def test_active_maps_the_loop_world_with_its_five_paths():
     world, policy, result = _active_run("loop", seed=1)
     _assert_true_map(world, policy, result)
     assert policy.map_.n_paths == 5 and policy.turnarounds_ >= 1 and policy.rehearsals_ >= 1
+    # Where two maps disagreed at the spur junction, the robot travelled straight on through it.
+    at_junction = [actions for t, actions in policy.plans_ if result.tableau.steps[t].truth in ("T:E", "T:W")]
+    assert ["travel"] in [a[:1] for a in at_junction]
 
 
 def test_active_keeps_taylor_hall_20_dstates_7_places_4_paths():

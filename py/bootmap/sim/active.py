@@ -96,6 +96,8 @@ class Active(Explore):
         The policy stopped because the map is unique and complete (not because of ``max_steps``).
     rehearsals_ : int
         Rehearsal plans carried out (begun).
+    plans_ : list of tuple
+        ``(t, actions)``: each rehearsal plan begun, with the time point it was begun at.
     turnarounds_ : int
         Turn-arounds made to join a path's two directions.
     """
@@ -118,6 +120,7 @@ class Active(Explore):
         self.map_: CognitiveMap | None = None
         self.complete_ = False
         self.rehearsals_ = 0
+        self.plans_: list[tuple[int, list[str]]] = []
         self.turnarounds_ = 0
         self._steps: list[Step] = []
         self._where: list[tuple[int, int]] = []  # (place, heading) by dead reckoning, per time point
@@ -159,6 +162,7 @@ class Active(Explore):
             if not self._plan:
                 return None
             self.rehearsals_ += 1
+            self.plans_.append((len(self._steps) - 1, list(plan.actions)))
             self._intent = None  # exploration picks up afresh after the rehearsal
         decision = self._plan.popleft()
         if decision.kind == "travel" and not obs.front_open:
