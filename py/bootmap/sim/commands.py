@@ -21,8 +21,10 @@ def register(subparsers) -> None:
         description="Run the simulated robot (pymunk physics, a 180-beam laser, control laws that see only "
                     "the scan and odometry) in a world, and write the tableau of its dstates as JSON.")
     p.add_argument("world", help="world file, or the name of one in worlds/ (e.g. notched_rectangle)")
-    p.add_argument("--policy", choices=("circuits", "explore"),
-                   help="circuits of a room, or systematic exploration of a hallway (default: the world's)")
+    p.add_argument("--policy", choices=("circuits", "explore", "active", "random"),
+                   help="circuits of a room; systematic exploration of a hallway; active mapping (explore and "
+                        "rehearse until the robot's own map is unique and complete; --steps caps it); a random "
+                        "walk (needs --steps) (default: the world's)")
     p.add_argument("--circuits", type=arguments.count("circuits"), default=50, metavar="N", help="circuits to make (default 50)")
     p.add_argument("--steps", type=arguments.count("steps", 2), metavar="N",
                    help="record exactly N dstates (explore: keep wandering after exploring)")
@@ -54,6 +56,8 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         world = load_world(args.world, dict(args.set or ()))
         if args.circuits < 1 or (args.steps is not None and args.steps < 1):
             raise WorldError("--circuits and --steps must be at least 1")
+        if args.policy == "random" and args.steps is None:
+            raise WorldError("--policy random never stops by itself: give --steps N")
         result = run(world, policy=args.policy or world.policy, circuits=args.circuits, steps=args.steps,
                      seed=args.seed, progress=not args.no_progress, direction=args.direction)
     except SimulationError as e:

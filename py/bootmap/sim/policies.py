@@ -6,6 +6,8 @@ odometry) that brought it there; it answers with the next action - travel along 
 
 * :class:`Circuits` - the paper's circuits of a room: follow the wall on one side, and at each corner
   turn away from it (clockwise circuits keep the wall on the left and turn right).
+* :class:`RandomWalk` - at every place, travel on, or turn towards an open side or back and travel,
+  uniformly at random (the baseline an active explorer must beat).
 * :class:`Explore` - a systematic hallway explorer: it takes every unexplored path direction at every
   place and turns around at dead ends, then walks back to the nearest place with an untried direction.
   Places are told apart by dead reckoning on a 90-degree grid (turns are rounded to quarter turns, since
@@ -42,11 +44,13 @@ TRAVEL = Decision("travel")
 
 @dataclass(frozen=True)
 class Observation:
-    """What a policy is told at a dstate: the percept of its image, the action that led there."""
+    """What a policy is told at a dstate: the percept of its image, the action that led there, and the
+    image itself (the laser scan; None where a caller has only the percept)."""
 
     percept: Percept
     action: Action | None
     front_open: bool
+    image: np.ndarray | None = None
 
 
 class Circuits:
@@ -77,6 +81,39 @@ class Circuits:
         if isinstance(obs.action, TurnAction):
             return TRAVEL
         return Decision("turn", -math.pi / 2 if self.direction == "cw" else math.pi / 2)
+
+
+class RandomWalk:
+    """A random walk of a hallway network: at every place, one of the directions open there - the path
+    ahead, a side opening, or back the way it came - chosen uniformly by the simulation's generator, then
+    a travel that way (a turn is always followed by a travel). It never stops by itself: give the run a
+    number of steps.
+
+    Parameters
+    ----------
+    turn_around : bool
+        Count going back among the choices (always taken where nothing else is open).
+    """
+
+    junctions = True
+    follow = "centre"
+
+    def __init__(self, turn_around: bool = True):
+        self.turn_around = turn_around
+
+    def reset(self, rng: np.random.Generator) -> None:
+        self.rng = rng
+
+    def decide(self, obs: Observation) -> Decision:
+        if isinstance(obs.action, TurnAction):
+            return TRAVEL  # the direction was chosen before the turn
+        p = obs.percept
+        moves = ([TRAVEL] if obs.front_open else []) + \
+            ([Decision("turn", math.pi / 2)] if p.left_open else []) + \
+            ([Decision("turn", -math.pi / 2)] if p.right_open else [])
+        if self.turn_around or not moves:
+            moves.append(Decision("turn", math.pi))
+        return moves[int(self.rng.integers(len(moves)))]
 
 
 @dataclass

@@ -26,7 +26,7 @@ from .control import ControlLaw, Limits, Travel, Turn
 from .laser import Laser, Scene
 from .perception import Perception
 from .physics import PhysicalRobot
-from .policies import Circuits, Decision, Explore, Observation
+from .policies import Circuits, Decision, Explore, Observation, RandomWalk
 from .world import World, load_world
 
 DSTATES_PER_CIRCUIT = 8  # a room has four corners, and a dstate before and after each turn
@@ -34,7 +34,12 @@ MOVE_PROBABILITY = 0.2  # chance that a jittery clutter object has moved when th
 
 
 class SimulationError(BootmapError):
-    """The robot got stuck: a control law did not reach its fixed point in time."""
+    """The robot got stuck: a control law did not reach its fixed point in time.
+
+    Raised from :meth:`Simulation.run` once a dstate has been recorded, it carries ``run``: the
+    :class:`Run` up to the last dstate reached."""
+
+    run: "Run | None" = None
 
 
 @dataclass
@@ -132,12 +137,19 @@ class Simulation:
         bar.update(1)
         while n_steps is None or len(rec.images) < n_steps:
             obs = Observation(percept, rec.actions[-1] if rec.actions else None,
-                              percept.front > self.world.control.open_range)
+                              percept.front > self.world.control.open_range, image)
             decision = policy.decide(obs)
             if decision is None:
                 break
             law = self._law(decision, policy)
-            image, percept = self._execute(law)
+            try:
+                image, percept = self._execute(law)
+            except SimulationError as e:
+                # Keep the experience up to the dstate where the robot got stuck (benchmarks score it).
+                e.run = Run(self._tableau(rec, policy), np.array(self._trajectory), self.time,
+                            self.robot.contacts, time.perf_counter() - started)
+                bar.close()
+                raise
             self._record(rec, image, law.action(self.robot.odometry))
             bar.update(1)
         bar.close()
@@ -251,15 +263,30 @@ def _progress_bar(enabled: bool, total: int | None):
     return tqdm(total=total, unit="dstate", file=sys.stderr, dynamic_ncols=True)
 
 
-def make_policy(policy: str | object, direction: str = "cw", wander: bool = False):
-    """A policy object from its name (``circuits`` or ``explore``), or the object itself."""
+POLICIES = ("circuits", "explore", "active", "random")
+ACTIVE_MAX_STEPS = 400  # the active policy's cap when no --steps is given
+
+
+def make_policy(policy: str | object, direction: str = "cw", wander: bool = False, steps: int | None = None,
+                max_range: float | None = None):
+    """A policy object from its name (:data:`POLICIES`), or the object itself.
+
+    ``steps`` caps the ``active`` policy (default :data:`ACTIVE_MAX_STEPS`); ``max_range`` is the laser's,
+    for the active policy's view labels.
+    """
     if not isinstance(policy, str):
         return policy
     if policy == "circuits":
         return Circuits(direction)
     if policy == "explore":
         return Explore(wander=wander)
-    raise ValueError(f"unknown policy {policy!r} (expected 'circuits' or 'explore')")
+    if policy == "random":
+        return RandomWalk()
+    if policy == "active":
+        from .active import Active  # imports the mapping stack (clingo): only when asked for
+
+        return Active(max_steps=steps or ACTIVE_MAX_STEPS, max_range=max_range)
+    raise ValueError(f"unknown policy {policy!r} (expected one of: {', '.join(POLICIES)})")
 
 
 def run(world: World | str | os.PathLike, policy: str | object = "circuits", circuits: int = 50,
@@ -269,7 +296,10 @@ def run(world: World | str | os.PathLike, policy: str | object = "circuits", cir
     ``start`` (x, y, heading in degrees) overrides the world's start pose."""
     if not isinstance(world, World):
         world = load_world(world)
-    pol = make_policy(policy, direction=direction, wander=steps is not None)
+    pol = make_policy(policy, direction=direction, wander=steps is not None, steps=steps,
+                      max_range=world.laser.range_max)
+    if steps is None and isinstance(pol, RandomWalk):
+        raise ValueError("a random walk never stops by itself: give it a number of steps")
     if steps is None and isinstance(pol, Circuits):
         steps = DSTATES_PER_CIRCUIT * circuits
     if start is not None:
@@ -284,10 +314,12 @@ def simulate(world: World | str | os.PathLike, policy: str | object = "circuits"
     Parameters
     ----------
     world : World, or a path, or the name of a file in ``worlds/``
-    policy : {"circuits", "explore"} or a policy object
+    policy : {"circuits", "explore", "active", "random"} or a policy object
         ``circuits`` runs the paper's circuits of a room (8 dstates each); ``explore`` explores a
         hallway systematically and stops when every path direction is explored, or, given ``steps``,
-        goes on at random until it has that many dstates.
+        goes on at random until it has that many dstates; ``active`` keeps its map current and rehearses
+        until the map is unique and complete (``steps`` caps it; :mod:`bootmap.sim.active`); ``random``
+        walks at random (give ``steps``).
     circuits : int
         Number of circuits (``circuits`` policy, unless ``steps`` is given).
     steps : int, optional
