@@ -5,7 +5,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from bootmap.logs.evaluate import nn_on_revisits, shift_tolerant_distances, shuffled_uncertainty
+from bootmap.logs.evaluate import dead_reckoned_dstates, nn_on_revisits, shift_tolerant_distances, shuffled_uncertainty
 from bootmap.views import ViewClusterer, davies_bouldin_k
 
 from synthetic import pattern
@@ -66,3 +66,10 @@ def test_davies_bouldin_finds_the_clusters_where_m_picks_fewer():
     model = ViewClusterer(k_max=6).fit(x)
     k, scores = davies_bouldin_k(model, x)
     assert k == 3 and scores[0] is None and len(scores) == 6
+
+
+def test_dead_reckoned_dstates_join_close_visits_and_each_turns_two_ends():
+    # Two turns at one corner (odometry 1 m apart), then a turn 20 m away; headings east then north.
+    odometry = [(0, 0, 0), (0.5, 0.5, 1.57), (20, 0, 0), (20, 0.5, 1.57), (1, 0, 0), (1, 0.5, 1.57)]
+    track = [(x, 0, 0) for x in range(30)]
+    assert dead_reckoned_dstates(odometry, track) == ["P0:E", "P0:N", "P1:E", "P1:N", "P0:E", "P0:N"]

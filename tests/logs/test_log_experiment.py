@@ -32,6 +32,8 @@ def test_two_laps_of_a_square_give_its_map_by_hand(square_run):
     assert (m["true_dstates"], m["true_places"]) == (8, 4)
     assert m["dstate_accuracy"] == 1.0 and m["place_accuracy"] == 1.0
     assert m["every_visit_own_dstate_accuracy"] == 0.5  # each true dstate seen twice: half by renaming
+    # Exact odometry: dead-reckoned places are the true ones.
+    assert r["dead_reckoning"] == {"dstates": 8, "dstate_accuracy": 1.0}
 
 
 def test_the_square_meets_every_target_and_says_so(square_run):
@@ -105,4 +107,6 @@ def test_the_whole_killian_log_in_under_two_minutes(tmp_path, capsys):
     m, nn = r["map"], r["nn_revisited"]
     assert 0.5 < m["dstate_accuracy"] <= m["every_visit_own_dstate_accuracy"] + 0.05
     assert nn["shift"]["revisited"] > nn["raw"]["revisited"]
+    # Odometry is good locally: dead-reckoned places put more visits in their true dstate than the map.
+    assert r["dead_reckoning"]["dstate_accuracy"] > m["dstate_accuracy"]
     assert "visits in their true dstate" in capsys.readouterr().out

@@ -9,6 +9,10 @@ never saw them.
   gives every visit a dstate of its own would get (most dstates of a log are seen once).
 - :func:`views_against_truth`: U(V|S) of the views at every k, beside U of the same views against
   shuffled true dstates: views that help say more about the dstate than chance does.
+- :func:`dead_reckoned_dstates`: a baseline that uses no image at all, only the robot's own odometry:
+  the rule that makes true dstates from true poses, applied to the dead-reckoned poses. It tests the
+  issue's "local metrical consistency": odometry drifts over the whole log, but not between visits
+  close in time.
 - :func:`nn_on_revisits`: nearest-neighbour recognition of true dstates, leave one out, with raw scans
   or a shift-tolerant distance (:func:`shift_tolerant_distances`), on the visits whose true dstate is
   seen more than once; a visit to a dstate seen once has nothing to be recognised by (the ceiling).
@@ -35,6 +39,8 @@ from scipy.spatial.distance import cdist
 
 from ..metrics import dstate_accuracy
 from ..views import uncertainty_coefficient
+from .scans import Pose
+from .truth import main_axis, true_dstates
 
 #: Descriptors :func:`nn_on_revisits` compares scans with.
 DESCRIPTORS = ("raw", "shift")
@@ -66,6 +72,14 @@ def map_against_truth(truth: Sequence[str], cmap) -> dict:
             "merged_true_dstates": {d: sorted(ts) for d, ts in merged.items() if len(ts) > 1},
             "split_true_dstates": {t: sorted(ds) for t, ds in split.items() if len(ds) > 1},
             "solve_s": cmap.stats.total_s}
+
+
+def dead_reckoned_dstates(odometry: Sequence[Pose], track: Sequence[Pose], radius_m: float = 3.0) -> list[str]:
+    """Dstates from odometry alone: dstates whose dead-reckoned positions lie within ``radius_m`` are one
+    place (a turn's two ends too: the chosen dstates alternate turn start, turn end), and a place with
+    a heading sector aligned to the main axis of the dead-reckoned ``track`` is a dstate."""
+    turn_ends = [(k, k + 1) for k in range(0, len(odometry) - 1, 2)]
+    return true_dstates(list(odometry), radius_m, main_axis(list(track)), turn_ends)
 
 
 def shuffled_uncertainty(views: Sequence[Hashable], truth: Sequence[Hashable], repeats: int = 20,

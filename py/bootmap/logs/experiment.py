@@ -6,7 +6,8 @@
    falls steadily with k on real scans (it picks k = 1 or 2 there), by the Davies-Bouldin index, which
    does not (:func:`bootmap.views.davies_bouldin_k`). Both are reported; the map uses ``view_criterion``'s.
 3. The tableau is resolved into dstates, places and paths (:class:`~bootmap.mapping.resolver.Resolver`).
-4. Recognition as the paper's (images labelled by the map), and nearest neighbour on the true dstates
+4. A baseline without images: dstates from dead-reckoned poses alone (local metrical consistency).
+5. Recognition as the paper's (images labelled by the map), and nearest neighbour on the true dstates
    seen more than once, with raw scans and with a shift-tolerant distance (:mod:`bootmap.logs.evaluate`).
 
 Results use the simulated experiment's keys where the meaning is the same (``views``, ``map``,
@@ -25,9 +26,10 @@ import numpy as np
 from ..errors import BadInput, LogError, SolveTimeout
 from ..experiment import _jsonable, curves_figure, recognition_section, views_figure
 from ..mapping.resolver import Resolver
+from ..metrics import dstate_accuracy
 from ..views import ViewClusterer, davies_bouldin_k, view_labels, view_table
 from .dstates import TurnDetector
-from .evaluate import DESCRIPTORS, map_against_truth, nn_on_revisits, views_against_truth
+from .evaluate import DESCRIPTORS, dead_reckoned_dstates, map_against_truth, nn_on_revisits, views_against_truth
 from .ingest import log_tableau, read_log
 
 #: How k is chosen for the map's views: "auto" takes M's k unless M degenerates (k <= 2), then
@@ -87,6 +89,8 @@ def _run(log, out_dir, seed, k_max, time_limit, quantum_deg, view_criterion, det
         cmap, map_note = e.best_map, str(e)
     lap("map_s")
     nn = {d: nn_on_revisits(images, truth, d) for d in DESCRIPTORS}
+    odometry = [s.odometry for s in scans]
+    dead = dead_reckoned_dstates([odometry[i] for i in tableau.meta["dstates"]["scans"]], odometry, radius_m)
     recognition = None if cmap is None else recognition_section(images, cmap.dstate_of, "1-NN", seed)
     lap("recognise_s")
     results = {
@@ -96,6 +100,7 @@ def _run(log, out_dir, seed, k_max, time_limit, quantum_deg, view_criterion, det
         "views": views_section,
         "map": {"error": map_note} if cmap is None else
                {**map_against_truth(truth, cmap), "proved_minimal": cmap.minimal, "note": map_note},
+        "dead_reckoning": {"dstates": len(set(dead)), "dstate_accuracy": dstate_accuracy(truth, dead)},
         "recognition": recognition, "nn_revisited": nn, "timings": timings}
     results["targets"] = targets(results)
     if out_dir is not None:
@@ -152,6 +157,9 @@ def headline(r: dict) -> list[str]:
         lines.append(f"  map: {m['dstates']} dstates, {m['places']} places, {m['paths']} paths (truth "
                      f"{m['true_dstates']} dstates, {m['true_places']} places); visits in their true dstate: "
                      f"{m['dstate_accuracy']:.1%} (a dstate per visit: {m['every_visit_own_dstate_accuracy']:.1%})")
+    dead = r["dead_reckoning"]
+    lines.append(f"  odometry alone (dead-reckoned places within the radius, no image): {dead['dstates']} dstates, "
+                 f"{dead['dstate_accuracy']:.1%} of visits in their true dstate")
     for d, n in r["nn_revisited"].items():
         if n["revisited"] is None:
             lines.append(f"  nearest neighbour ({d} scans): no true dstate is seen twice")
