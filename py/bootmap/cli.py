@@ -167,7 +167,7 @@ def _log_experiment(args: argparse.Namespace) -> int:
     """``bootmap experiment --log LOG``: the experiment on a robot's log (:mod:`bootmap.logs.experiment`).
     Exit 0 when a map was found and the report written (the issue's targets are reported, met or not),
     1 when no map was found in the time limit, 2 on bad input."""
-    from .logs.experiment import LOG_QUANTUM_DEG, headline, run_log_experiment
+    from .logs.experiment import headline, run_log_experiment
 
     if args.world is not None:
         raise BadInput(f"give a world or --log, not both (world {args.world!r}, log {args.log!r})")
@@ -175,11 +175,8 @@ def _log_experiment(args: argparse.Namespace) -> int:
                                          ("--circuits", args.circuits), ("--steps", args.steps)) if value]
     if sim_only:
         raise BadInput(f"{', '.join(sim_only)}: for the simulated experiment, not for --log {args.log}")
-    if args.learn_action_types and args.quantum is not None:
-        raise BadInput("--learn-action-types and --quantum exclude each other")
-    quantum = None if args.learn_action_types else (args.quantum or LOG_QUANTUM_DEG)
     r = run_log_experiment(args.log, out_dir=args.output, seed=args.seed, k_max=args.k_max,
-                           time_limit=args.time_limit, quantum_deg=quantum, view_criterion=args.views,
+                           time_limit=args.time_limit, quantum_deg=args.quantum, view_criterion=args.views,
                            progress=True)
     print("\n".join(headline(r)))
     print(f"report: {args.output}/report.md")
@@ -339,10 +336,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--time-limit", type=arguments.seconds, default=60.0, metavar="S", help="seconds for the map (default 60)")
     p.add_argument("--quantum", type=arguments.quantum, metavar="DEG",
                    help="round the actions' angles to this many degrees instead of learning the robot's action "
-                        "types (the default; with --log, 5 is the default)")
-    p.add_argument("--learn-action-types", action="store_true",
-                   help="--log: learn the robot's action types rather than round angles to --quantum (on the "
-                        "whole Killian log the search then finds no map in 60 s)")
+                        "types (the default)")
     p.add_argument("--set", type=arguments.setting, action="append", metavar="SECTION.FIELD=VALUE",
                    help="override a field of the world file, e.g. --set laser.noise_sd=0.02 --set "
                         "laser.dropout=0.002 (twice the shipped sensor noise); validated as in the file; "

@@ -76,7 +76,6 @@ def test_the_excerpt_runs_end_to_end_from_the_command_line(tmp_path, capsys):
     (["--log", str(EXCERPT), "--seeds", "1,2"], "--seeds: for the simulated experiment"),
     (["notched_rectangle", "--log", str(EXCERPT)], "give a world or --log, not both"),
     ([], "give a world (e.g. taylor_hall) or a robot's log"),
-    (["--log", str(EXCERPT), "--learn-action-types", "--quantum", "5"], "exclude each other"),
 ])
 def test_bad_input_exits_2_naming_it(argv, message, capsys):
     assert main(["experiment", *argv]) == 2

@@ -35,22 +35,19 @@ from .ingest import log_tableau, read_log
 #: How k is chosen for the map's views: "auto" takes M's k unless M degenerates (k <= 2), then
 #: Davies-Bouldin's.
 VIEW_CRITERIA = ("auto", "M", "davies-bouldin")
-#: Actions' angles rounded to this many degrees by default on a log: the learned action types put the
-#: Killian log's turns on a 90-degree grid, where the search for a minimal map of 98 dstates with few
-#: views found no map in 60 s (measured 2026-11-23); at 5 degrees it is proved minimal in about 2 s.
-LOG_QUANTUM_DEG = 5.0
 #: The issue's targets (set from an outside probe of the Killian log; ambitious).
 TARGETS = {"corner_recall": 0.95, "angles_within_10_deg": 1.0, "visits_in_true_dstate": 0.80,
            "nn_revisited": 0.60}
 
 
 def run_log_experiment(log: str | Path, out_dir: str | Path | None = None, seed: int = 0, k_max: int = 12,
-                       time_limit: float = 60.0, quantum_deg: float | None = LOG_QUANTUM_DEG,
+                       time_limit: float = 60.0, quantum_deg: float | None = None,
                        view_criterion: str = "auto", detector: TurnDetector = TurnDetector(),
                        max_range: float = 20.0, radius_m: float = 3.0, progress: bool = False) -> dict:
     """Run the experiment on a log (a path any of :func:`~bootmap.logs.ingest.read_log`'s formats, or
     ``killian``); see the module docstring. Returns the results and, given ``out_dir``, writes
-    ``results.json``, ``report.md`` and figures there. ``quantum_deg=None`` learns the action types."""
+    ``results.json``, ``report.md`` and figures there. The robot's action types are learned, as in the
+    simulated experiment, unless ``quantum_deg`` rounds the angles instead."""
     if view_criterion not in VIEW_CRITERIA:
         raise BadInput(f"unknown view criterion {view_criterion!r}; known: {', '.join(VIEW_CRITERIA)}")
     from threadpoolctl import threadpool_limits
