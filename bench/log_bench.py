@@ -27,15 +27,16 @@ def main(argv=None) -> int:
     p.add_argument("--log", default="killian", help="any log bootmap ingest reads (default killian)")
     p.add_argument("--repeat", type=int, default=3, help="runs; the fastest is reported")
     args = p.parse_args(argv)
-    best, r = float("inf"), None
+    seconds, r = [], None
     for _ in range(args.repeat):
         start = time.perf_counter()
         r = run_log_experiment(args.log)
-        best = min(best, time.perf_counter() - start)
+        seconds.append(time.perf_counter() - start)
+    best = min(seconds)
     print("\n".join(headline(r)))
     stages = ", ".join(f"{k.removesuffix('_s')} {v:.2f}" for k, v in r["timings"].items())
     print(f"{args.log}: {r['scans']} scans, ingest + pipeline {best:.1f} s ({r['scans'] / best:.0f} scans/s; "
-          f"fastest of {args.repeat}; {stages} s)")
+          f"fastest of {args.repeat}, the first {seconds[0]:.1f} s with its imports; {stages} s)")
     print(PAPER)
     targets = Targets()
     targets.check("ingest + pipeline, whole log", best, "<", 120.0, fmt="{:.1f}", unit=" s")

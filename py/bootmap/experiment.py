@@ -308,6 +308,7 @@ def views_figure(results: dict, path: Path) -> None:
     axes[1].set_ylabel("U(V|S)")
     axes[1].set_xlabel("k")
     fig.suptitle(f"{results['world']}: clustering images into views (paper Figure 3)")
+    fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
