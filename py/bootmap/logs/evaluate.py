@@ -25,7 +25,7 @@ shift-tolerant distance:
 >>> scan = np.linspace(1.0, 5.0, 40) ** 1.5
 >>> turned = np.roll(scan, 4); turned[:4] = scan[0]
 >>> raw = np.abs(scan - turned).mean()
->>> float(shift_tolerant_distances(scan[None], turned[None], max_shift=10)[0, 0]) < raw / 10
+>>> bool(shift_tolerant_distances(scan[None], turned[None], max_shift=10)[0, 0] < raw / 10)
 True
 """
 
