@@ -14,7 +14,7 @@ import time
 from typing import Callable, Sequence
 
 from . import __version__, arguments
-from .errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_OK, BootmapError, SolveTimeout
+from .errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_OK, BadInput, BootmapError, SolveTimeout
 
 
 def _add_theory_options(p: argparse.ArgumentParser) -> None:
@@ -134,6 +134,12 @@ def cmd_schema(args: argparse.Namespace) -> int:
 def cmd_experiment(args: argparse.Namespace) -> int:
     from .experiment import failed_checks, run_experiment, run_seeds
 
+    if args.log is None and args.world == "killian":
+        args.log, args.world = "killian", None  # the short form: no world is called killian
+    if args.log is not None:
+        return _log_experiment(args)
+    if args.world is None:
+        raise BadInput("give a world (e.g. taylor_hall) or a robot's log (--log LOG, or killian)")
     world = args.world
     if args.set:
         from .sim.world import load_world
@@ -156,6 +162,26 @@ def cmd_experiment(args: argparse.Namespace) -> int:
     # A run that did not show what the paper's experiment must show (no map, a map not proved minimal,
     # or any check false) is a failure, not a success with a caveat in the report.
     return EXIT_FAILURE if failed_checks(runs) else EXIT_OK
+
+
+def _log_experiment(args: argparse.Namespace) -> int:
+    """``bootmap experiment --log LOG``: the experiment on a robot's log (:mod:`bootmap.logs.experiment`).
+    Exit 0 when a map was found and the report written (the issue's targets are reported, met or not),
+    1 when no map was found in the time limit, 2 on bad input."""
+    from .logs.experiment import headline, run_log_experiment
+
+    if args.world is not None:
+        raise BadInput(f"give a world or --log, not both (world {args.world!r}, log {args.log!r})")
+    sim_only = [name for name, value in (("--seeds", args.seeds), ("--set", args.set),
+                                         ("--circuits", args.circuits), ("--steps", args.steps)) if value]
+    if sim_only:
+        raise BadInput(f"{', '.join(sim_only)}: for the simulated experiment, not for --log {args.log}")
+    r = run_log_experiment(args.log, out_dir=args.output, seed=args.seed, k_max=args.k_max,
+                           time_limit=args.time_limit, quantum_deg=args.quantum, view_criterion=args.views,
+                           progress=True)
+    print("\n".join(headline(r)))
+    print(f"report: {args.output}/report.md")
+    return EXIT_FAILURE if "error" in r["map"] else EXIT_OK
 
 
 def _print_summary(r: dict) -> None:
@@ -289,7 +315,15 @@ def build_parser() -> argparse.ArgumentParser:
                                    "(k by M is the largest k with U = 1; the map is the true topology, proved "
                                    "minimal; every image on its dstate; nearest neighbour at 90 images >= 85%), "
                                    "1 when any fails (the summary names which), 2 on bad input.")
-    p.add_argument("world", help="world file, or the name of one in worlds/")
+    p.add_argument("world", nargs="?", help="world file, or the name of one in worlds/; 'killian' is short for "
+                                            "--log killian")
+    p.add_argument("--log", metavar="LOG",
+                   help="run the experiment on a robot's log instead (any log `bootmap ingest` reads, or "
+                        "'killian'): ingest -> views -> map -> recognition, evaluated against the log's true "
+                        "poses; exit 0 once the report is written, 1 when no map is found")
+    p.add_argument("--views", choices=("auto", "M", "davies-bouldin"), default="auto",
+                   help="--log: how k is chosen for the map's views (auto: M's k unless M picks 1 or 2, then "
+                        "the Davies-Bouldin index's; both are reported)")
     runs = p.add_mutually_exclusive_group()
     runs.add_argument("--circuits", type=arguments.count("circuits"), metavar="N",
                       help="circuits of a room (worlds of the circuits policy; default 50)")

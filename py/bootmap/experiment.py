@@ -127,7 +127,24 @@ def _run(world, circuits, steps, seed, out_dir, k_max, progress, time_limit, lev
             write_report(results, Path(out_dir), world, tableau, None)
         return results
     # The paper's labels: every image labelled by its *resolved* dstate.
-    labels = cmap.dstate_of
+    recognition = recognition_section(images, cmap.dstate_of, learner, seed)
+    lap("recognise_s")
+    results = {
+        "world": world.name, "seed": seed, "images": len(images), "clusterer": view_method,
+        "views": _views_section(clusterer, images, views, truth),
+        "map": {**_map_section(cmap, truth, world), "proved_minimal": cmap.minimal, "note": map_note},
+        "recognition": recognition,
+        "timings": timings,
+    }
+    results["checks"] = checks(results)
+    if out_dir is not None:
+        write_report(results, Path(out_dir), world, tableau, cmap)
+    return results
+
+
+def recognition_section(images: np.ndarray, labels, learner: str = "1-NN", seed: int = 0) -> dict:
+    """The paper's recognition, images labelled by their *resolved* dstates: the online curve and 10-fold
+    cross-validated learning curves (nearest neighbour's, and ``learner``'s on the same folds)."""
     online = online_curve(images, labels)
     hits = online_hits(images, labels)
     n_train = len(images) - -(-len(images) // 10)  # the smallest training set of 10-fold CV: 90 of 100
@@ -136,25 +153,13 @@ def _run(world, circuits, steps, seed, out_dir, k_max, progress, time_limit, lev
     # Another learner on the same folds (the paper's future work); nearest neighbour's curve is the paper's.
     other = cv if learner == "1-NN" else learning_curve_cv(images, labels, sizes=sizes, random_state=seed,
                                                            learner=default_learners(seed)[learner])
-    lap("recognise_s")
-    results = {
-        "world": world.name, "seed": seed, "images": len(images), "clusterer": view_method,
-        "views": _views_section(clusterer, images, views, truth),
-        "map": {**_map_section(cmap, truth, world), "proved_minimal": cmap.minimal, "note": map_note},
-        "recognition": {
-            "online_accuracy": [float(x) for x in np.asarray(online)],
+    return {"online_accuracy": [float(x) for x in np.asarray(online)],
             "online_after_90": float(np.mean(hits[90:])) if len(hits) > 90 else None,
             "cv_sizes": [int(n) for n in cv.sizes], "cv_mean": [float(x) for x in cv.mean],
             "cv_std": [float(x) for x in cv.std],
             "cv_at_90": cv.at(90) if 90 in cv.sizes else None,
             "learner": learner, "learner_cv_mean": [float(x) for x in other.mean],
-            "learner_cv_at_90": other.at(90) if 90 in other.sizes else None},
-        "timings": timings,
-    }
-    results["checks"] = checks(results)
-    if out_dir is not None:
-        write_report(results, Path(out_dir), world, tableau, cmap)
-    return results
+            "learner_cv_at_90": other.at(90) if 90 in other.sizes else None}
 
 
 @dataclass(frozen=True)
@@ -269,30 +274,55 @@ def write_report(results: dict, out: Path, world, tableau, cmap) -> None:
 
 
 def _figures(results: dict, out: Path, world, tableau) -> None:
+    from .sim.render import render
+
+    render(world, tableau, path=out / "world_map.png", title=f"{results['world']}: run and true dstates")
+    views_figure(results, out / "views_M_U.png")
+    if results["recognition"] is not None:
+        curves_figure(results, out / "learning_curves.png")
+
+
+def _pyplot():
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from .sim.render import render
+    return plt
 
+
+def views_figure(results: dict, path: Path) -> None:
+    """M and U(V|S) against k (the paper's Figure 3); U against shuffled dstates too where the results
+    have it (``views.U_shuffled``), and the k each criterion chose."""
+    plt = _pyplot()
     v = results["views"]
-    render(world, tableau, path=out / "world_map.png", title=f"{results['world']}: run and true dstates")
     fig, axes = plt.subplots(2, 1, figsize=(6, 6), sharex=True)
     axes[0].plot(v["ks"], v["M"], "o-")
+    axes[0].axvline(v.get("k_by_M", v["k"]), color="grey", ls=":", label=f"k by M = {v.get('k_by_M', v['k'])}")
+    if v.get("k_by_davies_bouldin") is not None:
+        axes[0].axvline(v["k_by_davies_bouldin"], color="tab:red", ls="--",
+                        label=f"k by Davies-Bouldin = {v['k_by_davies_bouldin']}")
+    axes[0].legend(fontsize=8)
     axes[0].set_ylabel("internal measure M")
     if v["U"] is not None:
-        axes[1].plot(v["ks"], v["U"], "o-")
+        axes[1].plot(v["ks"], v["U"], "o-", label="U(V|S), true dstates")
+    if v.get("U_shuffled") is not None:
+        axes[1].plot(v["ks"], v["U_shuffled"], "s--", color="grey", label="U(V|S), dstates shuffled")
+        axes[1].legend(fontsize=8)
     axes[1].set_ylabel("U(V|S)")
     axes[1].set_xlabel("k")
     fig.suptitle(f"{results['world']}: clustering images into views (paper Figure 3)")
-    fig.savefig(out / "views_M_U.png", dpi=110)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
     plt.close(fig)
-    if results["recognition"] is None:
-        return
-    online = results["recognition"]["online_accuracy"]
-    fig, ax = plt.subplots(figsize=(6, 4))
+
+
+def curves_figure(results: dict, path: Path) -> None:
+    """The online and cross-validated learning curves (the paper's Figure 4)."""
+    plt = _pyplot()
     rec = results["recognition"]
+    online = rec["online_accuracy"]
+    fig, ax = plt.subplots(figsize=(6, 4))
     ax.plot(range(1, len(online) + 1), online, label="online, cumulative (predict, then store)")
     ax.errorbar(rec["cv_sizes"], rec["cv_mean"], yerr=rec["cv_std"], fmt="o-", capsize=3,
                 label="10-fold cross-validation")
@@ -301,7 +331,7 @@ def _figures(results: dict, out: Path, world, tableau) -> None:
     ax.set_ylim(0, 1.02)
     ax.legend()
     fig.suptitle(f"{results['world']}: recognising dstates from images (paper Figure 4)")
-    fig.savefig(out / "learning_curves.png", dpi=110)
+    fig.savefig(path, dpi=110)
     plt.close(fig)
 
 

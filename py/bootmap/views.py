@@ -20,8 +20,8 @@ from sklearn.utils import check_random_state
 
 from .images import as_images
 
-__all__ = ["CLUSTERERS", "OnlineViews", "ViewClusterer", "internal_measure", "repair_dropouts", "uncertainty_coefficient",
-           "view_labels", "view_table"]
+__all__ = ["CLUSTERERS", "OnlineViews", "ViewClusterer", "davies_bouldin_k", "internal_measure", "repair_dropouts",
+           "uncertainty_coefficient", "view_labels", "view_table"]
 
 
 def internal_measure(images, labels) -> float:
@@ -407,6 +407,26 @@ class ViewClusterer:
     def fit_predict(self, images, dstates: Sequence[Hashable] | None = None) -> np.ndarray:
         """Fit and return ``labels_``."""
         return self.fit(images, dstates).labels_
+
+
+def davies_bouldin_k(clusterer: "ViewClusterer", images) -> tuple[int | None, list[float | None]]:
+    """The k whose clustering (of a fitted :class:`ViewClusterer`) has the lowest Davies-Bouldin index
+    (scikit-learn), and the index at every k (None at k = 1, where it is undefined).
+
+    M = 1/(k * SSE) can fall steadily with k on real scans, where no k gives tight clusters, and then
+    picks k = 1 or 2. The Davies-Bouldin index compares each cluster's spread with its distance to the
+    nearest other cluster, so it does not reward fewer clusters for their own sake: a criterion that does
+    not degenerate there. Returns ``(None, ...)`` when only k = 1 was tried.
+    """
+    from sklearn.metrics import davies_bouldin_score
+
+    x = clusterer._prepare(images)
+    scores: list[float | None] = []
+    for k in clusterer.ks_:
+        labels = clusterer.labels_per_k_[int(k)]
+        scores.append(float(davies_bouldin_score(x, labels)) if len(np.unique(labels)) > 1 else None)
+    known = [(s, int(k)) for s, k in zip(scores, clusterer.ks_) if s is not None]
+    return (min(known)[1] if known else None), scores
 
 
 def view_labels(labels: Sequence[Hashable]) -> list[str]:

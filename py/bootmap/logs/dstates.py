@@ -57,7 +57,7 @@ class TurnDetector:
         Turns closer than this (a travel too short to be one) are joined into one turn.
     """
 
-    window_m: float = 6.0
+    window_m: float = 8.0
     detect_deg: float = 20.0
     turn_deg: float = 45.0
     settled_deg: float = 10.0
