@@ -109,3 +109,31 @@ def test_property_noisy_walks_of_random_worlds_resolve_to_the_truth(seed, width,
     cmap = Resolver(time_limit=60).resolve(tableau)
     assert cmap.n_dstates == len(set(truth)) and dstate_accuracy(truth, cmap.dstate_of) == 1.0, \
         [str(t) for t in cmap.action_types]
+
+
+@pytest.mark.parametrize("centre, sd, strays", [(-174, 5, [163.0, 163.4]), (175, 8, [-151.0, -153.0, -156.0])])
+def test_a_few_stray_turn_arounds_do_not_set_the_grid(centre, sd, strays):
+    # A real robot's turn-arounds (Taylor Hall seeds 94 and 52 in the simulator) read -174 +- 5 or +175 +- 8,
+    # and a few far off: two alike by chance (to 0.4 degrees), or three together 27 degrees off. They are a
+    # tail of the turn-around, not a primitive: were they one, no grid would hold every type, and each
+    # travel's +1 degree would make every heading its own (a map of 100 dstates for 20).
+    rng = np.random.default_rng(0)
+    actions = ([Turn(float(a)) for a in centre + sd * rng.standard_normal(18)] + [Turn(float(a)) for a in strays]
+               + [Turn(float(a)) for a in -90 + 5 * rng.standard_normal(12)]
+               + [Travel(20.0, float(b)) for b in 1 + 3 * rng.standard_normal(50)])
+    m = MotionPrimitives().fit(actions)
+    assert m.grid_deg_ == 90
+    assert sorted({t.angle for t in m.types_ if t.kind == "turn"}) == [-90, 180]
+    assert {t.angle for t in m.types_ if t.kind == "travel"} == {0}
+
+
+def test_a_bend_read_three_times_far_from_the_grid_is_a_primitive():
+    # Three readings of a 45-degree bend beside many right turns: no grid angle of 90 is near 45, so the
+    # bend is a primitive of its own and the grid is 45.
+    rng = np.random.default_rng(1)
+    actions = ([Turn(float(a)) for a in -90 + 4 * rng.standard_normal(20)]
+               + [Travel(10.0, float(b)) for b in [44.0, 46.5, 45.2]]
+               + [Travel(10.0, float(b)) for b in 2 * rng.standard_normal(30)])
+    m = MotionPrimitives().fit(actions)
+    assert m.grid_deg_ == 45
+    assert sorted({t.angle for t in m.types_ if t.kind == "travel"}) == [0, 45]

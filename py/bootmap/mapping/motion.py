@@ -46,8 +46,12 @@ GRIDS = (180, 90, 45, 15, 5, 1)
 BIAS_DEG = 10.0
 #: A type that sets the grid accounts for at least this share of its kind's actions (and three of them) ...
 MIN_SHARE = 0.05
-#: ... or is read the same, within this many degrees, at least twice (noise cannot do that).
+#: Readings that repeat within this many degrees are exact (a hand-written or simulated tableau) ...
 EXACT_DEG = 0.5
+#: ... and a type read the same, within this many degrees, at least twice sets the grid however few its
+#: readings (noise of a degree or more cannot do that; two turn-arounds of a real robot read at +163.0
+#: and +163.6 among eighteen at -174 +- 5 are chance, and must not make every heading its own).
+SAME_DEG = 0.05
 #: A type of at most this many readings within this many spreads of a type three times its size is
 #: that type's tail (a real robot's turn-arounds are read from +167 to +222).
 TAIL, TAIL_SDS = 3, 4.0
@@ -104,7 +108,7 @@ class MotionPrimitives:
         spreads = [_circular_sd(measured[i], m) for m, (_, i) in zip(means, clusters)]
         # A type seen once or twice is as likely a misread as a primitive: the grid is set by the types
         # that account for more (when there are any), and a stray reading snaps onto it like the others.
-        common = []
+        common, few = [], []
         for kind in ("turn", "travel"):
             mine = [(m, sd, len(i)) for m, sd, (k, i) in zip(means, spreads, clusters) if k == kind]
             total = sum(n for _, _, n in mine)
@@ -112,9 +116,13 @@ class MotionPrimitives:
             pooled = float(np.sqrt(sum(n * sd * sd for _, sd, n in mine) / total)) if total else 0.0
             # Readings without noise (a hand-written or simulated tableau) are all primitives.
             keep = [(m, pooled) for m, sd, n in mine
-                    if n >= max(3, MIN_SHARE * total) or (n >= 2 and sd < EXACT_DEG) or pooled < EXACT_DEG]
+                    if n >= max(3, MIN_SHARE * total) or (n >= 2 and sd < SAME_DEG) or pooled < EXACT_DEG]
             common += keep or [(m, pooled) for m, _, _ in mine]
-        self.grid_deg_ = _coarsest_grid(common, self.grids)
+            # A few readings (a tail, at most TAIL) set the grid only where no grid angle is near them:
+            # three turn-arounds read at -153 beside eighteen at +175 +- 8 are a tail of 180, not a
+            # primitive that makes every heading its own; a bend read at 45 three times is a primitive.
+            few += [m for m, sd, n in mine if n <= TAIL and (m, pooled) in keep and pooled >= EXACT_DEG]
+        self.grid_deg_ = _coarsest_grid([t for t in common if t[0] not in few], self.grids, few)
         snapped = [quantise(m, self.grid_deg_) for m in means]
         self.angles_ = [0] * len(actions)
         for (_, idx), angle in zip(clusters, snapped):
@@ -223,11 +231,15 @@ def _circular_sd(a: np.ndarray, centre: float) -> float:
     return float(np.sqrt(np.mean(_wrap(a - centre) ** 2)))
 
 
-def _coarsest_grid(types: Sequence[tuple[float, float]], grids: Sequence[int]) -> int:
+def _coarsest_grid(types: Sequence[tuple[float, float]], grids: Sequence[int], few: Sequence[float] = ()) -> int:
     """The coarsest grid near every type: its mean within three spreads (sd, the noise of its kind), or
-    :data:`BIAS_DEG` for tight readings, of a grid angle, and less than a third of a step away."""
+    :data:`BIAS_DEG` for tight readings, of a grid angle, and less than a third of a step away; the
+    means of types of a ``few`` readings only less than a third of a step away."""
+    def off(m: float, q: int) -> float:
+        return abs(_wrap(np.array([m - quantise(m, q)]))[0])
+
     for q in grids:
-        if all(abs(_wrap(np.array([m - quantise(m, q)]))[0]) < min(q / 3, max(3 * sd, BIAS_DEG)) for m, sd in types):
+        if all(off(m, q) < min(q / 3, max(3 * sd, BIAS_DEG)) for m, sd in types) and all(off(m, q) < q / 3 for m in few):
             return q
     return grids[-1]
 
