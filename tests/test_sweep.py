@@ -8,6 +8,7 @@ import shutil
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import pytest
 from hypothesis import given, settings
@@ -16,7 +17,7 @@ from hypothesis import strategies as st
 from bootmap.errors import SweepError
 from bootmap.experiment import run_experiment
 from bootmap.sim.world import load_world
-from bootmap.sweep import TIMING_COLUMNS, DaskCluster, loads_spec, run_sweep
+from bootmap.sweep import TIMING_COLUMNS, DaskCluster, load_spec, loads_spec, run_sweep
 from bootmap.sweep.cells import experiment_row, in_child
 
 # Tiny cells: 3 circuits of the notched rectangle (24 images), about a second each.
@@ -214,3 +215,31 @@ def test_the_grid_is_every_combination_once_with_stable_ids(seeds, levels, learn
     assert {(c.seed, c.noise.settings, c.learner) for c in cells} == \
         {(s, (("laser.noise_sd", x),), le) for s in seeds for x in levels for le in learners}
     assert [c.id for c in loads_spec(text).cells] == [c.id for c in cells]
+
+
+def test_a_log_is_an_axis_of_the_grid_beside_worlds(tmp_path, monkeypatch):
+    # A robot's log (a synthetic CARMEN log of a square, truth known by hand) runs as `bootmap experiment
+    # --log` does, one cell per seed, beside a world's cells; its row has the log's own figures.
+    monkeypatch.syspath_prepend(str(Path(__file__).parent / "logs"))
+    from synthetic import write_square_log
+
+    write_square_log(tmp_path / "square.log")
+    text = TINY.format(seeds="[1]").replace('worlds = ["notched_rectangle"]',
+                                            'worlds = ["notched_rectangle"]\nlogs = ["square.log"]')
+    (tmp_path / "logs.toml").write_text(text)
+    spec = load_spec(tmp_path / "logs.toml")
+    assert [(c.world, c.noise.name, c.log is not None) for c in spec.cells] == [
+        ("notched_rectangle", "1x", False), ("notched_rectangle", "2x laser", False), ("square.log", "as recorded", True)]
+    result = run_sweep(spec, tmp_path / "out", workers=1)
+    row = result.table[-1]
+    assert (row["status"], row["error"], row["world"]) == ("ok", None, "square.log")
+    assert (row["dstates"], row["places"], row["true_dstates"], row["dstate_accuracy"]) == (8, 4, 8, 1.0)
+    assert row["map_exact"] and row["dead_reckoning_accuracy"] == 1.0 and row["ingest_s"] is not None
+    # The world's cells are the experiment as before.
+    assert deterministic(result.table[:2]) == deterministic(run_sweep(tiny("[1]"), tmp_path / "worlds", workers=1).table)
+
+
+def test_a_log_that_is_not_there_is_refused_naming_the_key(tmp_path):
+    text = TINY.format(seeds="[1]").replace('worlds = ["notched_rectangle"]', 'logs = ["nowhere.log"]')
+    with pytest.raises(SweepError, match=r"grid\.logs\[0\] \(nowhere\.log\): no such log"):
+        loads_spec(text, "logs.toml")

@@ -28,8 +28,9 @@ COLUMNS = ("cell_id", "world", "seed", "noise", "clusterer", "learner", "levels"
            "true_places", "true_paths", "proved_minimal", "map_exact", "dstate_accuracy", "nn_at_90",
            "learner_at_90", "online_after_90", "k_by_m_is_largest_u1", "map_is_true_topology",
            "every_image_on_its_dstate", "nn_at_90_at_least_85", "all_checks",
-           "seconds", "simulate_s", "views_s", "map_s", "recognise_s", "worker")
-TIMING_COLUMNS = ("seconds", "simulate_s", "views_s", "map_s", "recognise_s", "worker")
+           "nn_revisited", "nn_revisited_shift", "dead_reckoning_accuracy",
+           "seconds", "simulate_s", "ingest_s", "views_s", "map_s", "recognise_s", "worker")
+TIMING_COLUMNS = ("seconds", "simulate_s", "ingest_s", "views_s", "map_s", "recognise_s", "worker")
 CHECK_COLUMNS = ("k_by_m_is_largest_u1", "map_is_true_topology", "every_image_on_its_dstate",
                  "nn_at_90_at_least_85")
 
@@ -50,6 +51,11 @@ def run_cell(cell: Cell) -> dict:
 
 def failed_row(cell: Cell, status: str, error: str) -> dict:
     """The row of a cell that did not finish: its axes, ``status`` (``failed`` or ``timeout``) and error."""
+    return _row(cell, status, error)
+
+
+def _row(cell: Cell, status: str, error: str | None) -> dict:
+    """A row with the cell's axes, its status and error, no figures and the paper's checks not met."""
     row = {c: None for c in COLUMNS}
     row.update(_axes(cell), status=status, error=error, all_checks=False)
     row.update({c: False for c in CHECK_COLUMNS})
@@ -69,6 +75,8 @@ def _experiment_row(cell: Cell) -> dict:
     from ..experiment import run_experiment
     from ..sim.world import loads_world
 
+    if cell.log is not None:
+        return _log_row(cell)
     try:
         world = loads_world(cell.world_text, cell.world_path, dict(cell.noise.settings))
         r = run_experiment(world, circuits=cell.circuits, steps=cell.steps, seed=cell.seed, k_max=cell.k_max,
@@ -101,6 +109,33 @@ def experiment_row(cell: Cell, r: dict) -> dict:
     if rec:
         row["curve"] = {"sizes": rec["cv_sizes"], "nn": [round(x, 6) for x in rec["cv_mean"]],
                         "learner": [round(x, 6) for x in rec["learner_cv_mean"]]}
+    return row
+
+
+def _log_row(cell: Cell) -> dict:
+    """The experiment on a robot's log (``bootmap experiment --log``) and its row: the map against the
+    log's poses, nearest neighbour on revisited dstates, the dead-reckoning baseline. The paper's checks,
+    made for the simulator's worlds, are not taken (False)."""
+    from ..errors import BootmapError
+    from ..logs.experiment import run_log_experiment
+
+    try:
+        r = run_log_experiment(cell.log, seed=cell.seed, k_max=cell.k_max, time_limit=cell.time_limit,
+                               quantum_deg=cell.quantum_deg)
+    except BootmapError as e:
+        return failed_row(cell, "failed", f"{type(e).__name__}: {e}")
+    v, m, rec, nn = r["views"], r["map"], r["recognition"] or {}, r["nn_revisited"]
+    has_map = "error" not in m
+    row = _row(cell, "ok", None if has_map else f"no map: {m['error']}")
+    row.update(images=r["images"], k=v["k"], largest_k_with_U_1=v["largest_k_with_U_1"],
+               U_at_k=round(v["U"][v["k"] - 1], 6), nn_at_90=_round(rec.get("cv_at_90")),
+               nn_revisited=_round(nn["raw"]["revisited"]), nn_revisited_shift=_round(nn["shift"]["revisited"]),
+               dead_reckoning_accuracy=_round(r["dead_reckoning"]["dstate_accuracy"]),
+               true_dstates=r["truth"]["true_dstates"], map_exact=False, **r["timings"])
+    if has_map:
+        row.update({k: m[k] for k in ("dstates", "places", "paths", "true_places")},
+                   proved_minimal=bool(m["proved_minimal"]), dstate_accuracy=round(m["dstate_accuracy"], 6),
+                   map_exact=m["dstate_accuracy"] == 1.0 and m["places"] == m["true_places"])
     return row
 
 

@@ -10,6 +10,8 @@ A sweep file names the axes of a grid; every combination is one *cell*, one run 
     learners = ["1-NN"]                             # recognition beside 1-NN (default 1-NN alone)
     levels = ["all"]                                # resolver levels: "all" or e.g. "causal,topological"
     quantum = ["learned"]                           # "learned" action types, or degrees to round to
+    logs = ["killian"]                              # robots' logs (bootmap experiment --log), beside or
+                                                    # instead of worlds: each log x quantum x seed is a cell
 
     [[noise]]                                       # one level of the noise axis (default: the world as shipped)
     name = "2x laser"
@@ -41,7 +43,9 @@ from typing import Any
 from .. import arguments
 from ..errors import BootmapError, SweepError
 
-AXES = ("worlds", "seeds", "clusterers", "learners", "levels", "quantum")
+AXES = ("worlds", "logs", "seeds", "clusterers", "learners", "levels", "quantum")
+#: The noise axis of a log's cells: the log is what it is.
+AS_RECORDED = "as recorded"
 RUN_DEFAULTS = {"circuits": None, "steps": None, "k_max": 12, "time_limit": 60.0, "cell_timeout": 600.0}
 
 
@@ -72,12 +76,14 @@ class Cell:
     k_max: int = 12
     time_limit: float = 60.0
     cell_timeout: float = 600.0
+    log: str | None = None                  # a robot's log instead of a world (``world`` is its name)
 
     @property
     def id(self) -> str:
         """Stable across runs and machines: readable axes, then a hash of every parameter (so a cell whose
         run options changed is not taken for a finished one on ``--resume``)."""
-        params = {k: v for k, v in asdict(self).items() if k != "world_path"}  # where it lies is no parameter
+        # Where a world lies is no parameter; a world's cell has no log (ids as before logs came in).
+        params = {k: v for k, v in asdict(self).items() if k != "world_path" and not (k == "log" and v is None)}
         digest = hashlib.sha1(json.dumps(params, sort_keys=True, default=str).encode()).hexdigest()[:10]
         return f"{self.world}/seed{self.seed}/{self.noise.name}/{self.clusterer}/{self.learner}/" \
                f"{self.levels_text}/{self.quantum_text}/{digest}"
@@ -122,7 +128,8 @@ def loads_spec(text: str, source: str = "sweep", base: Path | None = None) -> Sw
     grid = _table(doc, "grid", at, required=True)
     _only(grid, set(AXES), at, "grid.")
     run = _run_options(_table(doc, "run", at), at)
-    worlds = _worlds(_list(grid, "worlds", at, required=True), at, base)
+    logs = _logs(_list(grid, "logs", at), at, base)
+    worlds = _worlds(_list(grid, "worlds", at, required=not logs) or [], at, base)
     seeds = _seeds(grid.get("seeds"), at)
     noises = _noises(doc.get("noise"), at)
     clusterers = _choices(grid, "clusterers", ["kmeans"], _known_clusterers(), at)
@@ -137,6 +144,11 @@ def loads_spec(text: str, source: str = "sweep", base: Path | None = None) -> Sw
              steps=run["steps"] if policies[w] == "explore" else None,
              k_max=run["k_max"], time_limit=run["time_limit"], cell_timeout=run["cell_timeout"])
         for (w, wp), n, c, le, lv, q, s in product(worlds, noises, clusterers, learners, levels, quanta, seeds))
+    # A log's cell is the experiment on it (views by k-means, 1-NN, every level): the log x quantum x seed.
+    cells += tuple(
+        Cell(world=name, world_path=path, world_text="", seed=s, noise=Noise(AS_RECORDED), quantum_deg=q,
+             k_max=run["k_max"], time_limit=run["time_limit"], cell_timeout=run["cell_timeout"], log=path)
+        for (name, path), q, s in product(logs, quanta, seeds))
     name = doc.get("name", Path(source).stem)
     if not isinstance(name, str):
         raise SweepError(f"expected a string, got {name!r}", at("name"))
@@ -216,6 +228,23 @@ def _worlds(values: list, at: _Where, base: Path | None) -> list[tuple[str, str]
         except BootmapError as e:
             raise SweepError(getattr(e, "reason", str(e)), at(f"grid.worlds[{i}] ({w})")) from None
         out.append((Path(w).stem if w.endswith(".toml") else w, str(path)))
+    return out
+
+
+def _logs(values: list | None, at: _Where, base: Path | None) -> list[tuple[str, str]]:
+    """(name, path) per log: ``killian`` (the rtb-data package's), or a file or ROS 2 bag directory,
+    relative to the sweep file first. Dask workers read the log from that path: it must be there too."""
+    out = []
+    for i, log in enumerate(values or []):
+        if not isinstance(log, str) or not log:
+            raise SweepError(f"expected 'killian' or a log file, got {log!r}", at(f"grid.logs[{i}]"))
+        if log == "killian":
+            out.append((log, log))
+            continue
+        path = base / log if base is not None and (base / log).exists() else Path(log)
+        if not path.exists():
+            raise SweepError("no such log file or bag directory", at(f"grid.logs[{i}] ({log})"))
+        out.append((path.name, str(path)))
     return out
 
 
