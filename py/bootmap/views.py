@@ -329,7 +329,8 @@ class ViewClusterer:
         self.max_range = max_range
         self.method = method
 
-    def _prepare(self, images) -> np.ndarray:
+    def prepare(self, images) -> np.ndarray:
+        """The images as the clusterer reads them: checked, drop-outs repaired."""
         x = as_images(images)
         if self.max_range is not None:
             x = repair_dropouts(x, self.max_range)
@@ -352,7 +353,7 @@ class ViewClusterer:
             raise ValueError(f"k_max must be at least 1, got {self.k_max}")
         if self.method not in CLUSTERERS:
             raise ValueError(f"unknown clustering method {self.method!r}; known: {', '.join(CLUSTERERS)}")
-        x = self._prepare(images)
+        x = self.prepare(images)
         if len(x) == 0:
             raise ValueError("no images")
         if dstates is not None and len(dstates) != len(x):
@@ -401,7 +402,7 @@ class ViewClusterer:
         """
         if not hasattr(self, "cluster_centers_"):
             raise RuntimeError("ViewClusterer is not fitted yet; call fit first")
-        x = self._prepare(images)
+        x = self.prepare(images)
         return pairwise_distances_argmin(x, self.cluster_centers_)
 
     def fit_predict(self, images, dstates: Sequence[Hashable] | None = None) -> np.ndarray:
@@ -420,7 +421,7 @@ def davies_bouldin_k(clusterer: "ViewClusterer", images) -> tuple[int | None, li
     """
     from sklearn.metrics import davies_bouldin_score
 
-    x = clusterer._prepare(images)
+    x = clusterer.prepare(images)
     scores: list[float | None] = []
     for k in clusterer.ks_:
         labels = clusterer.labels_per_k_[int(k)]
