@@ -18,13 +18,12 @@ Results use the simulated experiment's keys where the meaning is the same (``vie
 from __future__ import annotations
 
 import json
-import time
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import BadInput, LogError, SolveTimeout
-from ..experiment import _jsonable, curves_figure, recognition_section, views_figure
+from ..experiment import Laps, _jsonable, curves_figure, recognition_section, views_figure
 from ..mapping.resolver import Resolver
 from ..metrics import dstate_accuracy
 from ..views import ViewClusterer, davies_bouldin_k, view_labels, view_table
@@ -59,14 +58,8 @@ def run_log_experiment(log: str | Path, out_dir: str | Path | None = None, seed:
 
 def _run(log, out_dir, seed, k_max, time_limit, quantum_deg, view_criterion, detector, max_range, radius_m,
          progress) -> dict:
-    clock, timings = time.perf_counter(), {}
-
-    def lap(name: str) -> None:
-        nonlocal clock
-        now = time.perf_counter()
-        timings[name] = round(now - clock, 3)
-        clock = now
-
+    lap = Laps()
+    timings = lap.timings
     scans = read_log(log, progress=progress)
     tableau = log_tableau(scans, detector, max_range=max_range, radius_m=radius_m, source=str(log))
     if any(s.truth is None for s in tableau.steps):

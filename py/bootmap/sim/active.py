@@ -178,15 +178,6 @@ class Active(Explore):
             return self._join_paths()
         return self._turn_to(target)
 
-    def _turn_to(self, target: int) -> Decision:
-        """Travel if facing ``target`` (a quarter-turn direction), else turn to it and travel next."""
-        rel = (target - self._heading) % 4
-        if rel == 0:
-            self._intent = None
-            return TRAVEL
-        self._intent = target
-        return Decision("turn", {1: math.pi / 2, 2: math.pi, 3: -math.pi / 2}[rel])
-
     def _join_paths(self) -> Decision | None:
         """Towards a turn-around on a path the map knows one way only; None when there is none."""
         tasks = {(p, h) for p, h in self._one_way() if (p, h % 2) not in self._joined}

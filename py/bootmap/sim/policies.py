@@ -190,6 +190,10 @@ class Explore:
         target = self._intent if self._intent is not None else self._choose(here)
         if target is None:
             return None
+        return self._turn_to(target)
+
+    def _turn_to(self, target: int) -> Decision:
+        """Travel if facing ``target`` (a quarter-turn direction), else turn to it and travel next."""
         rel = (target - self._heading) % 4
         if rel == 0:
             self._intent = None
