@@ -40,6 +40,7 @@ TRACK_LIMIT = math.radians(18)
 # odometry can be off (a turn-rate scale error of a third, and a few degrees besides).
 TRACK_GATE = math.radians(8)
 TRACK_GATE_SCALE = 0.4
+PAIR_GATE = math.radians(3)  # and where it follows from the last scan's reading, by odometry, within this
 TURN_BOUND = math.radians(30)  # a turn never looks for or aligns with walls further than this from its target
 HOLD_TICKS = 10  # control periods an aligning turn waits for walls it lost before it stands where it is
 
@@ -59,6 +60,11 @@ class Limits:
     stop_tolerance: float = 0.008  # m: the hill-climbing has converged within this
     align_tolerance: float = math.radians(0.6)
     settle_ticks: int = 2  # consecutive converged control periods that make a fixed point
+
+
+def _fold(angle: float) -> float:
+    """An angle folded onto [-45, 45) degrees (the walls' directions are known to a quarter turn)."""
+    return (angle + QUARTER / 2) % QUARTER - QUARTER / 2
 
 
 def _approach_speed(error: float, lim: Limits) -> float:
@@ -216,8 +222,9 @@ class Turn(ControlLaw):
 
     The rotation is measured by odometry and corrected by the walls. Walls in buildings meet at right
     angles, so the percept's wall angle says the robot's heading to within a quarter turn; while the walls
-    are read reliably (within ``TRACK_LIMIT`` of the axes, and within ``TRACK_GATE`` plus
-    ``TRACK_GATE_SCALE`` of the rotation of what odometry says), the change of the wall angle since the
+    are read reliably (within ``TRACK_LIMIT`` of the axes, following from the last scan's reading by
+    odometry's step within ``PAIR_GATE``, and from the last reliable one within ``TRACK_GATE``, each
+    plus ``TRACK_GATE_SCALE`` of the rotation odometry measured), the change of the wall angle since the
     last such reading is the rotation since then, and odometry only says which quarter turn it is in (it
     is never 45 degrees off over the 50-odd degrees between two reliable readings). Odometry alone carries
     the estimate across the gaps, and decides it where no wall is seen at all. A turn-rate scale error
@@ -239,9 +246,10 @@ class Turn(ControlLaw):
       ``TURN_BOUND`` from the target are not the new path's: the estimate settles the turn;
     * ``search``: within the window no wall is seen (a crossing, or walls further off the axes than the
       percept folds): turn on past the target, up to ``TURN_BOUND``, until walls show;
-    * ``return``: none showed: back to the target by the estimate, the walls taking over if they show
-      within the window;
-    * ``final``: the turn is the estimate's alone: it settles at the target.
+    * ``return``: none showed: back to the target by the estimate, and settle there (the turn is the
+      estimate's alone, that is odometry's where no wall is seen), unless walls show within the window:
+      then they take over;
+    * ``final``: the walls led too far: the estimate settles the turn at the target.
 
     Parameters
     ----------
@@ -271,6 +279,7 @@ class Turn(ControlLaw):
         self.approaching = False  # the last approach, from align_window short of the walls, has begun
         self._odometry_theta = 0.0
         self._anchor: tuple[float, float] | None = None  # (wall angle, turned) at the last reliable reading
+        self._previous = math.nan  # the last scan's wall angle, if within TRACK_LIMIT
         self._lost = 0  # control periods the walls have been lost while aligning
 
     def begin(self, odometry: Odometry) -> None:
@@ -284,11 +293,18 @@ class Turn(ControlLaw):
 
     def _track(self, wall: float, odo: Odometry) -> None:
         """Advance the rotation estimate by odometry, then correct it by a reliable wall reading."""
-        self.turned += odo.theta - self._odometry_theta
+        step = odo.theta - self._odometry_theta
+        self.turned += step
         self._odometry_theta = odo.theta
         if math.isnan(wall) or abs(wall) > TRACK_LIMIT:
+            self._previous = math.nan
             return
+        previous, self._previous = self._previous, wall
         if self._anchor is not None:
+            # walls are seen as walls from one scan to the next: a reading that does not follow from the
+            # last one by odometry's step is a stray (corner chords, 35-55 degrees off the walls)
+            if math.isnan(previous) or abs(_fold(previous - wall - step)) > PAIR_GATE + TRACK_GATE_SCALE * abs(step):
+                return
             wall_then, turned_then = self._anchor
             by_odometry = self.turned - turned_then
             by_walls = wall_then - wall  # the walls turn the other way in the robot's frame
@@ -316,14 +332,18 @@ class Turn(ControlLaw):
         if self.phase == "search":
             if not math.isnan(wall) and abs(wall) <= TURN_BOUND:
                 self.phase = "align"
-            elif remaining * self.direction <= -TURN_BOUND:
-                self.phase = "return"
-            else:  # turn on past the target, at the speed of the last approach, until walls show
-                self._settle(False)
-                return 0.0, self.direction * self.lim.k_align * self.align_window
+            else:
+                # turn on past the target, at most at the speed of the last approach, until walls show;
+                # slowing into the bound so as not to pass it
+                gap = TURN_BOUND + remaining * self.direction
+                if gap < BACK_OFF_SLACK:
+                    self.phase = "return"
+                else:
+                    self._settle(False)
+                    return 0.0, self.direction * self.lim.k_align * min(self.align_window, gap)
         if self.phase == "align":
             return self._align(wall)
-        return self._rotate(remaining, settle=self.phase == "final")
+        return self._rotate(remaining, settle=self.phase in ("return", "final"))
 
     def _rotate(self, remaining: float, settle: bool) -> tuple[float, float]:
         lim = self.lim
