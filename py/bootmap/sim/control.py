@@ -10,8 +10,8 @@ corridor (hallways), then hill-climbs: to ``stop_distance`` from the wall ahead,
 to where the opening is symmetric about the robot: the near edge is seen in the scan before the robot
 reaches it and carried by odometry, the far edge is seen in the scan; once the opening's width is known
 the stop is where the far edge is half of it ahead. ``Turn`` rotates by odometry, corrected by the
-walls' direction, and then hill-climbs to alignment with the walls of the new path. Travel distances are odometry's signed progress: backing
-up onto a fixed point the robot overshot counts back.
+walls' direction, and then hill-climbs to alignment with the walls of the new path. Travel distances are
+odometry's signed progress: backing up onto a fixed point the robot overshot counts back.
 """
 
 from __future__ import annotations
@@ -303,7 +303,8 @@ class Turn(ControlLaw):
         if self._anchor is not None:
             # walls are seen as walls from one scan to the next: a reading that does not follow from the
             # last one by odometry's step is a stray (corner chords, 35-55 degrees off the walls)
-            if math.isnan(previous) or abs(_fold(previous - wall - step)) > PAIR_GATE + TRACK_GATE_SCALE * abs(step):
+            if math.isnan(previous) or \
+                    abs(_fold(previous - wall - step)) > PAIR_GATE + TRACK_GATE_SCALE * abs(step):
                 return
             wall_then, turned_then = self._anchor
             by_odometry = self.turned - turned_then

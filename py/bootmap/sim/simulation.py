@@ -152,7 +152,8 @@ class Simulation:
             except SimulationError as e:
                 # Keep the experience up to the dstate where the robot got stuck (benchmarks score it).
                 e.run = Run(self._tableau(rec, policy), np.array(self._trajectory), self.time,
-                            self.robot.contacts, time.perf_counter() - started, dstate_ticks=np.array(rec.ticks))
+                            self.robot.contacts, time.perf_counter() - started,
+                            dstate_ticks=np.array(rec.ticks))
                 bar.close()
                 raise
             self._record(rec, image, law.action(self.robot.odometry))
