@@ -41,6 +41,7 @@ TRACK_LIMIT = math.radians(18)
 TRACK_GATE = math.radians(8)
 TRACK_GATE_SCALE = 0.4
 PAIR_GATE = math.radians(3)  # and where it follows from the last scan's reading, by odometry, within this
+TAKEOVER = TRACK_LIMIT  # a turn's walls take over this far from its target, when they show there
 TURN_BOUND = math.radians(30)  # a turn never looks for or aligns with walls further than this from its target
 HOLD_TICKS = 10  # control periods an aligning turn waits for walls it lost before it stands where it is
 
@@ -325,6 +326,12 @@ class Turn(ControlLaw):
             wall += round((remaining - wall) / QUARTER) * QUARTER
         if self.phase == "align" and abs(remaining) > TURN_BOUND:
             self.phase = "final"
+        # The walls take over as soon as they show the target's axis (TAKEOVER ahead, by the estimate):
+        # at the window the rotation's momentum has carried the robot a few degrees nearer than the
+        # estimate, and nearly every last approach would begin by backing off against that momentum
+        # (which scatters the final heading by a third more).
+        if self.phase == "rotate" and not math.isnan(wall) and abs(remaining) <= TAKEOVER:
+            self.phase = "align"
         if self.phase in ("rotate", "return") and abs(remaining) <= self.align_window:
             if not math.isnan(wall):
                 self.phase = "align"
