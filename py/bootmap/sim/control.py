@@ -236,7 +236,8 @@ class Turn(ControlLaw):
 
     Phases, each ending, so that every turn ends:
 
-    * ``rotate``: towards the angle by the estimate, until within ``align_window`` of it;
+    * ``rotate``: towards the angle by the estimate, until the walls show the target's axis within
+      ``TAKEOVER``, or it is within ``align_window`` of the angle;
     * ``align``: the hill-climbing on the walls. The last approach always starts ``align_window`` short
       of the walls, by the walls: a robot that the rotation brought closer, or past them, first backs off
       to there. The hill-climbing stops as soon as the walls are within tolerance, so where in the
