@@ -104,10 +104,10 @@ def test_experiment_command_exits_1_when_a_check_fails(tmp_path):
 def test_seeds_report_mean_and_spread_and_exit_1_when_one_seed_fails(tmp_path, capsys):
     from bootmap.cli import main
 
-    # At 15 circuits (120 images), seed 5's nearest neighbour is 81.7% at 90 images, seed 3's 88.3%.
-    assert main(["experiment", "notched_rectangle", "--seeds", "3,5", "--circuits", "15", "-o", str(tmp_path)]) == 1
+    # At 15 circuits (120 images), seed 4's nearest neighbour is 83.3% at 90 images, seed 3's 90.8%.
+    assert main(["experiment", "notched_rectangle", "--seeds", "3,4", "--circuits", "15", "-o", str(tmp_path)]) == 1
     printed = capsys.readouterr().out
-    assert "notched_rectangle (seed 3)" in printed and "notched_rectangle (seed 5)" in printed
+    assert "notched_rectangle (seed 3)" in printed and "notched_rectangle (seed 4)" in printed
     assert "the paper's figures: NOT (nearest neighbour at 90 images >= 85%)" in printed
     out = json.loads((tmp_path / "summary.json").read_text())
     assert [r["checks"]["nn_at_90_at_least_85"] for r in out["runs"]] == [True, False]
@@ -116,11 +116,11 @@ def test_seeds_report_mean_and_spread_and_exit_1_when_one_seed_fails(tmp_path, c
     nn = s["1-NN at 90 images (CV)"]
     assert nn["min"] == min(nn["values"]) and nn["max"] == max(nn["values"]) and nn["min"] < nn["max"]
     assert nn["mean"] == pytest.approx(sum(nn["values"]) / 2)
-    assert (tmp_path / "seed_3" / "report.md").exists() and (tmp_path / "seed_5" / "report.md").exists()
+    assert (tmp_path / "seed_3" / "report.md").exists() and (tmp_path / "seed_4" / "report.md").exists()
     summary = (tmp_path / "summary.md").read_text()
     assert "| k by M | 4 | 4, 4 | 4 | 4 - 4 |" in summary  # the paper's figure, then ours
     assert "- k by M is the largest k with U = 1: yes, on every seed (2)" in summary
-    assert "- nearest neighbour at 90 images >= 85%: **no** on seed(s) 5" in summary
+    assert "- nearest neighbour at 90 images >= 85%: **no** on seed(s) 4" in summary
     assert "**Not everything holds** (above)." in summary
 
 

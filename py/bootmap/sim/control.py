@@ -9,9 +9,9 @@ then reports the tableau action it performed, measured by odometry.
 corridor (hallways), then hill-climbs: to ``stop_distance`` from the wall ahead, or, at a side opening,
 to where the opening is symmetric about the robot: the near edge is seen in the scan before the robot
 reaches it and carried by odometry, the far edge is seen in the scan; once the opening's width is known
-the stop is where the far edge is half of it ahead. ``Turn`` rotates by odometry and then hill-climbs
-to alignment with the walls of the new path. Travel distances are odometry's signed progress: backing
-up onto a fixed point the robot overshot counts back.
+the stop is where the far edge is half of it ahead. ``Turn`` rotates by odometry, corrected by the
+walls' direction, and then hill-climbs to alignment with the walls of the new path. Travel distances are
+odometry's signed progress: backing up onto a fixed point the robot overshot counts back.
 """
 
 from __future__ import annotations
@@ -31,7 +31,19 @@ NEAR_EDGE_WATCH = 1.0  # m: the end of the wall beside the robot is watched for 
 NEAR_EDGE_SLACK = 0.3  # m: a sighting of the edge further than this from where the side opened is stale
 MIN_FAR_EDGE = 0.5  # m: an opening's far edge is first measured when at least this far ahead
 BACK_OFF_SLACK = math.radians(1.0)  # a turn's last approach may start this much nearer than its window
-SEARCH_LIMIT = math.radians(40)  # a turn looks for walls this far past its odometry angle before giving up
+QUARTER = math.pi / 2
+# A turn's rotation is corrected by wall readings this near the robot's axes: further out (up to the
+# percept's 25-degree fold limit) a few chords of corners and door recesses can outvote the walls.
+TRACK_LIMIT = math.radians(18)
+# Even there, two such readings in a row can be corner chords (a dead end seen 40-50 degrees off its walls):
+# a reading is taken only where it differs from odometry's rotation since the last one by less than
+# odometry can be off (a turn-rate scale error of a third, and a few degrees besides).
+TRACK_GATE = math.radians(8)
+TRACK_GATE_SCALE = 0.4
+PAIR_GATE = math.radians(3)  # and where it follows from the last scan's reading, by odometry, within this
+TAKEOVER = TRACK_LIMIT  # a turn's walls take over this far from its target, when they show there
+TURN_BOUND = math.radians(30)  # a turn never looks for or aligns with walls further than this from its target
+HOLD_TICKS = 10  # control periods an aligning turn waits for walls it lost before it stands where it is
 
 
 @dataclass(frozen=True)
@@ -49,6 +61,11 @@ class Limits:
     stop_tolerance: float = 0.008  # m: the hill-climbing has converged within this
     align_tolerance: float = math.radians(0.6)
     settle_ticks: int = 2  # consecutive converged control periods that make a fixed point
+
+
+def _fold(angle: float) -> float:
+    """An angle folded onto [-45, 45) degrees (the walls' directions are known to a quarter turn)."""
+    return (angle + QUARTER / 2) % QUARTER - QUARTER / 2
 
 
 def _approach_speed(error: float, lim: Limits) -> float:
@@ -201,22 +218,40 @@ class Travel(ControlLaw):
 
 
 class Turn(ControlLaw):
-    """Turn in place by ``angle`` (radians, positive left) by odometry, then hill-climb to alignment
-    with the walls of the new path.
+    """Turn in place by ``angle`` (radians, positive left): rotate to near the new heading, then
+    hill-climb to alignment with the walls of the new path.
 
-    Odometry only has to bring the robot near the new heading: once within ``align_window`` of it by
-    odometry, with walls in sight, the law aligns with the walls and never goes back to odometry (the
-    robot is where the walls say; a slipping odometry that still reads the turn as unfinished must not
-    turn it away again). Until the walls are in sight, odometry turns on, to the whole angle, and on
-    beyond it by up to ``SEARCH_LIMIT`` while no wall shows: a robot that turned short (its turn starts
-    a control period late, and slips) may be more than 25 degrees off the walls, where the percept does
-    not see them as walls.
+    The rotation is measured by odometry and corrected by the walls. Walls in buildings meet at right
+    angles, so the percept's wall angle says the robot's heading to within a quarter turn; while the walls
+    are read reliably (within ``TRACK_LIMIT`` of the axes, following from the last scan's reading by
+    odometry's step within ``PAIR_GATE``, and from the last reliable one within ``TRACK_GATE``, each
+    plus ``TRACK_GATE_SCALE`` of the rotation odometry measured), the change of the wall angle since the
+    last such reading is the rotation since then, and odometry only says which quarter turn it is in (it
+    is never 45 degrees off over the 50-odd degrees between two reliable readings). Odometry alone carries
+    the estimate across the gaps, and decides it where no wall is seen at all. A turn-rate scale error
+    that leaves odometry 50 degrees off on a turn-around (2-3 standard deviations at twice the default
+    noise, docs/noise.md) therefore does not move where the turn ends; a law that trusted odometry to
+    within a fixed search range instead turned to and fro between the range and odometry's target for
+    ever (``stuck: turn did not reach a dstate``).
 
-    The last approach always starts ``align_window`` short of the walls, by the walls: a robot that
-    odometry brought closer, or past them, first backs off to there. The hill-climbing stops as soon as
-    the walls are within tolerance, so where in the tolerance it stops depends on the way it came; if
-    that way varied with the odometry error, so would the heading at the dstate and its image (a turn
-    approached from 5 or from 15 degrees out stops up to a degree apart, which splits a view).
+    Phases, each ending, so that every turn ends:
+
+    * ``rotate``: towards the angle by the estimate, until the walls show the target's axis within
+      ``TAKEOVER``, or it is within ``align_window`` of the angle;
+    * ``align``: the hill-climbing on the walls. The last approach always starts ``align_window`` short
+      of the walls, by the walls: a robot that the rotation brought closer, or past them, first backs off
+      to there. The hill-climbing stops as soon as the walls are within tolerance, so where in the
+      tolerance it stops depends on the way it came; if that way varied with the odometry error, so
+      would the heading at the dstate and its image (a turn approached from 5 or from 15 degrees out
+      stops up to a degree apart, which splits a view). Walls lost for a scan (drop-outs): hold still;
+      lost for ``HOLD_TICKS``, the fixed point is where the robot stands. Walls that lead further than
+      ``TURN_BOUND`` from the target are not the new path's: the estimate settles the turn;
+    * ``search``: within the window no wall is seen (a crossing, or walls further off the axes than the
+      percept folds): turn on past the target, up to ``TURN_BOUND``, until walls show;
+    * ``return``: none showed: back to the target by the estimate, and settle there (the turn is the
+      estimate's alone, that is odometry's where no wall is seen), unless walls show within the window:
+      then they take over;
+    * ``final``: the walls led too far: the estimate settles the turn at the target.
 
     Parameters
     ----------
@@ -224,8 +259,15 @@ class Turn(ControlLaw):
     angle : float
         Radians, positive left.
     align_window : float
-        Radians of odometry-measured turn still to go where alignment with the walls takes over, and
-        how far short of the walls the last approach starts.
+        Radians of turn still to go (by the estimate) where alignment with the walls takes over, and how
+        far short of the walls the last approach starts.
+
+    Attributes
+    ----------
+    turned : float
+        The rotation so far by the estimate, radians.
+    phase : str
+        One of the phases above.
     """
 
     timeout = 30.0
@@ -234,32 +276,98 @@ class Turn(ControlLaw):
         super().__init__(lim)
         self.angle, self.align_window = angle, align_window
         self.direction = math.copysign(1.0, angle)
-        self.aligning = False  # the walls have taken over from odometry
+        self.phase = "rotate"
+        self.turned = 0.0
         self.approaching = False  # the last approach, from align_window short of the walls, has begun
+        self._odometry_theta = 0.0
+        self._anchor: tuple[float, float] | None = None  # (wall angle, turned) at the last reliable reading
+        self._previous = math.nan  # the last scan's wall angle, if within TRACK_LIMIT
+        self._lost = 0  # control periods the walls have been lost while aligning
+
+    def begin(self, odometry: Odometry) -> None:
+        super().begin(odometry)
+        self._odometry_theta = odometry.theta
+
+    @property
+    def aligning(self) -> bool:
+        """The walls have taken over from the estimate."""
+        return self.phase == "align"
+
+    def _track(self, wall: float, odo: Odometry) -> None:
+        """Advance the rotation estimate by odometry, then correct it by a reliable wall reading."""
+        step = odo.theta - self._odometry_theta
+        self.turned += step
+        self._odometry_theta = odo.theta
+        if math.isnan(wall) or abs(wall) > TRACK_LIMIT:
+            self._previous = math.nan
+            return
+        previous, self._previous = self._previous, wall
+        if self._anchor is not None:
+            # walls are seen as walls from one scan to the next: a reading that does not follow from the
+            # last one by odometry's step is a stray (corner chords, 35-55 degrees off the walls)
+            if math.isnan(previous) or \
+                    abs(_fold(previous - wall - step)) > PAIR_GATE + TRACK_GATE_SCALE * abs(step):
+                return
+            wall_then, turned_then = self._anchor
+            by_odometry = self.turned - turned_then
+            by_walls = wall_then - wall  # the walls turn the other way in the robot's frame
+            quarters = round((by_odometry - by_walls) / QUARTER)
+            by_walls += quarters * QUARTER
+            if abs(by_walls - by_odometry) > TRACK_GATE + TRACK_GATE_SCALE * abs(by_odometry):
+                return  # more than odometry can be off: chords of a corner, not the walls
+            self.turned = turned_then + by_walls
+        self._anchor = (wall, self.turned)
 
     def step(self, p: Percept, ranges: np.ndarray, odo: Odometry) -> tuple[float, float]:
+        self._track(p.wall_angle, odo)
+        remaining = self.angle - self.turned
+        # The percept folds the walls onto the nearest axis; the estimate says which axis is the target's.
+        wall = p.wall_angle
+        if not math.isnan(wall):
+            wall += round((remaining - wall) / QUARTER) * QUARTER
+        if self.phase == "align" and abs(remaining) > TURN_BOUND:
+            self.phase = "final"
+        # The walls take over as soon as they show the target's axis (TAKEOVER ahead, by the estimate):
+        # at the window the rotation's momentum has carried the robot a few degrees nearer than the
+        # estimate, and nearly every last approach would begin by backing off against that momentum
+        # (which scatters the final heading by a third more).
+        if self.phase == "rotate" and not math.isnan(wall) and abs(remaining) <= TAKEOVER:
+            self.phase = "align"
+        if self.phase in ("rotate", "return") and abs(remaining) <= self.align_window:
+            if not math.isnan(wall):
+                self.phase = "align"
+            elif self.phase == "rotate":
+                self.phase = "search"
+        if self.phase == "search":
+            if not math.isnan(wall) and abs(wall) <= TURN_BOUND:
+                self.phase = "align"
+            else:
+                # turn on past the target, at most at the speed of the last approach, until walls show;
+                # slowing into the bound so as not to pass it
+                gap = TURN_BOUND + remaining * self.direction
+                if gap < BACK_OFF_SLACK:
+                    self.phase = "return"
+                else:
+                    self._settle(False)
+                    return 0.0, self.direction * self.lim.k_align * min(self.align_window, gap)
+        if self.phase == "align":
+            return self._align(wall)
+        return self._rotate(remaining, settle=self.phase in ("return", "final"))
+
+    def _rotate(self, remaining: float, settle: bool) -> tuple[float, float]:
         lim = self.lim
-        remaining = self.angle - (odo.theta - self.start.theta)
-        # the walls take over within the window (or once they have): before, odometry turns
-        wall = p.wall_angle if self.aligning or abs(remaining) <= self.align_window else math.nan
-        if not self.aligning and wall * self.direction < -self.align_window:
-            # Walls that say the robot turned too far by more than the window: a robot that starts its
-            # turn late and slips turns short, not long, so this is the fold of walls far ahead
-            # (a 45-degree reading folds to -45) or corner chords; turn on until the walls are clear.
-            wall = math.nan
-        if math.isnan(wall) and self.aligning:  # the walls lost for a scan (drop-outs): hold still
+        mag = min(lim.w_max, math.sqrt(2 * lim.w_accel * abs(remaining)), lim.k_align * abs(remaining))
+        self._settle(settle and abs(remaining) < lim.align_tolerance)
+        return 0.0, (0.0 if self.done else math.copysign(mag, remaining))
+
+    def _align(self, wall: float) -> tuple[float, float]:
+        lim = self.lim
+        if math.isnan(wall):  # the walls lost (drop-outs): hold still, and stand here if they stay lost
+            self._lost += 1
             self._settle(False)
+            self.done = self._lost >= HOLD_TICKS
             return 0.0, 0.0
-        if math.isnan(wall) and -SEARCH_LIMIT < remaining * self.direction <= self.align_window:
-            # Odometry says nearly there, yet no wall is within 25 degrees of the axes: the robot has
-            # turned short (a turn starts a tick late and slips), so it turns on until the walls show.
-            self._settle(False)
-            return 0.0, self.direction * lim.k_align * self.align_window
-        if math.isnan(wall):  # no walls to align with at all: the turn is odometry's alone
-            mag = min(lim.w_max, math.sqrt(2 * lim.w_accel * abs(remaining)), lim.k_align * abs(remaining))
-            self._settle(abs(remaining) < lim.align_tolerance)
-            return 0.0, (0.0 if self.done else math.copysign(mag, remaining))
-        self.aligning = True
+        self._lost = 0
         # short of the walls (in the turn's direction) by the window, less a degree of slack: approach
         self.approaching = self.approaching or wall * self.direction >= self.align_window - BACK_OFF_SLACK
         target = 0.0 if self.approaching else self.direction * self.align_window

@@ -58,6 +58,9 @@ class Run:
         Control periods in which the robot touched a wall or obstacle.
     wall_time : float
         Seconds the run took.
+    dstate_ticks : ndarray of int, shape (len(tableau),)
+        The row of ``trajectory`` where each dstate was reached (what the robot truly did between two
+        dstates, e.g. how far a turn rotated on its way, is the trajectory between them).
     """
 
     tableau: Tableau
@@ -66,6 +69,7 @@ class Run:
     contacts: int
     wall_time: float = 0.0
     explored: bool | None = None
+    dstate_ticks: np.ndarray | None = None
 
 
 @dataclass
@@ -74,6 +78,7 @@ class _Record:
     poses: list = field(default_factory=list)
     truths: list = field(default_factory=list)
     actions: list = field(default_factory=list)
+    ticks: list = field(default_factory=list)
 
 
 class Simulation:
@@ -147,14 +152,15 @@ class Simulation:
             except SimulationError as e:
                 # Keep the experience up to the dstate where the robot got stuck (benchmarks score it).
                 e.run = Run(self._tableau(rec, policy), np.array(self._trajectory), self.time,
-                            self.robot.contacts, time.perf_counter() - started)
+                            self.robot.contacts, time.perf_counter() - started,
+                            dstate_ticks=np.array(rec.ticks))
                 bar.close()
                 raise
             self._record(rec, image, law.action(self.robot.odometry))
             bar.update(1)
         bar.close()
         return Run(self._tableau(rec, policy), np.array(self._trajectory), self.time, self.robot.contacts,
-                   time.perf_counter() - started, getattr(policy, "explored_", None))
+                   time.perf_counter() - started, getattr(policy, "explored_", None), np.array(rec.ticks))
 
     def _law(self, decision: Decision, policy) -> ControlLaw:
         if decision.kind == "travel":
@@ -192,6 +198,7 @@ class Simulation:
         theta = math.atan2(math.sin(pose[2]), math.cos(pose[2]))
         rec.poses.append((round(pose[0], 4), round(pose[1], 4), round(theta, 5)))
         rec.truths.append(self.world.true_dstate(pose) or "?")
+        rec.ticks.append(len(self._trajectory) - 1)
         if action is not None:
             rec.actions.append(action)
         self._move_clutter()
