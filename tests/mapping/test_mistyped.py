@@ -96,3 +96,20 @@ def test_retyping_can_be_switched_off():
     assert [s["t"] for s in Resolver().resolve(tableau).retyped_steps] == [at]
     exact = Resolver(retype=False, time_limit=30).resolve(tableau)
     assert exact.retyped_steps == [] and exact.n_dstates > 8
+
+
+def test_why_reads_the_actions_as_the_map_typed_them():
+    """The explainer states its evidence with the actions as the map typed them, and says two visits of
+    one dstate on either side of the mistyped turn are one dstate."""
+    from bootmap.mapping.explain import Explainer, _Question
+    from bootmap.mapping.grounding import Deadline
+
+    tableau, at = noisy_rectangle(4)
+    explainer = Explainer(time_limit=60)
+    cmap = explainer.resolver.resolve(tableau)
+    explainer.remember(tableau, cmap)
+    question = _Question(explainer, tableau, Deadline.after(60), cmap)
+    assert question.angles[at] == cmap.retyped_steps[0]["abduced_deg"] != learned(tableau)[0][at]
+    d = cmap.dstate_of[at - 1]
+    b = max(b for b in range(at + 1, len(tableau)) if cmap.dstate_of[b] == d)
+    assert explainer.explain(tableau, at - 1, b).verdict == "same"
