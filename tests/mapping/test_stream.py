@@ -65,3 +65,106 @@ def test_a_step_that_breaks_the_map_is_resolved_again():
     assert (stream.extended_, stream.resolved_) == (0, 2)
     assert same_map(cmap, Resolver(time_limit=30, misreads=False).resolve(broken))
     assert cmap.n_dstates > 8
+
+
+# --- The stock axioms replayed in Python (mapping/replay.py) ------------------------------------------
+
+
+def test_the_shipped_axioms_are_the_ones_the_replay_argues_about():
+    # replay.py's argument is about these files. If this fails, an axiom file changed: check the argument
+    # in replay.py's docstring against the change, then update STOCK_DIGESTS.
+    from bootmap.mapping.replay import covers
+    assert covers(Resolver().theory)
+    assert covers(Resolver(levels=["causal", "topological"]).theory)  # a subset of the stock levels
+
+
+def test_a_theory_a_user_extended_is_checked_by_clingo_and_still_streams_exactly(tmp_path):
+    import shutil
+    from bootmap.mapping.replay import covers
+    from bootmap.mapping.theory import default_axioms_dir
+    axioms = tmp_path / "asp"
+    shutil.copytree(default_axioms_dir(), axioms)
+    # A user's level: no dstate is reached twice in a row by a turn-around (true of these walks anyway).
+    (axioms / "mine.lp").write_text("% mine\n:- next(D, turn(180), D).\n")
+    resolver = Resolver(axioms=axioms, time_limit=30)
+    assert not covers(resolver.theory)
+    stream = MapStream(resolver)
+    tableau = notched_rectangle(4)
+    for n in range(1, len(tableau) + 1):
+        streamed = stream.update(tableau.prefix(n))
+    assert same_map(streamed, resolver.resolve(tableau)) and stream.extended_ > stream.resolved_
+
+
+def _walk(seed: int, steps: int, misread: float = 0.0):
+    from bootmap.testing.noise import with_misreads
+    rng = np.random.default_rng(seed)
+    world = random_world(rng, 4, 3, extra_edges=2, landmarks=0.4)
+    tableau = walk(world, steps, rng, policy="explore")
+    return with_misreads(tableau, misread, rng)[0] if misread else tableau
+
+
+@settings(max_examples=5, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 10_000), misread=st.sampled_from([0.0, 0.03]))
+def test_the_suspect_watch_names_what_find_suspects_names_on_every_prefix(seed, misread):
+    from bootmap.mapping.facts import action_symbol, read_actions
+    from bootmap.mapping.misreads import SuspectWatch, find_suspects
+    tableau = _walk(seed, 160, misread)
+    angles, _ = read_actions(tableau)
+    actions = [action_symbol(s.action, a) for s, a in zip(tableau.steps, angles)]
+    watch = SuspectWatch()
+    for t, view in enumerate(tableau.views):
+        watch.append(view, actions[t - 1] if t else None)
+        assert watch.suspects == {s.t for s in find_suspects(tableau.views[:t + 1], actions[:t + 1])}, t
+    assert SuspectWatch.of(tableau.views, actions).suspects == watch.suspects
+
+
+@settings(max_examples=4, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 10_000), metrical=st.booleans())
+def test_the_replay_derives_what_the_prepass_derives(seed, metrical):
+    # Classes, and the features only some time points show: what clingo's prepass derives from the
+    # stock axioms, the replay derives in Python (the features as the apart relation they induce).
+    from bootmap.mapping.grounding import _apart
+    tableau = _walk(seed, 90)
+    resolver = Resolver(levels=None if metrical else ["causal", "topological"])
+    grounded, classes, partial, replay = _prepass_and_replay(tableau, resolver, metrical)
+    for a in range(len(tableau)):
+        assert len(replay.partial[a]) == len(partial[a]), a
+        for b in range(a + 1, len(tableau)):
+            assert (replay.class_of[a] == replay.class_of[b]) == (classes.of_time[a] == classes.of_time[b])
+            assert _apart(replay.partial[a], replay.partial[b]) == _apart(partial[a], partial[b]), (a, b)
+
+
+@settings(max_examples=3, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 10_000))
+def test_the_replay_proves_the_exact_map_where_the_prepass_bounds_do(seed):
+    tableau = _walk(seed, 120)
+    resolver = Resolver(time_limit=30)
+    grounded, classes, _, replay = _prepass_and_replay(tableau, resolver, True)
+    replay.watch.suspects = {0}  # as if some view were suspect, so that the bounds are asked for
+    n_dstates = len(replay.view_of)
+    expected = (len(replay.members) == n_dstates or len(tableau) < 5 * len(replay.members)
+                or sum(grounded.lower_bounds(classes)) == n_dstates)
+    assert replay.exact_stands(n_dstates) == expected
+
+
+def _prepass_and_replay(tableau, resolver, metrical):
+    from bootmap.mapping.facts import read_actions, tableau_facts, travel_lengths
+    from bootmap.mapping.grounding import prepass
+    from bootmap.mapping.replay import Replay, length_labels
+    angles, _ = read_actions(tableau)
+    grounded = prepass(resolver.theory, tableau_facts(tableau, angles=angles), resolver.future_depth)
+    classes = grounded.classes(range(len(tableau)))
+    partial = grounded._partial_features(classes.times)
+    # The replay needs a map: the exact one of the tableau, which the prepass's bounds are about.
+    cmap = Resolver(time_limit=30).resolve(tableau)
+    replay = Replay.of(tableau.steps, angles, length_labels(travel_lengths(tableau)), cmap, metrical,
+                       resolver.future_depth)
+    return grounded, classes, partial, replay
+
+
+def test_streaming_equals_batch_where_views_are_misread():
+    # Misreads make some views suspect: the stream must keep the map only where the resolver would.
+    from bootmap.testing.noise import with_misreads
+    tableau, misread = with_misreads(notched_rectangle(3), 0.01, np.random.default_rng(5))
+    stream = streamed_equals_batch(tableau, every=10)
+    assert misread and stream.extended_ > 0

@@ -243,12 +243,7 @@ def build_map(tableau: Tableau, models: list[list[Symbol]], exhausted: bool, lev
             sides[side if dr == "pos" else mirror].add((pname[ids[p]], pa))
     order = sorted(order, key=_natural)
     paths = {pa: _ordered_places(pa, on, order) for pa in sorted(set(paname.values()), key=_natural1)}
-    steps = []
-    for t, i in enumerate(seq):
-        s = S[i]
-        pa, dr = path_of.get(s, (None, None))
-        steps.append({"t": t, "view": tableau.steps[t].view, "dstate": s, "place": place_of.get(s),
-                      "path": pa, "dir": dr, "action": action_text(tableau.steps[t].action)})
+    steps = [step_row(t, tableau.steps[t], S[i], place_of, path_of) for t, i in enumerate(seq)]
     alternatives = []
     for m in models[1:]:
         _, alt = _number_dstates(IS.args(m), n)
@@ -263,6 +258,13 @@ def build_map(tableau: Tableau, models: list[list[Symbol]], exhausted: bool, lev
         n_models=len(models) if minimal else 0, unique=minimal and len(models) == 1 and exhausted,
         models_capped=minimal and not exhausted, alternatives=alternatives, levels=list(levels),
         stats=stats, minimal=minimal, action_types=list(action_types or []))
+
+
+def step_row(t: int, step, dstate: str, place_of: dict, path_of: dict) -> dict:
+    """A time point as the map lists it: its view, dstate, place, path and direction, and the action on."""
+    pa, dr = path_of.get(dstate, (None, None))
+    return {"t": t, "view": step.view, "dstate": dstate, "place": place_of.get(dstate), "path": pa, "dir": dr,
+            "action": action_text(step.action)}
 
 
 def _natural(t: tuple) -> tuple:

@@ -128,7 +128,7 @@ class Grounding:
         (e.g. the view seen after the same actions): no two of them can share a dstate. Time points
         ``left_out`` (suspect views, which may be at a dstate of another class) are not counted."""
         partial = self._partial_features(classes.times)
-        return [_apart_clique(ts, partial) for ts in _members(classes, leave_out)]
+        return [apart_clique(ts, partial) for ts in _members(classes, leave_out)]
 
     def loners(self, classes: "Classes") -> list[int]:
         """Time points that disagree with every other time point of their class: read as seen, each is
@@ -144,7 +144,7 @@ class Grounding:
         its distance, than their class-mates did. Time points ``left_out`` are suspects already."""
         partial, seen_from = self._partial_features(classes.times, sources=True)
         members = _members(classes, leave_out)
-        lower = [_apart_clique(ts, partial) for ts in members]
+        lower = [apart_clique(ts, partial) for ts in members]
         class_of = dict(zip(classes.times, classes.of_time))
         found = []
         for u, seers in sorted(seen_from.items()):
@@ -154,7 +154,7 @@ class Grounding:
             without = {t: {k: v for k, v in partial[t].items() if k not in seers[t]} for t in seers}
             features = ChainMap(without, partial)
             affected = {class_of[t] for t in seers if t not in leave_out}
-            if any(_apart_clique(members[c], features) < lower[c] for c in affected):
+            if any(apart_clique(members[c], features) < lower[c] for c in affected):
                 found.append(u)
         return found
 
@@ -258,9 +258,11 @@ def _apart(a: dict, b: dict) -> bool:
     return any(k in large and large[k] != v for k, v in small.items())
 
 
-def _apart_clique(times: list[int], partial: dict[int, dict]) -> int:
+def apart_clique(times: Sequence[int], partial, at_most: int | None = None) -> int:
     """Size of a set of time points that pairwise disagree (greedy, forwards, backwards and the time points
-    showing most features first, since those disagree most; at least 1 unless there are none)."""
+    showing most features first, since those disagree most; at least 1 unless there are none). Given
+    ``at_most``, a bound no such set can exceed (the dstates a valid map gives them), the search stops
+    once it is reached: the answer is the same, sooner."""
     best = min(1, len(times))
     richest = sorted(times, key=lambda t: -len(partial[t]))
     for order in (times, times[::-1], richest):
@@ -268,5 +270,7 @@ def _apart_clique(times: list[int], partial: dict[int, dict]) -> int:
         for t in order:
             if all(_apart(partial[t], partial[m]) for m in clique):
                 clique.append(t)
+                if at_most is not None and len(clique) >= at_most:
+                    return len(clique)
         best = max(best, len(clique))
     return best

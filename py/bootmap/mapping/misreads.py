@@ -64,6 +64,9 @@ MIN_STEPS = 100
 #: twice, and a search for misreads there cost seconds to minutes for none (a 105-step exploration
 #: prefix: 43 s); a 600-step exploration with 2% misreads has 9-12 per class, the paper's tableau 45.
 MIN_VISITS = 5
+#: A view seen in a context at most this many times is read by its share of the context's visits; one
+#: seen more often is ordinary there.
+SEEN_RARELY = 2
 #: Why a rare view is suspect.
 RARE_VIEW = "a view with one or two images"
 #: Why a view no rule here suspected became a suspect (the resolver finds these: :meth:`_ghosts`).
@@ -129,10 +132,10 @@ def find_suspects(views: Sequence[Hashable], actions: Sequence[Hashable],
     found = []
     for t in range(n):
         # How surprising the view is after what came before it, and before what came after.
-        sides = [side for side in (contexts.before(t), contexts.after(t)) if side is not None]
+        sides = contexts.sides(t)
         if t in rare:
             found.append(Suspect(t, RARE_VIEW_COST, _expected(sides), RARE_VIEW))
-        elif n >= MIN_STEPS and len(sides) == 2 and min(side[0] for side in sides) <= STRONG:
+        elif _surprising(sides, n):
             base = MISREAD_COST if costs is None else int(costs[t])
             clear = max(side[0] for side in sides) <= WEAK
             # Where one side looks ordinary, thin evidence on the other (a context seen only a few
@@ -146,6 +149,75 @@ def find_suspects(views: Sequence[Hashable], actions: Sequence[Hashable],
     return found
 
 
+def _surprising(sides: list, n: int) -> bool:
+    """A view is a suspect for its contexts: a view seen where, on one side at least, other views were
+    seen far more often (in a tableau long enough to tell)."""
+    return n >= MIN_STEPS and len(sides) == 2 and min(side[0] for side in sides) <= STRONG
+
+
+class SuspectWatch:
+    """Whether :func:`find_suspects` names any time point of a growing tableau (labels only, no images),
+    kept current as steps are appended: what a step changes are the contexts that end at it, so only
+    the time points that share one of those contexts (and the last few) are looked at again.
+
+    >>> watch = SuspectWatch()
+    >>> views = list("ABCD" * 25)
+    >>> views[21] = "A"
+    >>> for t, v in enumerate(views):
+    ...     watch.append(v, None if t == 0 else "turn")
+    >>> sorted(watch.suspects) == [s.t for s in find_suspects(views, ["turn"] * 100)]
+    True
+    """
+
+    def __init__(self):
+        self._view_ids: dict = {}
+        self._action_ids: dict = {}
+        self.contexts = _Contexts([], [], {}, {}, index=True)
+        self.suspects: set[int] = set()
+        self.rare: set = set()
+        self._at: dict[int, list[int]] = {}  # view id -> its time points
+
+    @classmethod
+    def of(cls, views: Sequence[Hashable], actions: Sequence[Hashable]) -> "SuspectWatch":
+        """The watch of a whole tableau at once (its views, and the actions between them)."""
+        watch = cls()
+        for t, view in enumerate(views):
+            watch._add(view, actions[t - 1] if t else None)
+        n = len(views)
+        watch.rare = _rare(watch._at, n, typical=RARE_AMONG)
+        watch.suspects = {t for t in range(n)
+                          if watch.contexts.views[t] in watch.rare or _surprising(watch.contexts.sides(t), n)}
+        return watch
+
+    def _add(self, view: Hashable, action_before: Hashable | None) -> set[int]:
+        v = self._view_ids.setdefault(view, len(self._view_ids))
+        self.contexts.view_names[v] = view
+        a = None
+        if action_before is not None:
+            a = self._action_ids.setdefault(action_before, len(self._action_ids))
+            self.contexts.action_names[a] = action_before
+        changed = self.contexts.append(v, a)
+        self._at.setdefault(v, []).append(len(self.contexts.views) - 1)
+        return changed
+
+    def append(self, view: Hashable, action_before: Hashable | None) -> None:
+        """The next time point's view, and the action that led to it (None for the first)."""
+        changed = self._add(view, action_before)
+        n = len(self.contexts.views)
+        again = set(changed) | set(range(max(0, n - 4), n))
+        rare = _rare(self._at, n, typical=RARE_AMONG)
+        for x in rare ^ self.rare:
+            again.update(self._at[x])
+        self.rare = rare
+        if n == MIN_STEPS:
+            again = range(n)
+        for t in again:
+            if self.contexts.views[t] in rare or _surprising(self.contexts.sides(t), n):
+                self.suspects.add(t)
+            else:
+                self.suspects.discard(t)
+
+
 def rare_views(views: Sequence[Hashable], at_most: int = 2, typical: int = 5) -> dict:
     """Views with at most ``at_most`` images in a tableau whose views have ``typical`` or more on average:
     view -> its time points. Such a view is as likely a misread image (a drop-out left unrepaired, a
@@ -157,9 +229,15 @@ def rare_views(views: Sequence[Hashable], at_most: int = 2, typical: int = 5) ->
     at: dict = {}
     for t, v in enumerate(views):
         at.setdefault(v, []).append(t)
-    if len(views) < typical * len(at):
-        return {}
-    return {v: ts for v, ts in at.items() if len(ts) <= at_most}
+    return {v: at[v] for v in _rare(at, len(views), at_most, typical)}
+
+
+def _rare(at: dict, n: int, at_most: int = 2, typical: int = 5) -> set:
+    """Of the views seen at these time points (view -> time points) in a tableau of ``n``, the rare ones
+    (:func:`rare_views`)."""
+    if n < typical * len(at):
+        return set()
+    return {v for v, ts in at.items() if len(ts) <= at_most}
 
 
 def has_images(tableau: Tableau) -> bool:
@@ -182,13 +260,54 @@ class _Contexts:
     #: A longer context counts once it has been seen this often.
     MIN_SEEN = 4
 
-    def __init__(self, views: Sequence[int], actions: Sequence[int], view_names: dict, action_names: dict):
-        self.views, self.actions = views, actions
+    def __init__(self, views: Sequence[int], actions: Sequence[int], view_names: dict, action_names: dict,
+                 index: bool = False):
+        self.views, self.actions = list(views), list(actions)
         self.view_names, self.action_names = view_names, action_names
         self.seen: dict = {}
+        # With an index, which time points each context was seen at (to look at them again on append).
+        self.at: dict | None = {} if index else None
         for t in range(len(views)):
             for key in self._keys(t):
-                self.seen.setdefault(key, Counter())[views[t]] += 1
+                self._count(key, t)
+
+    def _count(self, key, t: int) -> None:
+        self.seen.setdefault(key, Counter())[self.views[t]] += 1
+        if self.at is not None:
+            self.at.setdefault(key, {}).setdefault(self.views[t], []).append(t)
+
+    def _reread(self, key, depth: int) -> list[int]:
+        """The time points whose reading of a context may change now that it was seen once more: those
+        whose view it has seen at most once more than ``SEEN_RARELY`` (beyond that a view is ordinary
+        there whatever else is seen), or all of them once a longer context is seen often enough to count."""
+        seen, at = self.seen[key], self.at[key]
+        if depth > 1 and sum(seen.values()) == self.MIN_SEEN:
+            return [t for ts in at.values() for t in ts]
+        return [t for v, ts in at.items() if seen[v] <= SEEN_RARELY + 1 for t in ts]
+
+    def append(self, view: int, action_before: int | None) -> set[int]:
+        """One more time point (its view, and the action from the one before). Returns the time points
+        whose contexts were seen again, so may read differently: the contexts that end at the new
+        time point (the views before it, and what the last three saw after them)."""
+        if self.views:
+            del self.actions[len(self.views) - 1:]  # an action after the last time point is not experience
+            self.actions.append(action_before)
+        self.views.append(view)
+        n = len(self.views)
+        changed: set[int] = set()
+        ending = [(n - 1, depth, False) for depth in self.DEPTHS] + [(n - 1 - depth, depth, True) for depth in self.DEPTHS]
+        for t, depth, ahead in ending:
+            key = self._key(t, depth, ahead) if t >= 0 else None
+            if key is not None:
+                self._count(key, t)
+                if self.at is not None:
+                    changed.update(self._reread(key, depth))
+        return changed
+
+    def sides(self, t: int) -> list:
+        """How surprising t's view is after what came before it, and before what came after (a side
+        is left out where there is nothing on it)."""
+        return [side for side in (self.before(t), self.after(t)) if side is not None]
 
     def _key(self, t: int, depth: int, ahead: bool):
         lo, hi = (t + 1, t + 1 + depth) if ahead else (t - depth, t)
@@ -239,7 +358,7 @@ class _Contexts:
 def _surprise(seen: Counter, view) -> tuple[float, tuple, int]:
     """How rarely ``view`` was seen in a context (its share, or 1 when seen there three times or more),
     the views seen there instead, and how often they were."""
-    share = seen[view] / sum(seen.values()) if seen[view] <= 2 else 1.0
+    share = seen[view] / sum(seen.values()) if seen[view] <= SEEN_RARELY else 1.0
     return share, tuple(v for v in seen if v != view), sum(seen.values()) - seen[view]
 
 

@@ -97,8 +97,9 @@ class MotionPrimitives:
         self.grids = grids
 
     def fit(self, actions: Sequence[Action]) -> "MotionPrimitives":
-        kinds = np.array(["turn" if isinstance(a, Turn) else "travel" for a in actions])
-        measured = _wrap(np.array([measured_angle(a) for a in actions], dtype=float))
+        is_turn, read = _readings(actions)
+        kinds = np.where(is_turn, "turn", "travel")
+        measured = _wrap(read)
         clusters: list[tuple[str, np.ndarray]] = []  # (kind, indices into actions)
         for kind in ("turn", "travel"):
             idx = np.flatnonzero(kinds == kind)
@@ -124,11 +125,11 @@ class MotionPrimitives:
             few += [m for m, sd, n in mine if n <= TAIL and (m, pooled) in keep and pooled >= EXACT_DEG]
         self.grid_deg_ = _coarsest_grid([t for t in common if t[0] not in few], self.grids, few)
         snapped = [quantise(m, self.grid_deg_) for m in means]
-        self.angles_ = [0] * len(actions)
+        angles = np.zeros(len(actions), dtype=int)
         for (_, idx), angle in zip(clusters, snapped):
-            for i in idx:
-                self.angles_[i] = angle
-        self.types_ = action_types(actions, self.angles_)
+            angles[idx] = angle
+        self.angles_ = angles.tolist()
+        self.types_ = _types(is_turn, read, angles)
         return self
 
 
@@ -140,13 +141,24 @@ def measured_angle(action: Action) -> float:
 def action_types(actions: Sequence[Action], angles: Sequence[int]) -> list[ActionType]:
     """The types of these actions given the angle each was read as (learned, or rounded to a quantum):
     turns first, by angle."""
-    groups: dict[tuple[str, int], list[float]] = {}
-    for a, angle in zip(actions, angles):
-        groups.setdefault(("turn" if isinstance(a, Turn) else "travel", angle), []).append(measured_angle(a))
+    is_turn, read = _readings(actions)
+    return _types(is_turn, read, np.asarray(angles, dtype=int))
+
+
+def _readings(actions: Sequence[Action]) -> tuple[np.ndarray, np.ndarray]:
+    """Which actions are turns, and what odometry measured for each (:func:`measured_angle`)."""
+    is_turn = np.fromiter((isinstance(a, Turn) for a in actions), dtype=bool, count=len(actions))
+    read = np.fromiter((measured_angle(a) for a in actions), dtype=float, count=len(actions))
+    return is_turn, read
+
+
+def _types(is_turn: np.ndarray, read: np.ndarray, angles: np.ndarray) -> list[ActionType]:
+    """The action types, turns first, by angle: each with its count and measured mean and spread."""
     out = []
-    for (kind, angle), values in sorted(groups.items(), key=lambda kv: (kv[0][0] != "turn", kv[0][1])):
-        v = _wrap(np.array(values))
-        out.append(ActionType(kind, angle, len(values), _circular_mean(v), _circular_sd(v, angle)))
+    for kind, mine in (("turn", is_turn), ("travel", ~is_turn)):
+        for angle in np.unique(angles[mine]):
+            v = _wrap(read[mine & (angles == angle)])
+            out.append(ActionType(kind, int(angle), len(v), _circular_mean(v), _circular_sd(v, int(angle))))
     return out
 
 

@@ -4,9 +4,8 @@ that does not stand.
 A robot explores step by step, and most steps repeat what it has done before: the same action from
 the same dstate. When the map of the experience so far is the unique minimal map, a new time point
 reached by an action already taken from the same dstate must be at the dstate that action led to
-before (determinism). If the map so extended still satisfies every axiom (clingo checks it, with the
-partition fixed, so axioms a user adds are checked too), it is the unique minimal map of the longer
-experience as well:
+before (determinism). If the map so extended still satisfies every axiom, it is the unique minimal map
+of the longer experience as well:
 
 * minimal: a map of the longer experience restricted to the old steps is a map of them, so it has at
   least as many dstates as their minimal map; the extension adds none;
@@ -19,6 +18,12 @@ an ambiguous map) is resolved again from scratch. Where some views are suspect (
 :mod:`.misreads`), the map is extended only where the resolver too would keep the exact map without
 weighing them: one dstate per class, experience too little repeated for misreads to show, or as many
 dstates as the classes' proved lower bounds.
+
+Who checks: with the axiom files bootmap ships, :mod:`.replay` keeps, step by step, what the axioms
+derive from the experience (headings, classes, the features that tell time points apart, the suspect
+views, the classes' lower bounds) and checks only what the new steps change: a few milliseconds a step,
+however long the tableau. With a theory a user added to or edited, clingo checks the whole extended map
+with the partition fixed (``fixed/2``), so the user's axioms are honoured.
 
 Example
 -------
@@ -39,10 +44,12 @@ from dataclasses import replace
 from clingo import Function, Number, Symbol
 
 from ..tableau import Tableau
-from .cogmap import CognitiveMap, SolveStats, Try, build_map
-from .facts import action_symbol, read_actions, tableau_facts
+from .cogmap import CognitiveMap, SolveStats, Try, build_map, step_row
+from .facts import action_symbol, read_actions, tableau_facts, travel_lengths
 from .grounding import Deadline, Grounding, prepass
-from .misreads import MIN_VISITS, find_suspects, rare_clustered_views
+from .misreads import MIN_VISITS, find_suspects, has_images, rare_clustered_views
+from .motion import ActionType
+from .replay import Replay, covers, length_labels
 from .resolver import Resolver
 from .vocabulary import FIXED
 
@@ -74,21 +81,29 @@ class MapStream:
         self.resolved_ = 0
         self._tableau: Tableau | None = None
         self._angles: list[int] = []
+        # The stock axioms are replayed in Python (:mod:`.replay`); a theory a user changed, by clingo.
+        self._replays = covers(self.resolver.theory)
+        self._replay: Replay | None = None
+        self._images = False  # every step so far has an image (misreads.rare_clustered_views)
 
     def update(self, tableau: Tableau, deadline: Deadline | None = None) -> CognitiveMap:
         """The map of ``tableau``, which usually extends the last one given by a few steps."""
         deadline = deadline or Deadline.after(self.resolver.time_limit)
-        cmap = self._extended(tableau, deadline)
+        start = time.perf_counter()
+        angles, types = read_actions(tableau, self.resolver.quantum_deg)
+        cmap = self._extended(tableau, angles, types, deadline, start)
         if cmap is None:
             cmap = self.resolver.resolve(tableau, deadline)
             self.resolved_ += 1
+            self._replay = None
+            self._images = has_images(tableau)
         else:
             self.extended_ += 1
-        self.map_, self._tableau = cmap, tableau
-        self._angles = read_actions(tableau, self.resolver.quantum_deg)[0]
+        self.map_, self._tableau, self._angles = cmap, tableau, angles
         return cmap
 
-    def _extended(self, tableau: Tableau, deadline: Deadline) -> CognitiveMap | None:
+    def _extended(self, tableau: Tableau, angles: list[int], types: list[ActionType], deadline: Deadline,
+                  start: float) -> CognitiveMap | None:
         """The last map extended by determinism to the new steps, if it is still the unique minimal map;
         else None."""
         old, cmap = self._tableau, self.map_
@@ -98,10 +113,11 @@ class MapStream:
         n = len(old)
         if len(tableau) <= n or not _extends(tableau, old):
             return None
-        start = time.perf_counter()
-        angles, types = read_actions(tableau, self.resolver.quantum_deg)
         if angles[:n - 1] != self._angles[:n - 1]:
             return None  # the action types learned from the longer experience read an old action anew
+        self._images = self._images and all(s.image is not None for s in tableau.steps[n:])
+        if self._replays:
+            return self._replayed(tableau, angles, types, start)
         if self.resolver.misreads and rare_clustered_views(tableau):
             return None  # the resolver weighs views of one or two images against any map: let it
         dstate_of = _by_determinism(cmap, tableau, angles, n)
@@ -111,6 +127,29 @@ class MapStream:
         if self.resolver.misreads and self._suspect(tableau, angles) and not self._exact_stands(facts, dstate_of):
             return None
         return self._checked(tableau, facts, types, dstate_of, deadline, start)
+
+    def _replayed(self, tableau: Tableau, angles: list[int], types: list[ActionType],
+                  start: float) -> CognitiveMap | None:
+        """The stock axioms' verdict on the extended map, from what the new steps change (:mod:`.replay`)."""
+        old, cmap = self._tableau, self.map_
+        replay = self._replay or Replay.of(old.steps, self._angles, length_labels(travel_lengths(old)), cmap,
+                                           "metrical" in self.resolver.theory.levels, self.resolver.future_depth)
+        self._replay = None  # stale unless all below holds
+        dstate_of = replay.extend(tableau.steps, angles, length_labels(travel_lengths(tableau)))
+        if dstate_of is None:
+            return None
+        if self.resolver.misreads and self._images and replay.watch.rare:
+            return None  # the resolver weighs views of one or two images against any map: let it
+        if self.resolver.misreads and not replay.exact_stands(cmap.n_dstates):
+            return None  # some views are suspect and the bounds do not prove the exact map: resolve
+        self._replay = replay
+        rows = cmap.steps[:len(old) - 1] + [step_row(t, tableau.steps[t], dstate_of[t], cmap.place_of, cmap.path_of)
+                                           for t in range(len(old) - 1, len(tableau))]
+        seconds = time.perf_counter() - start
+        stats = SolveStats(classes=len(replay.members), lower_bound=cmap.n_dstates, total_s=seconds,
+                           bounds=(Try("the last map extended by determinism (stock axioms replayed)", "sat",
+                                       seconds),))
+        return replace(cmap, steps=rows, dstate_of=list(dstate_of), action_types=types, stats=stats)
 
     def _suspect(self, tableau: Tableau, angles: list[int]) -> bool:
         actions = [action_symbol(s.action, a) for s, a in zip(tableau.steps, angles)]
