@@ -69,6 +69,8 @@ def test_the_excerpt_runs_end_to_end_from_the_command_line(tmp_path, capsys):
     r = json.loads((tmp_path / "results.json").read_text())
     assert r["views"]["k_by_M"] == 1 and r["views"]["criterion"] == "davies-bouldin"
     assert r["map"]["dstates"] >= r["map"]["true_dstates"] - 2
+    # The excerpt's corners are right angles, read within a few degrees: no action is taken as mistyped.
+    assert r["map"]["retyped_steps"] == []
 
 
 @pytest.mark.parametrize("argv, message", [

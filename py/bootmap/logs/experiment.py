@@ -89,7 +89,8 @@ def _run(log, out_dir, seed, k_max, time_limit, quantum_deg, view_criterion, det
         "truth": {**tableau.meta["truth"], "true_dstates": len(set(truth))},
         "views": views_section,
         "map": {"error": map_note} if cmap is None else
-               {**map_against_truth(truth, cmap), "proved_minimal": cmap.minimal, "note": map_note},
+               {**map_against_truth(truth, cmap), "proved_minimal": cmap.minimal, "note": map_note,
+                "retyped_steps": cmap.retyped_steps},
         "dead_reckoning": {"dstates": len(set(dead)), "dstate_accuracy": dstate_accuracy(truth, dead)},
         "recognition": recognition, "nn_revisited": nn, "timings": timings}
     results["targets"] = targets(results)

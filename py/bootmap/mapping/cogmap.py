@@ -75,6 +75,10 @@ class CognitiveMap:
     suspect_steps : list of dict
         The time points whose views the map takes as misreads: ``t``, the view ``observed``, the view
         its dstate shows (``expected``) and what calling it a misread cost (a dstate costs 4).
+    retyped_steps : list of dict
+        The actions the map takes as mistyped (:func:`~bootmap.mapping.motion.type_suspects`): ``t``,
+        ``kind``, the reading (``measured_deg``), the type it was learned as (``learned_deg``), the angle
+        the axioms saw instead (``abduced_deg``) and what that cost.
     stats : SolveStats
         Solver figures: classes, the bound proved, ground_s, solve_s, total_s, the groundings tried.
     """
@@ -100,6 +104,7 @@ class CognitiveMap:
     minimal: bool = True
     action_types: list[ActionType] = field(default_factory=list)
     suspect_steps: list[dict] = field(default_factory=list)
+    retyped_steps: list[dict] = field(default_factory=list)
 
     @property
     def n_dstates(self) -> int:
@@ -136,6 +141,7 @@ class CognitiveMap:
             "alternatives": self.alternatives,
             "action_types": [a.to_dict() for a in self.action_types],
             "suspect_steps": self.suspect_steps,
+            "retyped_steps": self.retyped_steps,
             "stats": self.stats.to_dict(),
         }
 
@@ -159,6 +165,10 @@ class CognitiveMap:
         if self.suspect_steps:
             lines.append("views taken as misreads: " + "; ".join(
                 f"t{s['t']} saw {s['observed']}, its dstate shows {s['expected']}" for s in self.suspect_steps))
+        if self.retyped_steps:
+            lines.append("actions taken as mistyped: " + "; ".join(
+                f"t{s['t']} {s['kind']} read {s['measured_deg']:+g}, typed {s['learned_deg']:+d}, taken as "
+                f"{s['abduced_deg']:+d}" for s in self.retyped_steps))
         for pa, places in self.paths.items():
             lines.append(f"{pa}: {' -> '.join(places)} (pos)")
         for p, pa in self.right_of:
@@ -189,10 +199,11 @@ def _number_dstates(is_atoms, n: int) -> tuple[dict[Symbol, int], list[int]]:
 
 def build_map(tableau: Tableau, models: list[list[Symbol]], exhausted: bool, levels, stats: SolveStats,
               minimal: bool = True, action_types: list[ActionType] | None = None,
-              misread_costs: dict[int, int] | None = None) -> CognitiveMap:
+              misread_costs: dict[int, int] | None = None, retyped_steps: list[dict] | None = None) -> CognitiveMap:
     """The map of the first model, named as the paper names it; the other models are alternatives.
     ``exhausted``: clingo enumerated every minimal model (so one model means a unique map);
-    ``misread_costs``: what taking each suspect view as a misread cost."""
+    ``misread_costs``: what taking each suspect view as a misread cost; ``retyped_steps``: the actions
+    taken as mistyped."""
     n = len(tableau)
     atoms = Atoms(models[0])
     ids, seq = _number_dstates(atoms[IS], n)
@@ -241,7 +252,7 @@ def build_map(tableau: Tableau, models: list[list[Symbol]], exhausted: bool, lev
     suspect_steps = [{"t": t, "observed": tableau.steps[t].view, "expected": views[S[seq[t]]],
                       "cost": (misread_costs or {}).get(t)} for t in misread]
     return CognitiveMap(
-        suspect_steps=suspect_steps, steps=steps, dstate_of=[S[i] for i in seq], views=dict(sorted(views.items(), key=_natural1)),
+        suspect_steps=suspect_steps, retyped_steps=list(retyped_steps or []), steps=steps, dstate_of=[S[i] for i in seq], views=dict(sorted(views.items(), key=_natural1)),
         headings=headings, place_of=place_of, path_of=path_of, places=places, paths=paths, on=on,
         order=order, right_of=sorted(sides["right"], key=_natural), left_of=sorted(sides["left"], key=_natural),
         n_models=len(models) if minimal else 0, unique=minimal and len(models) == 1 and exhausted,

@@ -292,6 +292,8 @@ class _Question:
         self.theory = explainer.resolver.theory
         self.depth = explainer.resolver.future_depth
         self.angles, _ = read_actions(tableau, explainer.quantum_deg)
+        for step in (cmap.retyped_steps if cmap is not None else ()):
+            self.angles[step["t"]] = step["abduced_deg"]  # the map's evidence: actions as it typed them
         self.facts = tableau_facts(tableau, angles=self.angles)
         self.misreads = self.misread_facts(cmap) if cmap is not None and cmap.suspect_steps else {}
 

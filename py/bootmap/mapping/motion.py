@@ -299,3 +299,85 @@ def length_types(distances: Sequence[float]) -> list[int]:
     for part in np.split(order, splits):
         out[part] = int(round(float(d[part].mean()) * 10))
     return out.tolist()
+
+
+# -------------------------------------------------------------------------------------------------
+# Mistyped actions: readings far from their type, which the resolver may retype at a cost
+# -------------------------------------------------------------------------------------------------
+
+#: A reading is far from its type when it lies this many robust spreads of its kind off the type's angle
+#: (the spread of the readings around their types, from their median: the few far readings do not inflate
+#: it) ...
+TYPE_SDS = 3.0
+#: ... and at least this share of a grid step (a quarter: nearer the midpoint to the next grid angle than
+#: its own angle is to the midpoint's other side). A robot whose turns read within 10 degrees (sd) of 90
+#: has a reading 30 off about once in 400; Killian's 45- and 60-degree corners read 30-45 off.
+TYPE_STEP_SHARE = 0.25
+
+
+@dataclass(frozen=True)
+class TypeSuspect:
+    """An action whose reading lies far from its type's angle: it may be of the neighbouring type.
+
+    Attributes
+    ----------
+    t : int
+        The time point the action starts from.
+    kind : str
+        ``"turn"`` or ``"travel"``.
+    measured : float
+        What odometry read (degrees).
+    angle : int
+        The angle of the type it was learned as.
+    alternative : int
+        The other grid angle nearest the reading: what the action is if it was mistyped.
+    """
+
+    t: int
+    kind: str
+    measured: float
+    angle: int
+    alternative: int
+
+    def to_dict(self, cost: int | None = None) -> dict:
+        return {"t": self.t, "kind": self.kind, "measured_deg": round(self.measured, 2),
+                "learned_deg": self.angle, "abduced_deg": self.alternative, "cost": cost}
+
+
+def type_suspects(actions: Sequence[Action], angles: Sequence[int], grid_deg: int) -> list[TypeSuspect]:
+    """The actions whose reading lies far from the angle of their type (:data:`TYPE_SDS`,
+    :data:`TYPE_STEP_SHARE`), in order, each with the other grid angle nearest its reading.
+
+    Clean experience (readings on their types) has none; a robot's noise within its types' spread has
+    next to none.
+
+    >>> from bootmap.tableau import Travel
+    >>> acts = [Turn(-90.0 + d) for d in (1, -2, 0.5, 3, -1, 2, -3, 0)] + [Turn(-139.0), Travel(3.0, 0.0)]
+    >>> [(s.t, s.angle, s.alternative) for s in type_suspects(acts, [-90] * 8 + [180, 0], 90)]
+    [(8, 180, -90)]
+    """
+    kinds = np.array(["turn" if isinstance(a, Turn) else "travel" for a in actions])
+    measured = np.array([measured_angle(a) for a in actions], dtype=float)
+    off = np.abs(_wrap(measured - np.asarray(angles, dtype=float)))
+    out = []
+    for kind in ("turn", "travel"):
+        idx = np.flatnonzero(kinds == kind)
+        if idx.size == 0:
+            continue
+        spread = 1.4826 * float(np.median(off[idx]))  # the robust sd of readings about their types
+        far = max(TYPE_SDS * spread, TYPE_STEP_SHARE * grid_deg)
+        for i in idx[off[idx] > far]:
+            out.append(TypeSuspect(int(i), kind, float(measured[i]), int(angles[i]),
+                                   _neighbour_angle(float(measured[i]), int(angles[i]), grid_deg)))
+    return sorted(out, key=lambda s: s.t)
+
+
+def _neighbour_angle(reading: float, angle: int, grid_deg: int) -> int:
+    """Of the two grid angles either side of the reading, the one that is not ``angle`` (the nearer one
+    if neither is)."""
+    low = float(np.floor(reading / grid_deg) * grid_deg)
+    pair = [quantise(low, grid_deg), quantise(low + grid_deg, grid_deg)]
+    others = [a for a in pair if a != angle]
+    if len(others) == 2:
+        others.sort(key=lambda a: abs(_wrap(np.array([reading - a]))[0]))
+    return others[0]

@@ -47,6 +47,7 @@ from ..tableau import Tableau
 from .cogmap import CognitiveMap, SolveStats, Try, build_map
 from .diagnosis import diagnosed
 from .facts import action_symbol, read_actions, tableau_facts
+from .motion import MotionPrimitives, TypeSuspect, action_types, type_suspects
 from .grounding import Classes, Deadline, Grounding, key_with_view, prepass
 from .theory import Theory, load_theory
 from .misreads import DSTATE_COST, GHOST, MIN_VISITS, MISREAD_COST, RARE_VIEW, Suspect, find_suspects, has_images, rare_clustered_views
@@ -56,6 +57,11 @@ from .vocabulary import FUTURE_DEPTH, MAY_BE, MINIMISE_DSTATES, ONE_PER_CLASS, S
 #: The share of the time left (and at most so many seconds) spent checking that reading every view as
 #: seen does not explain the experience more cheaply than the misreads do, when the bounds do not say.
 VERIFY_SHARE, VERIFY_MAX_S = 0.25, 10.0
+#: What taking an action as mistyped costs (a dstate costs ``DSTATE_COST``): an action is retyped only where
+#: its learned type needs more than one dstate more.
+MISTYPE_COST = DSTATE_COST
+#: The share of the time (and at most so many seconds) spent weighing mistyped actions.
+RETYPE_SHARE, RETYPE_MAX_S = 0.25, 15.0
 #: Where the classes' lower bound is refuted, the bounds just above it are tried one by one (so many, in
 #: this share of the time left and at most so many seconds) before any map is looked for and minimised.
 CLIMB_STEPS, CLIMB_SHARE = 3, (0.6, 60.0)
@@ -88,6 +94,11 @@ class Resolver:
     diagnose : bool
         When no map satisfies the axioms, find which levels fail (:mod:`.diagnosis`), within the
         same deadline.
+    retype : bool
+        Allow a few actions to be mistyped (:func:`.motion.type_suspects`: a reading far from its learned
+        type's angle may be of the neighbouring type), each at ``MISTYPE_COST``: the map then has the
+        fewest dstates the theory proves necessary plus the cost of its retyped actions, and lists them
+        (``retyped_steps``). Only with learned action types (no ``quantum_deg``).
     misreads : bool
         Allow a few views to be misreads (:mod:`.misreads`) when one dstate per class does not
         explain the experience and some views are suspect: the map then has the fewest dstates plus
@@ -108,6 +119,7 @@ class Resolver:
     future_depth: int = FUTURE_DEPTH
     diagnose: bool = True
     misreads: bool = True
+    retype: bool = True
     theory: Theory = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -145,8 +157,14 @@ class _Search:
     def __init__(self, resolver: Resolver, tableau: Tableau, deadline: Deadline):
         self.resolver, self.tableau, self.deadline = resolver, tableau, deadline
         self.start = time.perf_counter()
-        self.angles, self.action_types = read_actions(tableau, resolver.quantum_deg)
+        self.grid: int | None = None  # the learned types' grid (None with a fixed quantum)
+        if resolver.quantum_deg is None and tableau.actions:
+            learned = MotionPrimitives().fit(tableau.actions)
+            self.angles, self.action_types, self.grid = learned.angles_, learned.types_, learned.grid_deg_
+        else:
+            self.angles, self.action_types = read_actions(tableau, resolver.quantum_deg)
         self.facts = tableau_facts(tableau, angles=self.angles)
+        self.retyped: list[TypeSuspect] = []  # actions taken as mistyped
         self.first: Grounding | None = None  # the first try's grounding
         self.suspects: dict[int, Suspect] = {}  # views the search may take as misreads (robust only)
         self.as_seen: int | None = None  # dstates proved necessary reading every view as seen
@@ -159,6 +177,8 @@ class _Search:
         self.tries: list[Try] = []
 
     def run(self) -> CognitiveMap:
+        if self.resolver.retype and self.grid is not None:
+            self.retype()
         found = self.one_per_class()
         suspects = self._suspects(found)
         if found and not suspects:
@@ -175,6 +195,42 @@ class _Search:
             if found:
                 return found
         return self.optimise(self.some_map())
+
+    def retype(self) -> None:
+        """Abduce mistyped actions, as misread views are: a reading far from its learned type's angle may
+        be of the neighbouring type (:func:`.motion.type_suspects`). Since an action's angle sets the
+        heading of every later time point (a class feature), the typing is chosen before the search: each
+        suspect in turn is retyped where that lowers the dstates the theory proves necessary (the
+        classes' lower bounds, from a prepass) by more than ``MISTYPE_COST`` (one dstate). Clean
+        experience has no suspects and is resolved as before; out of its share of the time, the typing
+        chosen so far stands."""
+        suspects = type_suspects(self.tableau.actions, self.angles, self.grid)
+        if not suspects:
+            return
+        share = self.deadline.share(RETYPE_SHARE, RETYPE_MAX_S)
+        angles = list(self.angles)
+        best = DSTATE_COST * self._proved_with(angles)
+        for s in suspects:
+            if share.passed():
+                break
+            trial = list(angles)
+            trial[s.t] = s.alternative
+            score = DSTATE_COST * self._proved_with(trial) + MISTYPE_COST * (len(self.retyped) + 1)
+            if score < best + MISTYPE_COST * len(self.retyped):
+                angles, best = trial, score - MISTYPE_COST * (len(self.retyped) + 1)
+                self.retyped.append(s)
+        if self.retyped:
+            self.angles = angles
+            self.facts = tableau_facts(self.tableau, angles=angles)
+            self.action_types = action_types(self.tableau.actions, angles)
+
+    def _proved_with(self, angles: list[int]) -> int:
+        """The dstates the theory proves necessary (the classes' lower bounds) with these action angles."""
+        grounded = prepass(self.resolver.theory, tableau_facts(self.tableau, angles=angles),
+                           self.resolver.future_depth)
+        self.ground_s += grounded.ground_s
+        classes = grounded.classes(range(len(self.tableau)))
+        return sum(grounded.lower_bounds(classes))
 
     def _climb(self) -> CognitiveMap | None:
         """The minimal maps a few dstates above the lower bound, one bound at a time. Where the greedy
@@ -410,7 +466,10 @@ class _Search:
         models = outcome.models if minimal else outcome.models[:1]
         return build_map(self.tableau, models, minimal and outcome.exhausted, self.resolver.theory.levels,
                          self._stats(), minimal=minimal, action_types=self.action_types,
-                         misread_costs=self._costs())
+                         misread_costs=self._costs(), retyped_steps=self._retyped_steps())
+
+    def _retyped_steps(self) -> list[dict]:
+        return [s.to_dict(MISTYPE_COST) for s in self.retyped]
 
     def _costs(self) -> dict[int, int]:
         return {t: s.cost for t, s in self.suspects.items()}
@@ -458,7 +517,7 @@ class _Search:
         if improving:  # the optimiser's last (smallest) model so far
             self.best = build_map(self.tableau, improving[-1:], False, self.resolver.theory.levels,
                                   self._stats(), minimal=False, action_types=self.action_types,
-                                  misread_costs=self._costs())
+                                  misread_costs=self._costs(), retyped_steps=self._retyped_steps())
         found = (f"best map so far: {self.best.n_dstates} dstates, not proved minimal" if self.best
                  else "no map found yet")
         limit = self.deadline.limit_s

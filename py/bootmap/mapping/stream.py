@@ -107,7 +107,8 @@ class MapStream:
         """The last map extended by determinism to the new steps, if it is still the unique minimal map;
         else None."""
         old, cmap = self._tableau, self.map_
-        if old is None or cmap is None or not (cmap.unique and cmap.minimal) or cmap.suspect_steps:
+        if old is None or cmap is None or not (cmap.unique and cmap.minimal) or cmap.suspect_steps \
+                or cmap.retyped_steps:  # its actions were typed against the whole experience: resolve anew
             return None
         n = len(old)
         if len(tableau) <= n or not _extends(tableau, old):

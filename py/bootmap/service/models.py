@@ -174,6 +174,17 @@ class SuspectStep(Out):
     cost: int | None = Field(description="What taking it as a misread cost, where a dstate costs 4.")
 
 
+class RetypedStep(Out):
+    """An action the map takes as mistyped: its reading lay far from its learned type's angle."""
+
+    t: int
+    kind: Literal["turn", "travel"]
+    measured_deg: float = Field(description="What odometry read (a turn's angle, a travel's heading change).")
+    learned_deg: int = Field(description="The angle of the type it was learned as.")
+    abduced_deg: int = Field(description="The angle the axioms saw instead.")
+    cost: int | None = Field(description="What taking it as mistyped cost, where a dstate costs 4.")
+
+
 class DstateOut(Out):
     view: str
     heading_deg: int | None
@@ -213,6 +224,8 @@ class MapOut(Out):
                                                          "angles (or its angles rounded to the server's quantum).")
     suspect_steps: list[SuspectStep] = Field(description="Time points whose views the map takes as misreads: "
                                                          "explaining them as seen needs far more dstates.")
+    retyped_steps: list[RetypedStep] = Field(description="Actions the map takes as mistyped: read far from "
+                                                          "their learned type, and typed as its neighbour.")
     stats: dict[str, Any] = Field(description="Solver figures (seconds, bounds tried).")
 
 

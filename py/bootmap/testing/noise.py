@@ -50,3 +50,26 @@ def with_misreads(tableau: Tableau, fraction: float, rng: np.random.Generator) -
         s = steps[i]
         steps[i] = Step(str(rng.choice(labels[others], p=p)), s.action, s.image, s.truth, s.pose)
     return Tableau(tuple(steps), tableau.world, dict(tableau.meta)), wrong
+
+
+def with_mistyped_action(tableau: Tableau, rng: np.random.Generator, off_deg: tuple[float, float] = (47.0, 55.0)
+                         ) -> tuple[Tableau, int]:
+    """The tableau with one quarter turn, from the middle half of the walk, read ``off_deg`` degrees off
+    (drawn uniformly, either way): past the midpoint to the neighbouring grid angle, so that the robot's
+    learned types take it for another action (a slipped wheel, a gyro glitch); and its time point.
+
+    >>> from bootmap.examples import notched_rectangle
+    >>> t, at = with_mistyped_action(notched_rectangle(4), np.random.default_rng(0))
+    >>> at, t.steps[at].action.angle_deg != notched_rectangle(4).steps[at].action.angle_deg
+    (20, True)
+    """
+    turns = [t for t, s in enumerate(tableau.steps) if isinstance(s.action, Turn) and abs(s.action.angle_deg) < 135]
+    if not turns:
+        raise ValueError("the tableau has no quarter turn to mistype")
+    middle = turns[len(turns) // 4: max(len(turns) // 4 + 1, 3 * len(turns) // 4)]
+    at = int(rng.choice(middle))
+    steps = list(tableau.steps)
+    s = steps[at]
+    off = float(rng.uniform(*off_deg)) * float(rng.choice([-1.0, 1.0]))
+    steps[at] = Step(s.view, Turn(s.action.angle_deg + off), s.image, s.truth, s.pose)  # type: ignore[union-attr]
+    return Tableau(tuple(steps), tableau.world, dict(tableau.meta)), at
