@@ -48,7 +48,7 @@ from .cogmap import CognitiveMap, SolveStats, Try, build_map, step_row
 from .facts import action_symbol, read_actions, tableau_facts, travel_lengths
 from .grounding import Deadline, Grounding, prepass
 from .misreads import MIN_VISITS, find_suspects, has_images, rare_clustered_views
-from .motion import ActionType
+from .motion import ActionType, MotionPrimitives, type_suspects
 from .replay import Replay, covers, length_labels
 from .resolver import Resolver
 from .vocabulary import FIXED
@@ -90,8 +90,11 @@ class MapStream:
         """The map of ``tableau``, which usually extends the last one given by a few steps."""
         deadline = deadline or Deadline.after(self.resolver.time_limit)
         start = time.perf_counter()
-        angles, types = read_actions(tableau, self.resolver.quantum_deg)
-        cmap = self._extended(tableau, angles, types, deadline, start)
+        angles, types, grid = self._typed(tableau)
+        cmap = None
+        if not (self.resolver.retype and grid is not None and type_suspects(tableau.actions, angles, grid)):
+            cmap = self._extended(tableau, angles, types, deadline, start)
+        # (else the resolver may take an action as mistyped, against the whole experience: resolve anew)
         if cmap is None:
             cmap = self.resolver.resolve(tableau, deadline)
             self.resolved_ += 1
@@ -101,6 +104,15 @@ class MapStream:
             self.extended_ += 1
         self.map_, self._tableau, self._angles = cmap, tableau, angles
         return cmap
+
+    def _typed(self, tableau: Tableau) -> tuple[list[int], list[ActionType], int | None]:
+        """The actions' angles and types, as the resolver reads them, and the learned types' grid (None
+        with a fixed quantum)."""
+        if self.resolver.quantum_deg is None and tableau.actions:
+            learned = MotionPrimitives().fit(tableau.actions)
+            return learned.angles_, learned.types_, learned.grid_deg_
+        angles, types = read_actions(tableau, self.resolver.quantum_deg)
+        return angles, types, None
 
     def _extended(self, tableau: Tableau, angles: list[int], types: list[ActionType], deadline: Deadline,
                   start: float) -> CognitiveMap | None:
