@@ -50,12 +50,17 @@ from .facts import action_symbol, read_actions, tableau_facts
 from .grounding import Classes, Deadline, Grounding, PartialFeatures, key_with_view, prepass
 from .theory import Theory, load_theory
 from .misreads import DSTATE_COST, GHOST, MIN_VISITS, MISREAD_COST, RARE_VIEW, Suspect, find_suspects, has_images, rare_clustered_views
-from .vocabulary import FUTURE_DEPTH, MAY_BE, MINIMISE_DSTATES, ONE_PER_CLASS, SUSPECT
+from .vocabulary import FUTURE_DEPTH, MAY_BE, MINIMISE_DSTATES, ONE_PER_CLASS, SLOTS, SUSPECT
 
 
 #: The share of the time left (and at most so many seconds) spent checking that reading every view as
 #: seen does not explain the experience more cheaply than the misreads do, when the bounds do not say.
 VERIFY_SHARE, VERIFY_MAX_S = 0.25, 10.0
+#: A search's grounding time grows faster than its size (:meth:`_Search._grounding_size`): the places
+#: and paths of the topological level pair up candidate dstates (600 steps: 2.8 s for a layout, 18.5 s
+#: for one with 1.9 times the size). Grounding and the first solve's preparation, which cannot be
+#: interrupted either, take about ``PREPARE_FACTOR`` times the grounding (18.5 s, then 30 s).
+GROUND_POWER, PREPARE_FACTOR, GROUND_GRACE_S = 2.0, 2.5, 1.0
 
 
 @dataclass(frozen=True)
@@ -153,6 +158,7 @@ class _Search:
         self.proved = 1  # dstates proved necessary so far
         self.best: CognitiveMap | None = None
         self.ground_s = self.solve_s = 0.0
+        self.ground_rate: float | None = None  # seconds per grounding size ** GROUND_POWER, the worst seen
         self.tries: list[Try] = []
 
     def run(self) -> CognitiveMap:
@@ -438,12 +444,17 @@ class _Search:
     def _solve(self, layout: list[Symbol], what: str, models: int | None = None, optimise: bool = False,
                keep: bool = False) -> "_Outcome":
         """Ground and solve; on time-out raise SolveTimeout with the best map known."""
+        size = None
         if self.classes is not None:  # the first try always runs: its classes bound the answer
             self._check_clock(what)
+            size = self._grounding_size(layout)
+            self._check_grounding(what, size)
         options = [str(self.resolver.max_models + 1 if models is None else models)]
         if optimise:
             options += ["--opt-mode=optN", "--opt-strategy=usc"]
         grounding = Grounding(self.resolver.theory, self.facts + layout, self.depth, options).ground()
+        if size:
+            self.ground_rate = max(self.ground_rate or 0.0, grounding.ground_s / size ** GROUND_POWER)
         optimal: list[list[Symbol]] = []
         improving: list[list[Symbol]] = []
 
@@ -461,6 +472,29 @@ class _Search:
                 self.proved = self.classes.count
             raise self._timed_out(what, improving)
         return _Outcome(optimal, bool(result.exhausted), grounding if keep else None)
+
+    def _grounding_size(self, layout: list[Symbol]) -> int:
+        """How large a search's grounding will be, before it is made: the candidate dstates of each
+        time point (its class's slots, and those of the classes a suspect may be misread from) times
+        those of the next (what experience/next and determinism are grounded over)."""
+        slots = {key: m.number for key, m in SLOTS.args(layout)}
+        keys, of_time = self.classes.keys, self.classes.of_time
+        cand = [slots.get(keys[c], 0) for c in of_time]
+        for t, key in MAY_BE.args(self.facts):
+            cand[t.number] += slots.get(key, 0)
+        return sum(a * b for a, b in zip(cand, cand[1:])) + len(cand)
+
+    def _check_grounding(self, what: str, size: int) -> None:
+        """Out of time before a grounding starts that would end well past the deadline, as the
+        groundings of this resolution so far predict it (clingo can interrupt neither a grounding nor
+        the preparation of its first solve, which takes about as long again)."""
+        left = self.deadline.remaining()
+        if left is None or self.ground_rate is None:
+            return
+        predicted = PREPARE_FACTOR * self.ground_rate * size ** GROUND_POWER
+        if predicted > left + GROUND_GRACE_S:
+            raise self._timed_out(f"{what} (not started: its grounding would take about {predicted:.0f} s "
+                                  f"with {left:.1f} s left)", [])
 
     def _check_clock(self, what: str) -> None:
         """Out of time before a grounding starts: stop here (clingo cannot interrupt a grounding)."""
