@@ -146,6 +146,29 @@ def find_suspects(views: Sequence[Hashable], actions: Sequence[Hashable],
     return found
 
 
+def context_views(views: Sequence[Hashable], actions: Sequence[Hashable], times: Sequence[int]) -> dict:
+    """For each of ``times``, the other views seen in its contexts of one step (after the same view and
+    action, before the same action and view): what a misread there most likely hid. Empty where the
+    contexts show no other view.
+
+    >>> context_views(list("ABAB") + ["C"] + list("BAB"), ["turn"] * 8, [4])
+    {4: ('A',)}
+    """
+    view_ids, action_ids = _ids(views), _ids(actions)
+    names = {i: v for v, i in view_ids.items()}
+    contexts = _Contexts([view_ids[v] for v in views], [action_ids[a] for a in actions[:len(views)]],
+                         names, {i: a for a, i in action_ids.items()})
+    out = {}
+    for t in times:
+        seen: set[int] = set()
+        for ahead in (False, True):
+            key = contexts._key(t, 1, ahead)
+            if key is not None:
+                seen |= {v for v in contexts.seen[key] if v != contexts.views[t]}
+        out[t] = tuple(sorted((names[v] for v in seen), key=str))
+    return out
+
+
 def rare_views(views: Sequence[Hashable], at_most: int = 2, typical: int = 5) -> dict:
     """Views with at most ``at_most`` images in a tableau whose views have ``typical`` or more on average:
     view -> its time points. Such a view is as likely a misread image (a drop-out left unrepaired, a

@@ -49,7 +49,7 @@ from .diagnosis import diagnosed
 from .facts import action_symbol, read_actions, tableau_facts
 from .grounding import Classes, Deadline, Grounding, PartialFeatures, key_with_view, prepass
 from .theory import Theory, load_theory
-from .misreads import DSTATE_COST, GHOST, MIN_VISITS, MISREAD_COST, RARE_VIEW, Suspect, find_suspects, has_images, rare_clustered_views
+from .misreads import DSTATE_COST, GHOST, context_views, MIN_VISITS, MISREAD_COST, RARE_VIEW, Suspect, find_suspects, has_images, rare_clustered_views
 from .vocabulary import FUTURE_DEPTH, MAY_BE, MINIMISE_DSTATES, ONE_PER_CLASS, SLOTS, SUSPECT
 
 
@@ -309,7 +309,11 @@ class _Search:
         inflators = self.features.inflators(self.classes, leave_out=self.suspects)
         times = sorted(({u for t in loners for u in (t, t + 1) if u < len(self.tableau)} | set(inflators))
                        - set(self.suspects))
-        return [Suspect(t, MISREAD_COST, (), GHOST) for t in times]
+        # Each may have been misread from the views its contexts show instead (any view where they show
+        # none): every other view would make each ghost a candidate of every class with its heading.
+        actions = [action_symbol(s.action, a) for s, a in zip(self.tableau.steps, self.angles)]
+        expected = context_views(self.tableau.views, actions, times)
+        return [Suspect(t, MISREAD_COST, expected[t], GHOST) for t in times]
 
     def _within_share(self, work):
         """``work()`` within a share of the time left; None if that runs out."""
