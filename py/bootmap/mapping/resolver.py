@@ -61,6 +61,9 @@ VERIFY_SHARE, VERIFY_MAX_S = 0.25, 10.0
 #: for one with 1.9 times the size). Grounding and the first solve's preparation, which cannot be
 #: interrupted either, take about ``PREPARE_FACTOR`` times the grounding (18.5 s, then 30 s).
 GROUND_POWER, PREPARE_FACTOR, GROUND_GRACE_S = 2.0, 2.5, 1.0
+#: Before any search is grounded, the first try's rate predicts the first search's: searches measured
+#: 0.11-0.35 of it (600-step explorations with misreads; the first try's share of fixed costs is higher).
+FIRST_TRY_SHARE = 0.35
 
 
 @dataclass(frozen=True)
@@ -159,6 +162,7 @@ class _Search:
         self.best: CognitiveMap | None = None
         self.ground_s = self.solve_s = 0.0
         self.ground_rate: float | None = None  # seconds per grounding size ** GROUND_POWER, the worst seen
+        self.searched = False  # a search's grounding has set ground_rate
         self.tries: list[Try] = []
 
     def run(self) -> CognitiveMap:
@@ -457,8 +461,14 @@ class _Search:
         if optimise:
             options += ["--opt-mode=optN", "--opt-strategy=usc"]
         grounding = Grounding(self.resolver.theory, self.facts + layout, self.depth, options).ground()
-        if size:
-            self.ground_rate = max(self.ground_rate or 0.0, grounding.ground_s / size ** GROUND_POWER)
+        rate = grounding.ground_s / (size or len(self.tableau) or 1) ** GROUND_POWER
+        if size:  # a search's grounding: the worst seen
+            self.ground_rate = max(rate, self.ground_rate if self.searched else 0.0)
+            self.searched = True
+        elif not self.searched:
+            # The first try (one slot for each time point) until a search is grounded: it says how
+            # fast this machine grounds this tableau, with the theory's fixed costs in it.
+            self.ground_rate = FIRST_TRY_SHARE * rate
         optimal: list[list[Symbol]] = []
         improving: list[list[Symbol]] = []
 
