@@ -162,7 +162,8 @@ class _Search:
         self.best: CognitiveMap | None = None
         self.ground_s = self.solve_s = 0.0
         self.ground_rate: float | None = None  # seconds per grounding size ** GROUND_POWER, the worst seen
-        self.searched = False  # a search's grounding has set ground_rate
+        self.fixed_ground_s = 0.0  # the first try's grounding: the costs every grounding has
+        self.rate_size = 0  # the size of the search grounding that set ground_rate (0: the first try did)
         self.tries: list[Try] = []
 
     def run(self) -> CognitiveMap:
@@ -461,14 +462,16 @@ class _Search:
         if optimise:
             options += ["--opt-mode=optN", "--opt-strategy=usc"]
         grounding = Grounding(self.resolver.theory, self.facts + layout, self.depth, options).ground()
-        rate = grounding.ground_s / (size or len(self.tableau) or 1) ** GROUND_POWER
-        if size:  # a search's grounding: the worst seen
-            self.ground_rate = max(rate, self.ground_rate if self.searched else 0.0)
-            self.searched = True
-        elif not self.searched:
-            # The first try (one slot for each time point) until a search is grounded: it says how
-            # fast this machine grounds this tableau, with the theory's fixed costs in it.
-            self.ground_rate = FIRST_TRY_SHARE * rate
+        if size is None:
+            # The first try (one slot for each time point): what every grounding of this tableau costs
+            # (the theory, the facts), and until a search is grounded, how fast this machine grounds.
+            self.fixed_ground_s = grounding.ground_s
+            self.ground_rate = FIRST_TRY_SHARE * grounding.ground_s / max(len(self.tableau), 1) ** GROUND_POWER
+        elif size >= self.rate_size:
+            # The largest search so far, less the fixed costs (which dominate small groundings and would
+            # make a larger one look far slower than it is), predicts the next.
+            self.ground_rate = max(grounding.ground_s - self.fixed_ground_s, 0.0) / size ** GROUND_POWER
+            self.rate_size = size
         optimal: list[list[Symbol]] = []
         improving: list[list[Symbol]] = []
 
@@ -505,7 +508,7 @@ class _Search:
         left = self.deadline.remaining()
         if left is None or self.ground_rate is None:
             return
-        predicted = PREPARE_FACTOR * self.ground_rate * size ** GROUND_POWER
+        predicted = PREPARE_FACTOR * (self.fixed_ground_s + self.ground_rate * size ** GROUND_POWER)
         if predicted > left + GROUND_GRACE_S:
             raise self._timed_out(f"{what} (not started: its grounding would take about {predicted:.0f} s "
                                   f"with {left:.1f} s left)", [])
