@@ -187,3 +187,63 @@ def test_the_view_that_raises_its_predecessors_bounds_is_the_one_inflator(u):
     assert loners and set(loners) <= set(range(u - resolver.future_depth, u))
     # Leaving u out (a suspect) leaves nothing to inflate.
     assert grounded.inflators(classes, leave_out={u}) == []
+
+
+def test_features_without_the_suspects_views_are_those_a_prepass_with_suspects_derives():
+    """One prepass serves every suspect set: leaving views out in Python gives the lower bounds and
+    loners a grounding with those suspects gives."""
+    from bootmap.mapping.facts import tableau_facts
+    from bootmap.mapping.grounding import prepass
+    from bootmap.mapping.vocabulary import SUSPECT
+
+    clean, rng = exploration(7)
+    tableau, wrong = with_misreads(clean, 0.02, rng)
+    resolver = Resolver()
+    facts = tableau_facts(tableau)
+    exact = prepass(resolver.theory, facts, resolver.future_depth)
+    classes = exact.classes(range(len(tableau)))
+    features = exact.partial_features(classes.times)
+    leave_out = set(wrong) | {u + 1 for u in wrong[:4]}
+    with_suspects = prepass(resolver.theory, facts + [SUSPECT(t, 10) for t in sorted(leave_out)],
+                            resolver.future_depth)
+    assert features.lower_bounds(classes, leave_out) == with_suspects.lower_bounds(classes, leave_out)
+    assert features.loners(classes, leave_out) == with_suspects.loners(classes)
+    # Leaving the misreads out lowers the bounds: reading them as seen splits the classes before them.
+    assert sum(features.lower_bounds(classes, leave_out)) < sum(features.lower_bounds(classes))
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_theapart_clique_is_the_largest_one(seed):
+    """The classes' lower bounds: the largest set of pairwise disagreeing time points, checked against
+    every subset of a small random class; never below the greedy one."""
+    from itertools import combinations
+
+    from bootmap.mapping.grounding import _apart, apart_clique
+
+    rng = np.random.default_rng(seed)
+    times = list(range(12))
+    # Each time point shows a few of 5 features, each with one of 3 values: apart where they differ.
+    partial = {t: {k: {int(rng.integers(3))} for k in rng.choice(5, size=int(rng.integers(1, 4)), replace=False)}
+               for t in times}
+    largest = max(len(s) for r in range(1, len(times) + 1) for s in combinations(times, r)
+                  if all(_apart(partial[a], partial[b]) for a, b in combinations(s, 2)))
+    assert apart_clique(times, partial, exact=True) == largest
+    assert apart_clique(times, partial) <= largest
+
+
+def test_a_resolution_ends_by_its_time_limit_when_a_grounding_would_not():
+    """A library call with a time limit returns within it and a couple of seconds: a search whose
+    grounding would run past the deadline (as the resolution's earlier groundings predict it) is not
+    started."""
+    import time
+
+    from bootmap.errors import SolveTimeout
+
+    clean, rng = exploration(46)
+    tableau, _ = with_misreads(clean, 0.05, rng)
+    t0 = time.perf_counter()
+    try:
+        Resolver(time_limit=8).resolve(tableau)
+    except SolveTimeout:
+        pass
+    assert time.perf_counter() - t0 < 8 + 4  # 19 s before (a grounding of 13 s begun with 6 s left)

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import time
 from collections import ChainMap, defaultdict
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Callable, Collection, Sequence
 
 import clingo
@@ -126,54 +126,140 @@ class Grounding:
     def lower_bounds(self, classes: "Classes", leave_out: Collection[int] = ()) -> list[int]:
         """Per class, a set of time points that pairwise disagree on a feature only some of them show
         (e.g. the view seen after the same actions): no two of them can share a dstate. Time points
-        ``left_out`` (suspect views, which may be at a dstate of another class) are not counted."""
-        partial = self._partial_features(classes.times)
-        return [apart_clique(ts, partial) for ts in _members(classes, leave_out)]
+        ``left_out`` (suspect views, which may be at a dstate of another class) are not counted, nor
+        is what was seen at them (as if they were suspects in this grounding's facts)."""
+        return self.partial_features(classes.times).lower_bounds(classes, leave_out)
 
-    def loners(self, classes: "Classes") -> list[int]:
+    def loners(self, classes: "Classes", leave_out: Collection[int] = ()) -> list[int]:
         """Time points that disagree with every other time point of their class: read as seen, each is
-        a dstate of its own."""
-        partial = self._partial_features(classes.times)
+        a dstate of its own (the views seen at ``leave_out`` not relied on)."""
+        return self.partial_features(classes.times).loners(classes, leave_out)
+
+    def inflators(self, classes: "Classes", leave_out: Collection[int] = ()) -> list[int]:
+        """Time points whose view, as the time points before them saw it later, raises the lower bounds
+        of those time points' classes (:meth:`PartialFeatures.inflators`)."""
+        return self.partial_features(classes.times).inflators(classes, leave_out)
+
+    def partial_features(self, times: Sequence[int]) -> "PartialFeatures":
+        """Each time point's features that only some time points show, as small ints (comparing clingo
+        symbols costs a C call each), and the time point each view seen later was seen at (``after(S)``
+        of causal.lp is seen len(S) actions on). Read once: the same features without the views of
+        some time points (suspects) need no other grounding."""
+        cached = getattr(self, "_partial", None)
+        if cached is not None and cached[0] == list(times):
+            return cached[1]
+        grouping = {args[0] for args in SHOWN_BY_ALL.facts_in(self.control)}
+        ids: dict[Symbol, int] = {}
+        distance: dict[int, int] = {}  # a view seen later: how many actions on
+        partial: dict[int, dict[int, set[int]]] = {t: defaultdict(set) for t in times}
+        seen_from: dict[int, dict[int, set]] = defaultdict(lambda: defaultdict(set))
+        for t, key, value in FEATURE.facts_in(self.control):
+            if key not in grouping:
+                k = ids.get(key)
+                if k is None:
+                    k = ids[key] = len(ids)
+                    if key.name == "after":
+                        distance[k] = _actions_in(key.arguments[0])
+                partial[t.number][k].add(ids.setdefault(value, len(ids)))
+                if k in distance:
+                    seen_from[t.number + distance[k]][t.number].add(k)
+        features = PartialFeatures(partial, seen_from, distance)
+        self._partial = (list(times), features)
+        return features
+
+
+@dataclass
+class PartialFeatures:
+    """The features only some time points show, read from a prepass: ``of[t]`` maps each feature (a
+    small int) to the values t shows (one, unless no map exists); ``seen_from[u][t]`` names the features
+    t shows by the view seen at u (what t saw ``u - t`` actions on).
+
+    A suspect view is not relied on (causal.lp's future_view_is_feature): :meth:`without` gives the
+    features as a prepass with those suspects would derive them, without grounding again."""
+
+    of: dict[int, dict[int, set[int]]]
+    seen_from: dict[int, dict[int, set[int]]]
+    distance: dict[int, int] = field(default_factory=dict)  # feature -> actions on, for views seen later
+
+    def without(self, views_at: Collection[int]) -> "dict[int, dict] | ChainMap":
+        """The features, but for those shown by the views seen at ``views_at``."""
+        dropped: dict[int, set[int]] = defaultdict(set)
+        for u in views_at:
+            for t, keys in self.seen_from.get(u, {}).items():
+                dropped[t] |= keys
+        if not dropped:
+            return self.of
+        return ChainMap({t: {k: v for k, v in self.of[t].items() if k not in keys}
+                         for t, keys in dropped.items()}, self.of)
+
+    def lower_bounds(self, classes: "Classes", leave_out: Collection[int] = ()) -> list[int]:
+        """Per class, the size of a set of its time points (but those left out) that pairwise disagree:
+        a proved lower bound on its dstates. The views seen at ``leave_out`` are not relied on."""
+        features = self.without(leave_out)
+        return [apart_clique(ts, features, exact=True) for ts in _members(classes, leave_out)]
+
+    def loners(self, classes: "Classes", leave_out: Collection[int] = ()) -> list[int]:
+        """Time points that disagree with every other time point of their class."""
+        features = self.without(leave_out)
         return sorted(t for ts in _members(classes) if len(ts) > 1 for t in ts
-                      if all(_apart(partial[t], partial[m]) for m in ts if m != t))
+                      if all(_apart(features[t], features[m]) for m in ts if m != t))
 
     def inflators(self, classes: "Classes", leave_out: Collection[int] = ()) -> list[int]:
         """Time points whose view, as the time points before them saw it later, raises the lower bounds
         of those time points' classes: without that view (as if it were a misread), fewer dstates are
         proved. A misread no rule suspected shows so: the time points before it saw another view, at
-        its distance, than their class-mates did. Time points ``left_out`` are suspects already."""
-        partial, seen_from = self._partial_features(classes.times, sources=True)
-        members = _members(classes, leave_out)
-        lower = [apart_clique(ts, partial) for ts in members]
-        class_of = dict(zip(classes.times, classes.of_time))
-        found = []
-        for u, seers in sorted(seen_from.items()):
-            if u in leave_out:
-                continue
-            # What the time points before u show, but for the views they saw at u.
-            without = {t: {k: v for k, v in partial[t].items() if k not in seers[t]} for t in seers}
-            features = ChainMap(without, partial)
-            affected = {class_of[t] for t in seers if t not in leave_out}
-            if any(apart_clique(members[c], features) < lower[c] for c in affected):
-                found.append(u)
-        return found
+        its distance, than their class-mates did. Time points ``left_out`` are suspects already (their
+        views not relied on).
 
-    def _partial_features(self, times: Sequence[int], sources: bool = False):
-        """Each time point's features that only some time points show, as small ints (comparing clingo
-        symbols costs a C call each). With ``sources``, also the time point each view seen later was
-        seen at (``after(S)`` of causal.lp is seen len(S) actions on): that time point -> {time point
-        before it: the features it shows from there}."""
-        grouping = {args[0] for args in SHOWN_BY_ALL.facts_in(self.control)}
-        ids: dict[Symbol, int] = {}
-        partial: dict[int, dict[int, set[int]]] = {t: defaultdict(set) for t in times}
-        seen_from: dict[int, dict[int, set]] = defaultdict(lambda: defaultdict(set))
-        for t, key, value in FEATURE.facts_in(self.control):
-            if key not in grouping:
-                k = ids.setdefault(key, len(ids))
-                partial[t.number][k].add(ids.setdefault(value, len(ids)))
-                if sources and key.name == "after":
-                    seen_from[t.number + _actions_in(key.arguments[0])][t.number].add(k)
-        return (partial, seen_from) if sources else partial
+        Two time points stay apart without u's view unless every feature they disagree on is one that
+        one of them shows by the view seen at u: so only the pairs that u alone keeps apart are
+        compared again, and only in their class (classes of more than ``EXACT_CLIQUE_UP_TO`` time
+        points are not searched)."""
+        partial = self.without(leave_out)
+        found: set[int] = set()
+        for ts in _members(classes, leave_out):
+            if not 1 < len(ts) <= EXACT_CLIQUE_UP_TO:
+                continue
+            adjacent = [0] * len(ts)
+            kept_by: dict[int, list[tuple[int, int]]] = defaultdict(list)  # u -> the pairs only u keeps apart
+            for i, a in enumerate(ts):
+                for j in range(i + 1, len(ts)):
+                    b = ts[j]
+                    apart, only = self._kept_apart_by(a, b, partial)
+                    if apart:
+                        adjacent[i] |= 1 << j
+                        adjacent[j] |= 1 << i
+                        for u in only:
+                            kept_by[u].append((i, j))
+            lower = _max_clique_bits(adjacent, 1)
+            for u, pairs in kept_by.items():
+                if u in leave_out or u in found:
+                    continue
+                without_u = list(adjacent)
+                for i, j in pairs:
+                    without_u[i] &= ~(1 << j)
+                    without_u[j] &= ~(1 << i)
+                if _max_clique_bits(without_u, 1) < lower:
+                    found.add(u)
+        return sorted(found)
+
+    def _kept_apart_by(self, a: int, b: int, features) -> tuple[bool, set[int]]:
+        """Whether time points a and b disagree on a feature both show, and the time points whose views
+        alone keep them apart (each feature they disagree on is one of them seeing that view; empty when
+        some feature does not depend on a single view, or two views do)."""
+        fa, fb = features[a], features[b]
+        if len(fa) > len(fb):
+            fa, fb = fb, fa
+            a, b = b, a
+        only: set[int] | None = None
+        for k, v in fa.items():
+            if k in fb and fb[k] != v:
+                d = self.distance.get(k)
+                sources = set() if d is None else {a + d, b + d}
+                only = sources if only is None else only & sources
+                if not only:
+                    return True, set()
+        return only is not None, only or set()
 
 
 def prepass(theory: Theory, facts: Sequence[Symbol], future_depth: int) -> Grounding:
@@ -258,11 +344,14 @@ def _apart(a: dict, b: dict) -> bool:
     return any(k in large and large[k] != v for k, v in small.items())
 
 
-def apart_clique(times: Sequence[int], partial, at_most: int | None = None) -> int:
+def apart_clique(times: Sequence[int], partial, exact: bool = False, at_most: int | None = None) -> int:
     """Size of a set of time points that pairwise disagree (greedy, forwards, backwards and the time points
-    showing most features first, since those disagree most; at least 1 unless there are none). Given
-    ``at_most``, a bound no such set can exceed (the dstates a valid map gives them), the search stops
-    once it is reached: the answer is the same, sooner."""
+    showing most features first, since those disagree most; at least 1 unless there are none). With
+    ``exact``, the largest such set where the class is small enough to search (:func:`_max_clique`):
+    a greedy set misses a few (a 600-step exploration with misreads: 103 where 116 are proved), and
+    every dstate the bound misses is a try the resolver makes. Given ``at_most``, a bound no such set
+    can exceed (the dstates a valid map gives them), the search stops once it is reached: the answer is
+    the same, sooner."""
     best = min(1, len(times))
     richest = sorted(times, key=lambda t: -len(partial[t]))
     for order in (times, times[::-1], richest):
@@ -273,4 +362,50 @@ def apart_clique(times: Sequence[int], partial, at_most: int | None = None) -> i
                 if at_most is not None and len(clique) >= at_most:
                     return len(clique)
         best = max(best, len(clique))
+    if exact and best < len(times) <= EXACT_CLIQUE_UP_TO:
+        best = _max_clique(times, partial, best)
+    return best
+
+
+#: Classes of up to so many time points get the exact bound (their pairs are compared once), each search
+#: within ``CLIQUE_BUDGET`` steps (beyond it, the largest set found so far). A 600-step exploration's
+#: classes hold up to 46; longer tableaux's larger classes keep the greedy bound (comparing their
+#: pairs took a second of a 2,000-step resolve without landmarks).
+EXACT_CLIQUE_UP_TO, CLIQUE_BUDGET = 48, 20_000
+
+
+def _max_clique(times: list[int], partial, known: int, budget: int = CLIQUE_BUDGET) -> int:
+    """The largest set of pairwise disagreeing time points, if larger than ``known`` (branch and bound
+    over bit sets; a set is pruned when it cannot beat the best)."""
+    n = len(times)
+    adjacent = [0] * n
+    for i in range(n):
+        for j in range(i + 1, n):
+            if _apart(partial[times[i]], partial[times[j]]):
+                adjacent[i] |= 1 << j
+                adjacent[j] |= 1 << i
+    return _max_clique_bits(adjacent, known, budget)
+
+
+def _max_clique_bits(adjacent: list[int], known: int, budget: int = CLIQUE_BUDGET) -> int:
+    """The size of the largest clique of a graph given as bit sets of neighbours, if larger than
+    ``known`` (else ``known``); within ``budget`` steps, the largest found so far."""
+    n = len(adjacent)
+    best, steps = known, 0
+
+    def expand(size: int, candidates: int) -> None:
+        nonlocal best, steps
+        while candidates:
+            steps += 1
+            if steps > budget or size + candidates.bit_count() <= best:
+                return
+            v = (candidates & -candidates).bit_length() - 1
+            candidates &= ~(1 << v)
+            joined = candidates & adjacent[v]
+            if joined:
+                expand(size + 1, joined)
+            elif size + 1 > best:
+                best = size + 1
+
+    expand(0, (1 << n) - 1)
     return best

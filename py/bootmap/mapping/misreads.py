@@ -137,7 +137,7 @@ def find_suspects(views: Sequence[Hashable], actions: Sequence[Hashable],
             found.append(Suspect(t, RARE_VIEW_COST, _expected(sides), RARE_VIEW))
         elif _surprising(sides, n):
             base = MISREAD_COST if costs is None else int(costs[t])
-            clear = max(side[0] for side in sides) <= WEAK
+            clear = _clear(sides)
             # Where one side looks ordinary, thin evidence on the other (a context seen only a few
             # times) makes a misread the dearer explanation. Surprise on both sides is evidence enough:
             # the search still takes a misread only where it saves dstates.
@@ -147,6 +147,11 @@ def find_suspects(views: Sequence[Hashable], actions: Sequence[Hashable],
             found.append(Suspect(t, cost, _expected(sides), reason, clear,
                                  tuple(contexts.describe(side[3]) for side in sides)))
     return found
+
+
+def _clear(sides: list) -> bool:
+    """Surprising on both sides: at most ``WEAK`` on the less surprising one."""
+    return max(side[0] for side in sides) <= WEAK
 
 
 def _surprising(sides: list, n: int) -> bool:
@@ -200,6 +205,15 @@ class SuspectWatch:
         self._at.setdefault(v, []).append(len(self.contexts.views) - 1)
         return changed
 
+    @property
+    def rare_names(self) -> set:
+        """The rare views (:func:`rare_views`), by label."""
+        return {self.contexts.view_names[v] for v in self.rare}
+
+    def clear(self, t: int) -> bool:
+        """Is suspect t a clear one (:attr:`Suspect.clear`): a rare view, or surprising on both sides?"""
+        return self.contexts.views[t] in self.rare or _clear(self.contexts.sides(t))
+
     def append(self, view: Hashable, action_before: Hashable | None) -> None:
         """The next time point's view, and the action that led to it (None for the first)."""
         changed = self._add(view, action_before)
@@ -216,6 +230,29 @@ class SuspectWatch:
                 self.suspects.add(t)
             else:
                 self.suspects.discard(t)
+
+
+def context_views(views: Sequence[Hashable], actions: Sequence[Hashable], times: Sequence[int]) -> dict:
+    """For each of ``times``, the other views seen in its contexts of one step (after the same view and
+    action, before the same action and view): what a misread there most likely hid. Empty where the
+    contexts show no other view.
+
+    >>> context_views(list("ABAB") + ["C"] + list("BAB"), ["turn"] * 8, [4])
+    {4: ('A',)}
+    """
+    view_ids, action_ids = _ids(views), _ids(actions)
+    names = {i: v for v, i in view_ids.items()}
+    contexts = _Contexts([view_ids[v] for v in views], [action_ids[a] for a in actions[:len(views)]],
+                         names, {i: a for a, i in action_ids.items()})
+    out = {}
+    for t in times:
+        seen: set[int] = set()
+        for ahead in (False, True):
+            key = contexts._key(t, 1, ahead)
+            if key is not None:
+                seen |= {v for v in contexts.seen[key] if v != contexts.views[t]}
+        out[t] = tuple(sorted((names[v] for v in seen), key=str))
+    return out
 
 
 def rare_views(views: Sequence[Hashable], at_most: int = 2, typical: int = 5) -> dict:

@@ -28,6 +28,7 @@ a user writes are always honoured.
 from __future__ import annotations
 
 import hashlib
+from collections import ChainMap
 from pathlib import Path
 from typing import Sequence
 
@@ -97,6 +98,8 @@ class Replay:
         self.length_of: dict[str, int] = {}
         self.dstates_in: dict[tuple, int] = {}  # class -> its dstates in the map
         self._lower: dict[tuple, int] = {}      # class -> its lower bound, while no step changes it
+        self._without: dict[tuple, int] = {}    # ... and without the clear suspects' views
+        self._cleared: frozenset[int] = frozenset()
 
     # ------------------------------------------------------------------------------------------------
 
@@ -138,17 +141,47 @@ class Replay:
             self.dstate_of.append(d)
         return self.dstate_of
 
-    def exact_stands(self, n_dstates: int) -> bool:
+    def exact_stands(self, n_dstates: int, images: bool = False) -> bool:
         """The resolver keeps the exact map without weighing misreads: no view is suspect; or one dstate
         per class; or experience too little repeated for misreads to show (``MIN_VISITS``); or the
-        classes' lower bounds add up to the map's dstates."""
+        classes' lower bounds add up to the map's dstates and the misreads are not evident (leaving the
+        clear suspects' views out lowers the bounds by less than one dstate per suspect: the resolver's
+        ``_misreads_evident``, which otherwise weighs them against the exact bound)."""
         count = len(self.members)
         if not self.watch.suspects or count == n_dstates or len(self.views) < MIN_VISITS * count:
             return True
         for key, times in self.members.items():
             if key not in self._lower:
-                self._lower[key] = apart_clique(times, self.partial, at_most=self.dstates_in.get(key))
-        return sum(self._lower.values()) == n_dstates
+                self._lower[key] = apart_clique(times, self.partial, exact=True, at_most=self.dstates_in.get(key))
+        bound = sum(self._lower.values())
+        if bound != n_dstates:
+            return False
+        clear = self._clear(images)
+        if clear != self._cleared:  # the views left out changed: every class's bound without them may too
+            self._without, self._cleared = {}, clear
+        without = self.without(clear)
+        for key, times in self.members.items():
+            if key not in self._without:
+                self._without[key] = apart_clique([t for t in times if t not in clear], without, exact=True,
+                                                  at_most=self.dstates_in.get(key))
+        return bound - sum(self._without.values()) < len(clear)
+
+    def _clear(self, images: bool) -> frozenset[int]:
+        """The suspects the resolver would leave out first: the clear ones, or all where none is clear
+        (views with one or two images are suspects only in a tableau of images)."""
+        suspects = [t for t in self.watch.suspects if images or self.views[t] not in self.watch.rare_names]
+        clear = [t for t in suspects if self.watch.clear(t)]
+        return frozenset(clear or suspects)
+
+    def without(self, views_at: frozenset[int]):
+        """The features, but for those shown by the views seen at ``views_at`` (what the time points
+        before them saw there): causal.lp does not rely on a suspect's view."""
+        dropped: dict[int, set] = {}
+        for u in views_at:
+            for t in range(max(0, u - self.depth), u):
+                dropped.setdefault(t, set()).add(("after", tuple(self.actions[t:u])))
+        return ChainMap({t: {k: v for k, v in self.partial[t].items() if k not in keys}
+                         for t, keys in dropped.items()}, self.partial)
 
     # ------------------------------------------------------------------------------------------------
 
@@ -181,12 +214,14 @@ class Replay:
         self.class_of.append(key)
         self.members.setdefault(key, []).append(t)
         self._lower.pop(key, None)
+        self._without.pop(key, None)
         if watch:
             self.watch.append(view, before)
 
     def _feature(self, t: int, key: tuple, value) -> None:
         self.partial[t][key] = value
         self._lower.pop(self.class_of[t], None)
+        self._without.pop(self.class_of[t], None)
 
 
 def length_labels(lengths: dict[int, int]) -> dict[int, int]:

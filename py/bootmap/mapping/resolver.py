@@ -48,10 +48,10 @@ from .cogmap import CognitiveMap, SolveStats, Try, build_map
 from .diagnosis import diagnosed
 from .facts import action_symbol, read_actions, tableau_facts
 from .motion import MotionPrimitives, TypeSuspect, action_types, type_suspects
-from .grounding import Classes, Deadline, Grounding, key_with_view, prepass
+from .grounding import Classes, Deadline, Grounding, PartialFeatures, key_with_view, prepass
 from .theory import Theory, load_theory
-from .misreads import DSTATE_COST, GHOST, MIN_VISITS, MISREAD_COST, RARE_VIEW, Suspect, find_suspects, has_images, rare_clustered_views
-from .vocabulary import FUTURE_DEPTH, MAY_BE, MINIMISE_DSTATES, ONE_PER_CLASS, SUSPECT
+from .misreads import DSTATE_COST, GHOST, context_views, MIN_VISITS, MISREAD_COST, RARE_VIEW, Suspect, find_suspects, has_images, rare_clustered_views
+from .vocabulary import FUTURE_DEPTH, MAY_BE, MINIMISE_DSTATES, ONE_PER_CLASS, SLOTS, SUSPECT
 
 
 #: The share of the time left (and at most so many seconds) spent checking that reading every view as
@@ -65,6 +65,14 @@ RETYPE_SHARE, RETYPE_MAX_S = 0.25, 15.0
 #: Where the classes' lower bound is refuted, the bounds just above it are tried one by one (so many, in
 #: this share of the time left and at most so many seconds) before any map is looked for and minimised.
 CLIMB_STEPS, CLIMB_SHARE = 3, (0.6, 60.0)
+#: A search's grounding time grows faster than its size (:meth:`_Search._grounding_size`): the places
+#: and paths of the topological level pair up candidate dstates (600 steps: 2.8 s for a layout, 18.5 s
+#: for one with 1.9 times the size). Grounding and the first solve's preparation, which cannot be
+#: interrupted either, take about ``PREPARE_FACTOR`` times the grounding (18.5 s, then 30 s).
+GROUND_POWER, PREPARE_FACTOR, GROUND_GRACE_S = 2.0, 2.5, 1.0
+#: Before any search is grounded, the first try's rate predicts the first search's: searches measured
+#: 0.11-0.35 of it (600-step explorations with misreads; the first try's share of fixed costs is higher).
+FIRST_TRY_SHARE = 0.35
 
 
 @dataclass(frozen=True)
@@ -170,10 +178,13 @@ class _Search:
         self.as_seen: int | None = None  # dstates proved necessary reading every view as seen
         self.depth = 0  # futures only matter once one dstate per class has failed
         self.classes: Classes | None = None  # known after the first try
-        self.prepassed: Grounding | None = None  # the last prepass with suspects
+        self.features: PartialFeatures | None = None  # what the prepass derives, read once
         self.proved = 1  # dstates proved necessary so far
         self.best: CognitiveMap | None = None
         self.ground_s = self.solve_s = 0.0
+        self.ground_rate: float | None = None  # seconds per grounding size ** GROUND_POWER, the worst seen
+        self.fixed_ground_s = 0.0  # the first try's grounding: the costs every grounding has
+        self.rate_size = 0  # the size of the search grounding that set ground_rate (0: the first try did)
         self.tries: list[Try] = []
 
     def run(self) -> CognitiveMap:
@@ -254,7 +265,8 @@ class _Search:
             self.classes = self.first.classes(range(len(self.tableau)))
         self.bound_classes_from_below()
         exact_lower = self.classes.lower
-        if exact is None and self.classes.lower_bound > self.classes.count:
+        clear = [s for s in suspects if s.clear] or suspects
+        if exact is None and self.classes.lower_bound > self.classes.count and not self._misreads_evident(clear):
             exact = self.bounded(self.classes.lower_bound)  # reading every view as seen, when that is easy
         self.as_seen = exact.n_dstates if exact else max(self.proved, sum(exact_lower))
         if exact is not None:
@@ -264,7 +276,6 @@ class _Search:
             suspects = [s for s in suspects if s.reason == RARE_VIEW]
             if not suspects:
                 return exact
-        clear = [s for s in suspects if s.clear] or suspects
         fewest = self._allow_misreads(exact_facts, clear)
         if exact is not None:
             # The exact map is in hand: misreads must save more dstates than the cheapest of them costs,
@@ -302,30 +313,57 @@ class _Search:
         self.suspects = suspects
         return found or misread
 
+    def _misreads_evident(self, clear: list[Suspect]) -> bool:
+        """Leaving the clear suspects' views out lowers the classes' bounds by a dstate or more per suspect:
+        reading them as seen is what splits the classes. Then the exact map at its lower bound (a search
+        that fails, and slowly: 1-8 s on 600-step explorations with 2% misreads) is not tried first; the
+        misreads are weighed against the exact lower bound instead. On clean experience whose suspects
+        are chance (aliasing), leaving them out lowers the bounds by less than one per suspect (0-7 for
+        1-84 suspects on 600-step explorations)."""
+        without = sum(self.features.lower_bounds(self.classes, leave_out={s.t for s in clear}))
+        return self.classes.lower_bound - without >= len(clear)
+
     def _misread_map(self, fewest: int, ceiling: int, exact_facts: list[Symbol] | None = None,
                      wider: list[Suspect] = ()) -> CognitiveMap | None:
         """The best map with misreads and at most ``ceiling`` dstates, from ``fewest`` up; None if none.
-        If the suspects allowed so far do not reach ``fewest``, the ``wider`` set is allowed too."""
+        If the suspects allowed so far do not reach ``fewest``, the ``wider`` set is allowed too.
+
+        Where some misread is no suspect (``exact_facts`` given: the first search of a resolution), the
+        views that raise their classes' bounds (:meth:`_ghosts`) become suspects first, in Python, as
+        long as they lower the bound (one unsuspected misread hides another: the second shows once the
+        first is left out), and the search starts from that bound. If it fails there, the layout of the
+        clear suspects' bound is tried with the same suspects: their higher bounds are the classes that
+        may need a slot back, where a suspect is no misread after all. A dstate more in the bound would
+        give every class a slot more instead, and that grounding grows past any time limit (2.8 s at
+        the bound, 18.5 s at one more, 600 steps with 27 suspects)."""
+        clear = chosen = list(self.suspects.values())
+        planned, proved = self.classes.lower, self.proved
+        if exact_facts is not None:
+            while True:
+                ghosts = self._ghosts()
+                if not ghosts:
+                    break
+                lowered = self._allow_misreads(exact_facts, chosen + ghosts)
+                if lowered >= (fewest if chosen is clear else lowest):
+                    self._allow_misreads(exact_facts, chosen)
+                    break
+                chosen, lowest = chosen + ghosts, lowered
+        if chosen is not clear:
+            misread = self.optimise(None, lowest)
+            if misread is not None:
+                return misread
+            self.classes.lower, self.proved = planned, max(proved, lowest + 1)
         misread = self.optimise(None, fewest)
-        clear = list(self.suspects.values())
-        if misread is None and exact_facts is not None and len(wider) > len(self.suspects):
+        others = [s for s in wider if s.t not in self.suspects]
+        if misread is None and exact_facts is not None and others:
             # The layout stays the one the clear suspects set: the others may join their classes'
             # dstates, but each class keeps its dstates (a small search, where misreads are few).
-            planned = self.classes.lower
-            self._allow_misreads(exact_facts, list(wider))
-            self.classes.lower = planned
+            self._allow_misreads(exact_facts, chosen + others)
+            self.classes.lower, self.proved = planned, proved
             misread = self.optimise(None, fewest)
-        if misread is None and exact_facts is not None:
-            # Some misread is no suspect: a first map shows where (its own dstate), and the layout
-            # leaves those time points out as it does the clear suspects.
-            self._allow_misreads(exact_facts, clear)
-            ghosts = self._ghosts()
-            if ghosts:
-                fewest = self._allow_misreads(exact_facts, clear + ghosts)
-                planned = self.classes.lower
-                self._allow_misreads(exact_facts, list(wider or clear) + ghosts)
-                self.classes.lower, self.proved = planned, fewest
-                misread = self.optimise(None, fewest)
+            if misread is None:  # each dstate more is a slot more for every class, and each suspect's
+                self._allow_misreads(exact_facts, chosen)  # other classes' slots with it: too many
+                self.classes.lower, self.proved = planned, proved
         while misread is None and fewest < ceiling:
             fewest += 1
             self.proved = max(self.proved, fewest)
@@ -342,11 +380,15 @@ class _Search:
         each loner and the time point after it become suspects too. So do the time points whose view,
         as the ones before them saw it later, raises their classes' lower bounds (*inflators*). Few are
         (4-6 loners, 1-13 inflators in a 600-step exploration with 2% misreads)."""
-        loners = self.prepassed.loners(self.classes)
-        inflators = self.prepassed.inflators(self.classes, leave_out=self.suspects)
+        loners = self.features.loners(self.classes, leave_out=self.suspects)
+        inflators = self.features.inflators(self.classes, leave_out=self.suspects)
         times = sorted(({u for t in loners for u in (t, t + 1) if u < len(self.tableau)} | set(inflators))
                        - set(self.suspects))
-        return [Suspect(t, MISREAD_COST, (), GHOST) for t in times]
+        # Each may have been misread from the views its contexts show instead (any view where they show
+        # none): every other view would make each ghost a candidate of every class with its heading.
+        actions = [action_symbol(s.action, a) for s, a in zip(self.tableau.steps, self.angles)]
+        expected = context_views(self.tableau.views, actions, times)
+        return [Suspect(t, MISREAD_COST, expected[t], GHOST) for t in times]
 
     def _within_share(self, work, share: tuple[float, float] = None):
         """``work()`` within a share of the time left (``(fraction, at most seconds)``, by default
@@ -366,9 +408,9 @@ class _Search:
         self._check_clock("the lower bounds with misreads")
         self.suspects = {s.t: s for s in suspects}
         self.facts = exact_facts + [SUSPECT(s.t, s.cost) for s in suspects] + self._may_be(suspects)
-        grounded = self.prepassed = prepass(self.resolver.theory, self.facts, self.depth)
-        self.ground_s += grounded.ground_s
-        self.classes.lower = grounded.lower_bounds(self.classes, leave_out=self.suspects)
+        # The prepass with these suspects would derive the same features but those their views show:
+        # read from the one prepass made reading every view as seen.
+        self.classes.lower = self.features.lower_bounds(self.classes, leave_out=self.suspects)
         self.proved = self.classes.lower_bound  # no explanation, misreads or not, needs fewer dstates
         return self.proved
 
@@ -430,7 +472,8 @@ class _Search:
         self.depth = self.resolver.future_depth
         grounded = prepass(self.resolver.theory, self.facts, self.depth)
         self.ground_s += grounded.ground_s
-        self.classes.lower = grounded.lower_bounds(self.classes)
+        self.features = grounded.partial_features(self.classes.times)
+        self.classes.lower = self.features.lower_bounds(self.classes)
         self.proved = max(self.proved, self.classes.lower_bound)
 
     def some_map(self) -> CognitiveMap:
@@ -484,12 +527,25 @@ class _Search:
     def _solve(self, layout: list[Symbol], what: str, models: int | None = None, optimise: bool = False,
                keep: bool = False) -> "_Outcome":
         """Ground and solve; on time-out raise SolveTimeout with the best map known."""
+        size = None
         if self.classes is not None:  # the first try always runs: its classes bound the answer
             self._check_clock(what)
+            size = self._grounding_size(layout)
+            self._check_grounding(what, size)
         options = [str(self.resolver.max_models + 1 if models is None else models)]
         if optimise:
             options += ["--opt-mode=optN", "--opt-strategy=usc"]
         grounding = Grounding(self.resolver.theory, self.facts + layout, self.depth, options).ground()
+        if size is None:
+            # The first try (one slot for each time point): what every grounding of this tableau costs
+            # (the theory, the facts), and until a search is grounded, how fast this machine grounds.
+            self.fixed_ground_s = grounding.ground_s
+            self.ground_rate = FIRST_TRY_SHARE * grounding.ground_s / max(len(self.tableau), 1) ** GROUND_POWER
+        elif size >= self.rate_size:
+            # The largest search so far, less the fixed costs (which dominate small groundings and would
+            # make a larger one look far slower than it is), predicts the next.
+            self.ground_rate = max(grounding.ground_s - self.fixed_ground_s, 0.0) / size ** GROUND_POWER
+            self.rate_size = size
         optimal: list[list[Symbol]] = []
         improving: list[list[Symbol]] = []
 
@@ -507,6 +563,29 @@ class _Search:
                 self.proved = self.classes.count
             raise self._timed_out(what, improving)
         return _Outcome(optimal, bool(result.exhausted), grounding if keep else None)
+
+    def _grounding_size(self, layout: list[Symbol]) -> int:
+        """How large a search's grounding will be, before it is made: the candidate dstates of each
+        time point (its class's slots, and those of the classes a suspect may be misread from) times
+        those of the next (what experience/next and determinism are grounded over)."""
+        slots = {key: m.number for key, m in SLOTS.args(layout)}
+        keys, of_time = self.classes.keys, self.classes.of_time
+        cand = [slots.get(keys[c], 0) for c in of_time]
+        for t, key in MAY_BE.args(self.facts):
+            cand[t.number] += slots.get(key, 0)
+        return sum(a * b for a, b in zip(cand, cand[1:])) + len(cand)
+
+    def _check_grounding(self, what: str, size: int) -> None:
+        """Out of time before a grounding starts that would end well past the deadline, as the
+        groundings of this resolution so far predict it (clingo can interrupt neither a grounding nor
+        the preparation of its first solve, which takes about as long again)."""
+        left = self.deadline.remaining()
+        if left is None or self.ground_rate is None:
+            return
+        predicted = PREPARE_FACTOR * (self.fixed_ground_s + self.ground_rate * size ** GROUND_POWER)
+        if predicted > left + GROUND_GRACE_S:
+            raise self._timed_out(f"{what} (not started: its grounding would take about {predicted:.0f} s "
+                                  f"with {left:.1f} s left)", [])
 
     def _check_clock(self, what: str) -> None:
         """Out of time before a grounding starts: stop here (clingo cannot interrupt a grounding)."""

@@ -152,7 +152,7 @@ class MapStream:
             return None
         if self.resolver.misreads and self._images and replay.watch.rare:
             return None  # the resolver weighs views of one or two images against any map: let it
-        if self.resolver.misreads and not replay.exact_stands(cmap.n_dstates):
+        if self.resolver.misreads and not replay.exact_stands(cmap.n_dstates, self._images):
             return None  # some views are suspect and the bounds do not prove the exact map: resolve
         self._replay = replay
         rows = cmap.steps[:len(old) - 1] + [step_row(t, tableau.steps[t], dstate_of[t], cmap.place_of, cmap.path_of)
@@ -169,14 +169,14 @@ class MapStream:
 
     def _exact_stands(self, facts: list[Symbol], dstate_of: list[str]) -> bool:
         """Where some views are suspect, the resolver keeps the exact map without weighing misreads when
-        it has one dstate per class, when the experience is too little repeated (``MIN_VISITS``), or when
-        the exact map has as many dstates as the classes' proved lower bounds: so does the stream."""
+        it has one dstate per class, or when the experience is too little repeated (``MIN_VISITS``): so
+        does the stream. (Where the exact map has as many dstates as the classes' lower bounds, the
+        resolver may still weigh misreads that are evident; the replay of the stock axioms mirrors that
+        rule, this check leaves it to a resolve.)"""
         grounded = prepass(self.resolver.theory, facts, self.resolver.future_depth)
         classes = grounded.classes(range(len(dstate_of)))
         n_dstates = len(set(dstate_of))
-        if classes.count == n_dstates or len(dstate_of) < MIN_VISITS * classes.count:
-            return True  # one dstate per class, or experience too little repeated for misreads to show
-        return sum(grounded.lower_bounds(classes)) == n_dstates
+        return classes.count == n_dstates or len(dstate_of) < MIN_VISITS * classes.count
 
     def _checked(self, tableau: Tableau, facts: list[Symbol], types, dstate_of: list[str],
                  deadline: Deadline, start: float) -> CognitiveMap | None:
