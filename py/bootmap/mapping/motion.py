@@ -356,8 +356,8 @@ def type_suspects(actions: Sequence[Action], angles: Sequence[int], grid_deg: in
     >>> [(s.t, s.angle, s.alternative) for s in type_suspects(acts, [-90] * 8 + [180, 0], 90)]
     [(8, 180, -90)]
     """
-    kinds = np.array(["turn" if isinstance(a, Turn) else "travel" for a in actions])
-    measured = np.array([measured_angle(a) for a in actions], dtype=float)
+    is_turn, measured = _readings(actions)
+    kinds = np.where(is_turn, "turn", "travel")
     off = np.abs(_wrap(measured - np.asarray(angles, dtype=float)))
     out = []
     for kind in ("turn", "travel"):
