@@ -18,8 +18,10 @@ $(STAMP): pyproject.toml
 demo: $(STAMP)
 	$(BIN)/bootmap demo
 
+# One pytest worker per core (pytest-xdist); a test module stays on one worker, so its module-scoped
+# servers and databases start once.
 test: $(STAMP)
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n auto --dist loadscope
 
 bench: $(STAMP)
 	$(BIN)/python bench/resolve_bench.py
