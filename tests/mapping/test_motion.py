@@ -137,3 +137,37 @@ def test_a_bend_read_three_times_far_from_the_grid_is_a_primitive():
     m = MotionPrimitives().fit(actions)
     assert m.grid_deg_ == 45
     assert sorted({t.angle for t in m.types_ if t.kind == "travel"}) == [0, 45]
+
+
+# Taylor Hall seed 12 at twice the laser noise: the travels' heading changes as odometry read them.
+SEED_12_TRAVELS = [-23.0, -12.7, -10.7, -9.6, -9.1, -5.3, -4.9, -4.4, -4.3, -3.8, -3.6, -3.5, -3.0, -2.9, -2.7,
+                   -1.8, -1.7, -1.5, -1.3, -0.9, -0.9, -0.9, -0.7, -0.7, -0.6, -0.5, -0.3, -0.3, -0.2, -0.2, 0.0,
+                   0.1, 0.1, 0.1, 0.2, 0.3, 0.3, 0.3, 0.4, 0.9, 0.9, 1.1, 1.5, 2.1, 2.6, 2.7, 2.8, 2.8, 3.5, 3.7,
+                   6.2, 7.8, 9.8, 12.5]
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 10_000), st.floats(1.5, 4.0), st.floats(-30.0, -18.0))
+def test_a_stray_bend_does_not_gather_the_tail_of_straight_travels_into_a_type(seed, sd, stray):
+    # Seed 12's travels (above) are 0 +- 3.5 with a heavy tail, and one read -23. The k-means steps grew
+    # the stray into a type of five at -13 +- 5.5, which set a 15-degree grid and gave a map of 55
+    # dstates for 20. A stray with the tail it gathers is still one type: here fifty straight travels,
+    # four of them read 8-14 degrees off, and a stray beyond.
+    rng = np.random.default_rng(seed)
+    bends = np.concatenate([sd * rng.standard_normal(45), rng.uniform(-14.0, -8.0, 4), [stray]])
+    turns = np.concatenate([-90 + 5 * rng.standard_normal(12), 180 + 8 * rng.standard_normal(20)])
+    for travels in (bends, SEED_12_TRAVELS):
+        m = MotionPrimitives().fit([Turn(float(a)) for a in turns] + [Travel(20.0, float(b)) for b in travels])
+        assert m.grid_deg_ == 90, [str(t) for t in m.types_]
+        assert {t.angle for t in m.types_ if t.kind == "travel"} == {0}
+
+
+def test_neighbouring_exact_types_fifteen_degrees_apart_stay_two():
+    # The rejoining of neighbours is for noise: travels read exactly 0 and exactly -15, each many times,
+    # are two primitives (a hand-written tableau), as are two noisy types 30 degrees apart.
+    exact = MotionPrimitives().fit([Travel(3.0, 0.0)] * 20 + [Travel(3.0, -15.0)] * 4 + [Turn(90.0)] * 3)
+    assert sorted({t.angle for t in exact.types_ if t.kind == "travel"}) == [-15, 0]
+    rng = np.random.default_rng(3)
+    noisy = MotionPrimitives().fit([Travel(3.0, float(b)) for b in 2 * rng.standard_normal(30)]
+                                   + [Travel(3.0, float(b)) for b in 30 + 2 * rng.standard_normal(10)])
+    assert sorted({t.angle for t in noisy.types_ if t.kind == "travel"}) == [0, 30]

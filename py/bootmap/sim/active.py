@@ -133,7 +133,7 @@ class Active(Explore):
         self._observe(obs)
         if len(self._steps) >= self.max_steps:
             return None
-        decision = self._rehearse(obs) or self._explore()
+        decision = self._asked(self._rehearse(obs) or self._explore())
         if decision is None:
             self.complete_ = self.map_.unique and self.explored_
         return decision

@@ -10,9 +10,9 @@ odometry) that brought it there; it answers with the next action - travel along 
   uniformly at random (the baseline an active explorer must beat).
 * :class:`Explore` - a systematic hallway explorer: it takes every unexplored path direction at every
   place and turns around at dead ends, then walks back to the nearest place with an untried direction.
-  Places are told apart by dead reckoning on a 90-degree grid (turns are rounded to quarter turns, since
-  every turn ends aligned with the walls; travels add their odometry distance), so a place it comes back
-  to is recognised by where it is, not by what it looks like.
+  Places are told apart by dead reckoning on a 90-degree grid (a turn counts as the quarter turns it was
+  asked for, since every turn ends aligned with the walls there; travels add their odometry distance),
+  so a place it comes back to is recognised by where it is, not by what it looks like.
 """
 
 from __future__ import annotations
@@ -183,6 +183,7 @@ class Explore:
         self._position = np.zeros(2)
         self._here: int | None = None
         self._intent: int | None = None
+        self._turning: int | None = None  # quarter turns (left) of the turn just asked for
 
     def decide(self, obs: Observation) -> Decision | None:
         self._update(obs)
@@ -190,7 +191,13 @@ class Explore:
         target = self._intent if self._intent is not None else self._choose(here)
         if target is None:
             return None
-        return self._turn_to(target)
+        return self._asked(self._turn_to(target))
+
+    def _asked(self, decision: Decision | None) -> Decision | None:
+        """Remember the quarter turns of a turn asked for (dead reckoning counts them, not odometry's)."""
+        if decision is not None and decision.kind == "turn":
+            self._turning = round(decision.angle / (math.pi / 2))
+        return decision
 
     def _turn_to(self, target: int) -> Decision:
         """Travel if facing ``target`` (a quarter-turn direction), else turn to it and travel next."""
@@ -205,8 +212,13 @@ class Explore:
     def _update(self, obs: Observation) -> None:
         arrived_from = None
         if isinstance(obs.action, TurnAction):
+            # The turn law ends aligned with the walls at the quarter turn it was asked for, whatever
+            # odometry read (a turn-around read at 230 degrees still faces back down the corridor):
+            # the heading follows the turn asked for. Odometry rounds it only where none was asked.
             before = self._heading
-            self._heading = (self._heading + round(obs.action.angle_deg / 90.0)) % 4
+            quarters = self._turning if self._turning is not None else round(obs.action.angle_deg / 90.0)
+            self._turning = None
+            self._heading = (self._heading + quarters) % 4
             self.places_[self._here].link(before, self._heading)
         else:  # a travel (or the first dstate, reached by travelling from the start pose)
             if isinstance(obs.action, TravelAction):
