@@ -26,14 +26,21 @@ def read_actions(tableau: Tableau, quantum_deg: float | None = None) -> tuple[li
     """The angle the axioms see for each action of the tableau (a turn's angle, a travel's net heading
     change), and the action types: learned (:mod:`.motion`), or, given a quantum, the measurements
     rounded to it."""
+    angles, types, _ = typed_actions(tableau, quantum_deg)
+    return angles, types
+
+
+def typed_actions(tableau: Tableau, quantum_deg: float | None = None) -> tuple[list[int], list[ActionType], int | None]:
+    """:func:`read_actions`, and the grid the learned types lie on (None with a fixed quantum, or no
+    actions): the grid says which readings may be mistyped (:func:`.motion.type_suspects`)."""
     actions = tableau.actions
     if quantum_deg is None:
         if not actions:
-            return [], []
+            return [], [], None
         learned = MotionPrimitives().fit(actions)
-        return learned.angles_, learned.types_
+        return learned.angles_, learned.types_, learned.grid_deg_
     angles = [quantise(measured_angle(a), quantum_deg) for a in actions]
-    return angles, action_types(actions, angles)
+    return angles, action_types(actions, angles), None
 
 
 def action_symbol(action: Action | None, angle: int) -> Symbol | None:

@@ -129,12 +129,15 @@ def find_suspects(views: Sequence[Hashable], actions: Sequence[Hashable],
                          {i: v for v, i in view_ids.items()}, {i: a for a, i in action_ids.items()})
     rare = {t for ts in rare_views(views, typical=RARE_AMONG).values() for t in ts}
     costs = _margin_costs(views, images)
+    sides_of = [contexts.sides(t) for t in range(n)]
+    clear_at = {t for t in range(n) if _surprising(sides_of[t], n) and _clear(sides_of[t])}
     found = []
     for t in range(n):
         # How surprising the view is after what came before it, and before what came after.
-        sides = contexts.sides(t)
+        sides = sides_of[t]
+        expected = _expected(_trusted(contexts, t, clear_at)) or _expected(sides)
         if t in rare:
-            found.append(Suspect(t, RARE_VIEW_COST, _expected(sides), RARE_VIEW))
+            found.append(Suspect(t, RARE_VIEW_COST, expected, RARE_VIEW))
         elif _surprising(sides, n):
             base = MISREAD_COST if costs is None else int(costs[t])
             clear = _clear(sides)
@@ -144,9 +147,20 @@ def find_suspects(views: Sequence[Hashable], actions: Sequence[Hashable],
             evidence = min(side[2] for side in sides)
             cost = base if clear else int(round(base * max(1.0, FULL_EVIDENCE / max(evidence, 1))))
             reason = "unlike what the experience around it shows" + ("" if clear else " on one side")
-            found.append(Suspect(t, cost, _expected(sides), reason, clear,
+            found.append(Suspect(t, cost, expected, reason, clear,
                                  tuple(contexts.describe(side[3]) for side in sides)))
     return found
+
+
+def _trusted(contexts: "_Contexts", t: int, clear_at: set[int]) -> list:
+    """The sides of t whose contexts say what t's view should have been: a side whose neighbour is
+    itself clearly surprising (two misreads in a row) saw that neighbour's misread, so what it expects
+    is not evidence (a true L.RB read as LFRB, just before a LFR. read as LF.B, was expected only as .FRB,
+    and no map with its misreads could explain it). Both sides, where both neighbours are. (Where the
+    side left expects no other view, t is ordinary there, and the caller reads both.)"""
+    sides = [side for side, neighbour in ((contexts.before(t), t - 1), (contexts.after(t), t + 1))
+             if side is not None and neighbour not in clear_at]
+    return sides or contexts.sides(t)
 
 
 def _clear(sides: list) -> bool:

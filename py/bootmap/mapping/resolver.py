@@ -46,8 +46,8 @@ from ..images import as_images
 from ..tableau import Tableau
 from .cogmap import CognitiveMap, SolveStats, Try, build_map
 from .diagnosis import diagnosed
-from .facts import action_symbol, read_actions, tableau_facts
-from .motion import MotionPrimitives, TypeSuspect, action_types, type_suspects
+from .facts import action_symbol, tableau_facts, typed_actions
+from .motion import TypeSuspect, action_types, type_suspects
 from .grounding import Classes, Deadline, Grounding, PartialFeatures, key_with_view, prepass
 from .theory import Theory, load_theory
 from .misreads import DSTATE_COST, GHOST, context_views, MIN_VISITS, MISREAD_COST, RARE_VIEW, Suspect, find_suspects, has_images, rare_clustered_views
@@ -165,12 +165,8 @@ class _Search:
     def __init__(self, resolver: Resolver, tableau: Tableau, deadline: Deadline):
         self.resolver, self.tableau, self.deadline = resolver, tableau, deadline
         self.start = time.perf_counter()
-        self.grid: int | None = None  # the learned types' grid (None with a fixed quantum)
-        if resolver.quantum_deg is None and tableau.actions:
-            learned = MotionPrimitives().fit(tableau.actions)
-            self.angles, self.action_types, self.grid = learned.angles_, learned.types_, learned.grid_deg_
-        else:
-            self.angles, self.action_types = read_actions(tableau, resolver.quantum_deg)
+        # the actions' angles and types, and the learned types' grid (None with a fixed quantum)
+        self.angles, self.action_types, self.grid = typed_actions(tableau, resolver.quantum_deg)
         self.facts = tableau_facts(tableau, angles=self.angles)
         self.retyped: list[TypeSuspect] = []  # actions taken as mistyped
         self.first: Grounding | None = None  # the first try's grounding

@@ -45,10 +45,10 @@ from clingo import Function, Number, Symbol
 
 from ..tableau import Tableau
 from .cogmap import CognitiveMap, SolveStats, Try, build_map, step_row
-from .facts import action_symbol, read_actions, tableau_facts, travel_lengths
+from .facts import action_symbol, tableau_facts, travel_lengths, typed_actions
 from .grounding import Deadline, Grounding, prepass
 from .misreads import MIN_VISITS, find_suspects, has_images, rare_clustered_views
-from .motion import ActionType, MotionPrimitives, type_suspects
+from .motion import ActionType, type_suspects
 from .replay import Replay, covers, length_labels
 from .resolver import Resolver
 from .vocabulary import FIXED
@@ -90,7 +90,7 @@ class MapStream:
         """The map of ``tableau``, which usually extends the last one given by a few steps."""
         deadline = deadline or Deadline.after(self.resolver.time_limit)
         start = time.perf_counter()
-        angles, types, grid = self._typed(tableau)
+        angles, types, grid = typed_actions(tableau, self.resolver.quantum_deg)
         cmap = None
         if not (self.resolver.retype and grid is not None and type_suspects(tableau.actions, angles, grid)):
             cmap = self._extended(tableau, angles, types, deadline, start)
@@ -104,15 +104,6 @@ class MapStream:
             self.extended_ += 1
         self.map_, self._tableau, self._angles = cmap, tableau, angles
         return cmap
-
-    def _typed(self, tableau: Tableau) -> tuple[list[int], list[ActionType], int | None]:
-        """The actions' angles and types, as the resolver reads them, and the learned types' grid (None
-        with a fixed quantum)."""
-        if self.resolver.quantum_deg is None and tableau.actions:
-            learned = MotionPrimitives().fit(tableau.actions)
-            return learned.angles_, learned.types_, learned.grid_deg_
-        angles, types = read_actions(tableau, self.resolver.quantum_deg)
-        return angles, types, None
 
     def _extended(self, tableau: Tableau, angles: list[int], types: list[ActionType], deadline: Deadline,
                   start: float) -> CognitiveMap | None:
