@@ -272,7 +272,7 @@ def truth_id(state: State) -> str:
 
 def random_world(rng: np.random.Generator, width: int, height: int, extra_edges: int = 0,
                  landmarks: float = 0.0, keep: float = 1.0, letters: str = _LETTERS,
-                 cell_m: float = 2.0, bends: float = 0.0) -> GridWorld:
+                 cell_m: float = 2.0, bends: float = 0.0, bend_deg: int = BEND_QUANTUM) -> GridWorld:
     """A random connected world inside a ``width`` x ``height`` grid.
 
     Parameters
@@ -295,6 +295,9 @@ def random_world(rng: np.random.Generator, width: int, height: int, extra_edges:
         Fraction of nodes (rounded) whose frame is turned by a random non-zero multiple of 15 degrees,
         bending every corridor between nodes whose frames differ. (Drawn last, so ``bends=0`` gives the
         same world from the same generator as before bends existed.)
+    bend_deg : int
+        The frames are turned by multiples of this (a multiple of 15): 45 gives a world of 45-degree
+        geometry, whose corridors meet at 45, 90 and 135 degrees.
     """
     if width * height < 2:
         raise ValueError("a world needs at least two nodes")
@@ -306,7 +309,7 @@ def random_world(rng: np.random.Generator, width: int, height: int, extra_edges:
     picks = rng.permutation(len(rest))[:max(0, extra_edges)]
     edges = tree | {rest[i] for i in picks}
     marks = _place_landmarks(rng, sorted(nodes), landmarks, letters)
-    frames = _turn_frames(rng, sorted(nodes), bends)
+    frames = _turn_frames(rng, sorted(nodes), bends, bend_deg)
     name = f"grid {width}x{height}, {len(nodes)} nodes, {len(edges)} edges"
     name += f", {len(frames)} frames turned" if frames else ""
     return GridWorld(frozenset(nodes), frozenset(edges), marks, cell_m, name, frames)
@@ -350,11 +353,13 @@ def _place_landmarks(rng: np.random.Generator, nodes: list[Node], fraction: floa
     return {nodes[i]: letters[int(rng.integers(len(letters)))] for i in sorted(chosen)}
 
 
-def _turn_frames(rng: np.random.Generator, nodes: list[Node], fraction: float) -> dict[Node, int]:
+def _turn_frames(rng: np.random.Generator, nodes: list[Node], fraction: float, step: int) -> dict[Node, int]:
     count = min(len(nodes), round(fraction * len(nodes)))
     if count == 0:
         return {}
-    angles = [a for a in range(-165, 181, BEND_QUANTUM) if a != 0]
+    if step % BEND_QUANTUM or not 0 < step <= 180:
+        raise ValueError(f"bend_deg must be a multiple of {BEND_QUANTUM} in (0, 180], got {step}")
+    angles = [a for a in range(-180 + step, 181, step) if a != 0]
     chosen = rng.permutation(len(nodes))[:count]
     return {nodes[i]: angles[int(rng.integers(len(angles)))] for i in sorted(chosen)}
 
