@@ -140,6 +140,8 @@ def cmd_experiment(args: argparse.Namespace) -> int:
         return _log_experiment(args)
     if args.world is None:
         raise BadInput("give a world (e.g. taylor_hall) or a robot's log (--log LOG, or killian)")
+    if args.junctions:
+        raise BadInput(f"--junctions: for an experiment on a robot's log (--log LOG), not for the world {args.world}")
     world = args.world
     if args.set:
         from .sim.world import load_world
@@ -176,9 +178,11 @@ def _log_experiment(args: argparse.Namespace) -> int:
                                          ("--circuits", args.circuits), ("--steps", args.steps)) if value]
     if sim_only:
         raise BadInput(f"{', '.join(sim_only)}: for the simulated experiment, not for --log {args.log}")
+    from .logs.dstates import JunctionDetector
+
     r = run_log_experiment(args.log, out_dir=args.output, seed=args.seed, k_max=args.k_max,
                            time_limit=args.time_limit, quantum_deg=args.quantum, view_criterion=args.views,
-                           progress=True)
+                           progress=True, junctions=JunctionDetector() if args.junctions else None)
     print("\n".join(headline(r)))
     print(f"report: {args.output}/report.md")
     return EXIT_FAILURE if "error" in r["map"] else EXIT_OK
@@ -324,6 +328,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--views", choices=("auto", "M", "davies-bouldin"), default="auto",
                    help="--log: how k is chosen for the map's views (auto: M's k unless M picks 1 or 2, then "
                         "the Davies-Bouldin index's; both are reported)")
+    p.add_argument("--junctions", action="store_true",
+                   help="--log: a junction passed straight through (a side corridor's opening, mid-travel) is "
+                        "a dstate too, not only a turn's two ends (bootmap.logs.dstates.JunctionDetector)")
     runs = p.add_mutually_exclusive_group()
     runs.add_argument("--circuits", type=arguments.count("circuits"), metavar="N",
                       help="circuits of a room (worlds of the circuits policy; default 50)")

@@ -53,3 +53,35 @@ def test_the_excerpt_has_eight_turns_and_sixteen_dstates(excerpt_scans):
                                                    (236, 244), (321, 324), (341, 350)]
     assert [round(t.angle_deg) for t in turns] == [-89, -80, 77, 100, 80, 84, -83, 87]
     assert dstate_scans(turns)[:4] == [18, 25, 113, 117]
+
+
+def _corridor_with_junctions():
+    """40 m of travel between two turns (a scan every 0.25 m), walls 1 m off on both sides, and: a side
+    corridor 2.5 m wide on the left at 10 m, a crossing (both sides open) at 20 m, a doorway 0.5 m wide on
+    the right at 27 m, a hall 8 m long on the right from 30 m, and a side corridor 1 m before the travel
+    ends (at the turn's place already)."""
+    from bootmap.logs.dstates import FoundTurn
+
+    distance = np.arange(161) * 0.25
+    left, right = np.ones(161), np.ones(161)
+    open_at = lambda lo, hi: (distance >= lo) & (distance <= hi)
+    left[open_at(9.0, 11.5)] = 10.0
+    left[open_at(19.0, 21.5)] = right[open_at(19.0, 21.5)] = 10.0
+    right[open_at(27.0, 27.5)] = 10.0
+    right[open_at(30.0, 38.0)] = 10.0
+    left[open_at(38.5, 40.0)] = 10.0
+    turns = [FoundTurn(0, 0, 90.0), FoundTurn(160, 160, 90.0)]
+    return left, right, distance, turns
+
+
+def test_a_travel_passing_a_side_corridor_or_a_crossing_visits_it_once():
+    from bootmap.logs.dstates import JunctionDetector, find_passes
+
+    left, right, distance, turns = _corridor_with_junctions()
+    passes = find_passes(left, right, distance, turns, JunctionDetector())
+    # the side corridor's middle, the crossing's once; no doorway, no hall, nothing at the turn's place
+    assert [distance[i] for i in passes] == pytest.approx([10.25, 20.25])
+    assert dstate_scans(turns, passes) == [0, 0, passes[0], passes[1], 160, 160]
+    # a wider doorway limit lets the doorway in; a narrower corridor limit loses the side corridor
+    assert len(find_passes(left, right, distance, turns, JunctionDetector(min_width_m=0.5))) == 3
+    assert len(find_passes(left, right, distance, turns, JunctionDetector(max_width_m=2.0))) == 0

@@ -64,3 +64,53 @@ def test_killian_whole_log_truth():
     assert len(t) == 98 and recall["corners"] == 55 and recall["found"] == 53
     seen = Counter(s.truth for s in t.steps)
     assert len(seen) == 69 and sum(n == 1 for n in seen.values()) == 45
+
+
+def _corridor_log():
+    """Scans of a robot that turns, drives 20 m down a corridor (walls 1 m off) past a side corridor on
+    its left at 10 m, and turns again: poses exact, and the true poses the same."""
+    import math
+
+    import numpy as np
+
+    from bootmap.logs.scans import Scan
+
+    angles = np.radians(np.arange(-90, 90, 1.0))
+    poses = [(0.0, 0.0, math.radians(-90 + 15 * k)) for k in range(7)]  # a left turn on the spot
+    poses += [(0.25 * k, 0.0, 0.0) for k in range(1, 81)]
+    poses += [(20.0, 0.0, math.radians(15 * k)) for k in range(1, 7)]
+    scans = []
+    for i, (x, y, h) in enumerate(poses):
+        with np.errstate(divide="ignore"):
+            ranges = np.minimum(1.0 / np.abs(np.sin(angles)), 30.0)
+        if h == 0.0 and 8.75 <= x <= 11.25:
+            ranges[angles > np.radians(60)] = 12.0  # the side corridor, open to the left
+        scans.append(Scan(0.1 * i, ranges, float(angles[0]), math.radians(1.0), 30.0, (x, y, h), (x, y, h)))
+    return scans
+
+
+def test_junctions_passed_are_dstates_when_asked_for():
+    from bootmap.logs.dstates import JunctionDetector
+
+    scans = _corridor_log()
+    turns_only = log_tableau(scans)
+    assert [type(a) for a in turns_only.actions] == [Turn, Travel, Turn]
+    t = log_tableau(scans, junctions=JunctionDetector())
+    assert [type(a) for a in t.actions] == [Turn, Travel, Travel, Turn]
+    pass_step = t.steps[2]
+    assert pass_step.pose[0] == pytest.approx(10.0, abs=0.3)
+    # the two travels add up to the one they cut, and the pass is a place of its own
+    assert t.actions[1].distance_m + t.actions[2].distance_m == pytest.approx(turns_only.actions[1].distance_m)
+    places = [s.truth.split(":")[0] for s in t.steps]
+    assert places[0] == places[1] and places[3] == places[4] and len(set(places)) == 3
+    assert t.meta["dstates"]["passes"] == [t.meta["dstates"]["scans"][2]]
+    assert Tableau.loads(t.dumps()).steps == t.steps  # the pass's scan index is a plain int in the JSON
+
+
+def test_bootmap_ingest_junctions_records_its_detector_and_experiment_on_a_world_refuses_it(tmp_path, capsys):
+    out = tmp_path / "run.json"
+    assert main(["ingest", str(EXCERPT), "-o", str(out), "--no-progress", "--junctions"]) == 0
+    meta = load(out).meta["dstates"]
+    assert meta["junctions"]["min_width_m"] == 1.5 and set(meta["passes"]) <= set(meta["scans"])
+    assert main(["experiment", "notched_rectangle", "--junctions"]) == 2
+    assert "--junctions: for an experiment on a robot's log" in capsys.readouterr().err

@@ -13,7 +13,7 @@ from pathlib import Path
 
 from .. import arguments
 from ..errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_OK, BadInput
-from .dstates import TurnDetector
+from .dstates import JunctionDetector, TurnDetector
 
 
 def register(subparsers) -> None:
@@ -36,6 +36,9 @@ def register(subparsers) -> None:
                    help="clip images at this range (default 20 m)")
     p.add_argument("--radius", type=arguments.positive("metres"), default=3.0, metavar="M",
                    help="dstates whose true poses lie this close are one place (default 3 m)")
+    p.add_argument("--junctions", action="store_true",
+                   help="a junction passed straight through (a side opening 1.5-5 m wide mid-travel) is a "
+                        "dstate too, not only a turn's two ends")
     p.add_argument("--scan-topic", help="ROS: the LaserScan topic (when the bag has several)")
     p.add_argument("--odom-topic", help="ROS: the Odometry topic (when the bag has several)")
     p.add_argument("--truth-topic", help="ROS: an Odometry topic of true poses")
@@ -52,7 +55,9 @@ def cmd_ingest(args: argparse.Namespace) -> int:
     try:
         scans = read_log(args.log, progress=not args.no_progress, **ros)
         detector = TurnDetector(window_m=args.window, turn_deg=args.turn)
-        tableau = log_tableau(scans, detector, max_range=args.max_range, radius_m=args.radius, source=args.log)
+        junctions = JunctionDetector() if args.junctions else None
+        tableau = log_tableau(scans, detector, max_range=args.max_range, radius_m=args.radius, source=args.log,
+                              junctions=junctions)
     except BadInput as e:
         print(f"bootmap ingest: error: {e}", file=sys.stderr)
         return EXIT_BAD_INPUT

@@ -19,8 +19,14 @@ How a turn is found (all from odometry, never from the true poses):
 4. A stretch is a turn if its start and end headings differ by ``turn_deg`` or more (wrapped: a full
    spin on the spot is no turn). Turns less than ``min_travel_m`` apart are one turn.
 
-Passing straight through a junction is not yet a dstate (that needs the scan, not odometry). A curve
-longer than the window is read short by up to ``2 * settled_deg`` (its ends are taken as straight).
+A curve longer than the window is read short by up to ``2 * settled_deg`` (its ends are taken as
+straight).
+
+Passing straight through a junction is a visit too, where asked for (:class:`JunctionDetector`; off by
+default): the travel law that follows a corridor would have settled in the middle of a side opening,
+so within a travel, a stretch where one side's beams (75-90 degrees off the heading) read further than
+``open_m`` over ``min_width_m`` to ``max_width_m`` of travel (a side corridor: wider than a doorway,
+narrower than a hall) gives one dstate, at its middle scan. That needs the scan, not odometry alone.
 
 Example
 -------
@@ -62,6 +68,26 @@ class TurnDetector:
     turn_deg: float = 45.0
     settled_deg: float = 10.0
     min_travel_m: float = 1.0
+
+
+@dataclass(frozen=True)
+class JunctionDetector:
+    """The parameters of :func:`find_passes` (see the module docstring).
+
+    Parameters
+    ----------
+    open_m : float
+        A side whose beams read further than this (median) is open.
+    min_width_m, max_width_m : float
+        An opening is a side corridor when it stays open over this much travel.
+    margin_m : float
+        A pass this close to either end of its travel is at the turn's place already.
+    """
+
+    open_m: float = 4.0
+    min_width_m: float = 1.5
+    max_width_m: float = 5.0
+    margin_m: float = 1.5
 
 
 @dataclass(frozen=True)
@@ -133,6 +159,43 @@ def _join_close(turns: list[tuple[int, int]], distance: np.ndarray, heading: np.
     return joined
 
 
-def dstate_scans(turns: list[FoundTurn]) -> list[int]:
-    """The chosen scans, in time order: each turn's start and end."""
-    return [i for t in turns for i in (t.before, t.after)]
+def side_ranges(scans) -> tuple[np.ndarray, np.ndarray]:
+    """Per scan, the median range of the beams 75-90 degrees to the left, and to the right."""
+    left, right = np.empty(len(scans)), np.empty(len(scans))
+    for k, scan in enumerate(scans):
+        degrees = np.degrees(scan.angles)
+        ranges = np.minimum(scan.ranges, scan.range_max)
+        left[k] = np.median(ranges[(degrees >= 75) & (degrees <= 90)])
+        right[k] = np.median(ranges[(degrees <= -75) & (degrees >= -90)])
+    return left, right
+
+
+def find_passes(left: np.ndarray, right: np.ndarray, distance: np.ndarray, turns: list[FoundTurn],
+                detector: JunctionDetector = JunctionDetector()) -> list[int]:
+    """The scans where a travel passes straight through a junction (see the module docstring), in
+    time order: the middle of each side opening of a side corridor's width, on either side."""
+    passes: set[int] = set()
+    for turn, following in zip(turns, turns[1:]):
+        start, end = turn.after, following.before
+        for side in (left, right):
+            for first, last in _runs(side[start:end + 1] > detector.open_m):
+                width = distance[start + last] - distance[start + first]
+                middle = start + (first + last) // 2
+                if detector.min_width_m <= width <= detector.max_width_m and \
+                        min(distance[middle] - distance[start], distance[end] - distance[middle]) >= detector.margin_m:
+                    passes.add(int(middle))
+    return _apart(sorted(passes), distance, detector.margin_m)
+
+
+def _apart(passes: list[int], distance: np.ndarray, margin_m: float) -> list[int]:
+    """Openings on both sides at once (a crossing) are one pass: the first of any within the margin."""
+    kept: list[int] = []
+    for i in passes:
+        if not kept or distance[i] - distance[kept[-1]] >= margin_m:
+            kept.append(i)
+    return kept
+
+
+def dstate_scans(turns: list[FoundTurn], passes: list[int] = ()) -> list[int]:
+    """The chosen scans, in time order: each turn's start and end, and the junctions passed."""
+    return sorted([i for t in turns for i in (t.before, t.after)] + list(passes))

@@ -27,9 +27,9 @@ from ..experiment import Laps, _jsonable, curves_figure, recognition_section, vi
 from ..mapping.resolver import Resolver
 from ..metrics import dstate_accuracy
 from ..views import ViewClusterer, davies_bouldin_k, view_labels, view_table
-from .dstates import TurnDetector
+from .dstates import JunctionDetector, TurnDetector
 from .evaluate import DESCRIPTORS, dead_reckoned_dstates, map_against_truth, nn_on_revisits, views_against_truth
-from .ingest import log_tableau, read_log
+from .ingest import log_tableau, read_log, turn_ends
 
 #: How k is chosen for the map's views: "auto" takes M's k unless M degenerates (k <= 2), then
 #: Davies-Bouldin's.
@@ -42,7 +42,8 @@ TARGETS = {"corner_recall": 0.95, "angles_within_10_deg": 1.0, "visits_in_true_d
 def run_log_experiment(log: str | Path, out_dir: str | Path | None = None, seed: int = 0, k_max: int = 12,
                        time_limit: float = 60.0, quantum_deg: float | None = None,
                        view_criterion: str = "auto", detector: TurnDetector = TurnDetector(),
-                       max_range: float = 20.0, radius_m: float = 3.0, progress: bool = False) -> dict:
+                       max_range: float = 20.0, radius_m: float = 3.0, progress: bool = False,
+                       junctions: JunctionDetector | None = None) -> dict:
     """Run the experiment on a log (a path any of :func:`~bootmap.logs.ingest.read_log`'s formats, or
     ``killian``); see the module docstring. Returns the results and, given ``out_dir``, writes
     ``results.json``, ``report.md`` and figures there. The robot's action types are learned, as in the
@@ -53,15 +54,16 @@ def run_log_experiment(log: str | Path, out_dir: str | Path | None = None, seed:
 
     with threadpool_limits(limits=1):  # small arrays: threads only wait on each other (see run_experiment)
         return _run(log, out_dir, seed, k_max, time_limit, quantum_deg, view_criterion, detector, max_range,
-                    radius_m, progress)
+                    radius_m, progress, junctions)
 
 
 def _run(log, out_dir, seed, k_max, time_limit, quantum_deg, view_criterion, detector, max_range, radius_m,
-         progress) -> dict:
+         progress, junctions) -> dict:
     lap = Laps()
     timings = lap.timings
     scans = read_log(log, progress=progress)
-    tableau = log_tableau(scans, detector, max_range=max_range, radius_m=radius_m, source=str(log))
+    tableau = log_tableau(scans, detector, max_range=max_range, radius_m=radius_m, source=str(log),
+                          junctions=junctions)
     if any(s.truth is None for s in tableau.steps):
         raise LogError("the log has no true poses (g2o vertices, CARMEN robot poses or a ROS --truth-topic): "
                        "nothing to evaluate the map against", str(log))
@@ -80,7 +82,8 @@ def _run(log, out_dir, seed, k_max, time_limit, quantum_deg, view_criterion, det
     lap("map_s")
     nn = {d: nn_on_revisits(images, truth, d) for d in DESCRIPTORS}
     odometry = [s.odometry for s in scans]
-    dead = dead_reckoned_dstates([odometry[i] for i in tableau.meta["dstates"]["scans"]], odometry, radius_m)
+    dead = dead_reckoned_dstates([odometry[i] for i in tableau.meta["dstates"]["scans"]], odometry, radius_m,
+                                 turn_ends(tableau.actions))
     recognition = None if cmap is None else recognition_section(images, cmap.dstate_of, "1-NN", seed)
     lap("recognise_s")
     results = {

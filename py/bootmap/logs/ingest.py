@@ -5,7 +5,8 @@ actions odometry measured between them.
    name: ``killian``, a ``.g2o`` or ``.zip``, a ROS bag (``.bag``, ``.db3``, ``.mcap`` or a ROS 2 bag
    directory), else a CARMEN log).
 2. :func:`~bootmap.logs.dstates.find_turns` cuts the odometry into travels and turns; each turn gives
-   two dstates, its start and its end.
+   two dstates, its start and its end. Where asked for, :func:`~bootmap.logs.dstates.find_passes` adds a
+   dstate where a travel passes straight through a junction.
 3. :func:`log_tableau` writes one step per dstate: the scan as an image (the simulator's format), the
    action to the next dstate as odometry measured it (a turn: its angle; a travel: its length and net
    heading change), the true pose as ``pose`` and, when the log has true poses, the true dstate as
@@ -24,7 +25,8 @@ import numpy as np
 
 from ..errors import LogError
 from ..tableau import Step, Tableau, Travel, Turn
-from .dstates import FoundTurn, TurnDetector, dstate_scans, find_turns, odometry_track
+from .dstates import (FoundTurn, JunctionDetector, TurnDetector, dstate_scans, find_passes, find_turns,
+                      odometry_track, side_ranges)
 from .scans import IMAGE_ANGLE_MAX, IMAGE_ANGLE_MIN, IMAGE_BEAMS, Scan, to_image, wrap
 from .truth import corner_recall, corners_in_poses, main_axis, true_dstates
 
@@ -64,7 +66,7 @@ def _shown(scans: Iterable[Scan], progress: bool) -> Iterator[Scan]:
 
 
 def log_tableau(scans: list[Scan], detector: TurnDetector = TurnDetector(), max_range: float = 20.0,
-                radius_m: float = 3.0, source: str = "log") -> Tableau:
+                radius_m: float = 3.0, source: str = "log", junctions: JunctionDetector | None = None) -> Tableau:
     """The tableau of a log: one step per dstate (see the module docstring).
 
     Parameters
@@ -80,6 +82,8 @@ def log_tableau(scans: list[Scan], detector: TurnDetector = TurnDetector(), max_
         Dstates whose true poses lie this close are one place (for ``truth`` only).
     source : str
         What the log is called in messages and in ``meta.source``.
+    junctions : JunctionDetector, optional
+        Where travels pass junctions, which are dstates too; None: only turns give dstates.
     """
     if len(scans) < 2:
         raise LogError(f"{len(scans)} scan(s): a log needs at least two to have any motion", source)
@@ -88,48 +92,56 @@ def log_tableau(scans: list[Scan], detector: TurnDetector = TurnDetector(), max_
     if not turns:
         raise LogError(f"the odometry turns nowhere (no heading change of {detector.turn_deg:g} degrees or "
                        "more between travels): no dstate to choose", source)
-    chosen = dstate_scans(turns)
-    actions = _actions(turns, distance, heading)
+    passes = [] if junctions is None else find_passes(*side_ranges(scans), distance, turns, junctions)
+    chosen = dstate_scans(turns, passes)
+    actions = _actions(chosen, turns, distance, heading)
     has_truth = all(s.truth is not None for s in scans)
-    truth = _truth(scans, chosen, radius_m) if has_truth else [None] * len(chosen)
+    truth = _truth(scans, chosen, turn_ends(actions), radius_m) if has_truth else [None] * len(chosen)
     steps = tuple(Step(action=actions[k] if k < len(actions) else None,
                        image=to_image(scans[i], IMAGE_BEAMS, max_range), truth=truth[k],
                        pose=_rounded(scans[i].truth) if has_truth else None)
                   for k, i in enumerate(chosen))
-    meta = _meta(scans, chosen, turns, detector, max_range, radius_m, source, has_truth)
+    meta = _meta(scans, chosen, turns, detector, max_range, radius_m, source, has_truth, junctions, passes)
     return Tableau(steps, None, meta)
 
 
-def _actions(turns: list[FoundTurn], distance: np.ndarray, heading: np.ndarray) -> list:
-    """The actions between consecutive dstates: each turn, then the travel to the next turn's start."""
+def _actions(chosen: list[int], turns: list[FoundTurn], distance: np.ndarray, heading: np.ndarray) -> list:
+    """The actions between consecutive dstates: a turn from a turn's start to its end, else the travel
+    odometry measured (its length and net heading change)."""
+    angle = {(t.before, t.after): t.angle_deg for t in turns}
     actions: list = []
-    for k, turn in enumerate(turns):
-        actions.append(Turn(round(turn.angle_deg, 2)))
-        if k + 1 < len(turns):
-            a, b = turn.after, turns[k + 1].before
+    for a, b in zip(chosen, chosen[1:]):
+        if (a, b) in angle:
+            actions.append(Turn(round(angle[a, b], 2)))
+        else:
             change = math.degrees(wrap(float(heading[b] - heading[a])))
             actions.append(Travel(round(float(distance[b] - distance[a]), 3), round(change, 2)))
     return actions
 
 
-def _truth(scans: list[Scan], chosen: list[int], radius_m: float) -> list[str]:
+def turn_ends(actions: list) -> list[tuple[int, int]]:
+    """The (start, end) step pairs of the turns: a turn never leaves its place."""
+    return [(k, k + 1) for k, action in enumerate(actions) if isinstance(action, Turn)]
+
+
+def _truth(scans: list[Scan], chosen: list[int], together: list[tuple[int, int]], radius_m: float) -> list[str]:
     """True dstates of the chosen scans, sectors aligned to the axis of the whole true path."""
     axis = main_axis([s.truth for s in scans])
-    turn_ends = [(k, k + 1) for k in range(0, len(chosen), 2)]  # dstate_scans: each turn's start, then end
-    return true_dstates([scans[i].truth for i in chosen], radius_m, axis, turn_ends)
+    return true_dstates([scans[i].truth for i in chosen], radius_m, axis, together)
 
 
 def _rounded(pose) -> tuple[float, float, float]:
     return (round(pose[0], 4), round(pose[1], 4), round(float(wrap(pose[2])), 5))
 
 
-def _meta(scans, chosen, turns, detector, max_range, radius_m, source, has_truth) -> dict:
+def _meta(scans, chosen, turns, detector, max_range, radius_m, source, has_truth, junctions, passes) -> dict:
     meta = {"generator": "bootmap.logs", "source": source, "scans": len(scans),
             "laser": {"angle_min": IMAGE_ANGLE_MIN, "angle_max": IMAGE_ANGLE_MAX,
                       "angle_increment": (IMAGE_ANGLE_MAX - IMAGE_ANGLE_MIN) / (IMAGE_BEAMS - 1),
                       "range_max": max_range, "beams": IMAGE_BEAMS,
                       "log_range_max": scans[0].range_max},
-            "dstates": {"scans": chosen, "detector": asdict(detector)}}
+            "dstates": {"scans": chosen, "detector": asdict(detector),
+                        "junctions": None if junctions is None else asdict(junctions), "passes": passes}}
     if has_truth:
         truth = [s.truth for s in scans]
         recall = corner_recall(turns, truth, corners_in_poses(truth))
@@ -140,9 +152,10 @@ def _meta(scans, chosen, turns, detector, max_range, radius_m, source, has_truth
 
 
 def ingest(log: str | Path, detector: TurnDetector = TurnDetector(), max_range: float = 20.0,
-           radius_m: float = 3.0, progress: bool = False, **ros_options) -> Tableau:
+           radius_m: float = 3.0, progress: bool = False, junctions: JunctionDetector | None = None,
+           **ros_options) -> Tableau:
     """:func:`read_log` then :func:`log_tableau`: a log file (or ``killian``) to a tableau."""
     scans = read_log(log, progress=progress, **ros_options)
-    return log_tableau(scans, detector, max_range, radius_m, source=str(log))
+    return log_tableau(scans, detector, max_range, radius_m, source=str(log), junctions=junctions)
 
 
