@@ -14,6 +14,17 @@ def test_places_join_poses_within_the_radius_and_turn_ends():
     assert place_labels(poses, radius_m=1.0) == [0, 1, 2, 3, 4, 0]
 
 
+def test_a_travel_never_joins_its_two_ends_into_one_place():
+    # Turns 3-6 m apart chain into one place by the radius; but the robot travelled from one to the other,
+    # and a travel always leaves its place (the SSH): the chain breaks at its longest link.
+    poses = [(0, 0, 0), (2.5, 0, 0), (5.5, 0, 0), (0.4, 0.2, 0)]
+    assert place_labels(poses, radius_m=3.0) == [0, 0, 0, 0]
+    assert place_labels(poses, radius_m=3.0, apart=[(0, 2)]) == [0, 0, 1, 0]
+    assert place_labels(poses, radius_m=3.0, apart=[(0, 1)]) == [0, 1, 1, 0]
+    # a turn's two ends stay together whatever the radius says
+    assert place_labels(poses, radius_m=1.0, together=[(0, 2)], apart=[(1, 2)]) == [0, 1, 0, 0]
+
+
 def test_the_axis_is_the_corridors_direction_modulo_90():
     angle = np.radians(30)
     legs = [(0, 0), (10, 0), (10, 10), (-5, 10)]  # corridors along x and y, then rotated by 30 degrees

@@ -75,14 +75,16 @@ def map_against_truth(truth: Sequence[str], cmap) -> dict:
 
 
 def dead_reckoned_dstates(odometry: Sequence[Pose], track: Sequence[Pose], radius_m: float = 3.0,
-                          turn_ends: Sequence[tuple[int, int]] | None = None) -> list[str]:
-    """Dstates from odometry alone: dstates whose dead-reckoned positions lie within ``radius_m`` are one
-    place (a turn's two ends too: ``turn_ends``, by default every pair, as when the chosen dstates
-    alternate turn start, turn end), and a place with a heading sector aligned to the main axis of the
-    dead-reckoned ``track`` is a dstate."""
+                          turn_ends: Sequence[tuple[int, int]] | None = None,
+                          travel_ends: Sequence[tuple[int, int]] = ()) -> list[str]:
+    """Dstates from odometry alone, as the truth is made from the true poses: dstates whose dead-reckoned
+    positions lie within ``radius_m`` are one place (a turn's two ends too: ``turn_ends``, by default
+    every pair, as when the chosen dstates alternate turn start, turn end; a travel's two ends never),
+    and a place with a heading sector aligned to the main axis of the dead-reckoned ``track`` is a
+    dstate."""
     if turn_ends is None:
         turn_ends = [(k, k + 1) for k in range(0, len(odometry) - 1, 2)]
-    return true_dstates(list(odometry), radius_m, main_axis(list(track)), list(turn_ends))
+    return true_dstates(list(odometry), radius_m, main_axis(list(track)), list(turn_ends), list(travel_ends))
 
 
 def shuffled_uncertainty(views: Sequence[Hashable], truth: Sequence[Hashable], repeats: int = 20,

@@ -29,7 +29,7 @@ from ..metrics import dstate_accuracy
 from ..views import ViewClusterer, davies_bouldin_k, view_labels, view_table
 from .dstates import JunctionDetector, TurnDetector
 from .evaluate import DESCRIPTORS, dead_reckoned_dstates, map_against_truth, nn_on_revisits, views_against_truth
-from .ingest import log_tableau, read_log, turn_ends
+from .ingest import log_tableau, read_log, travel_ends, turn_ends
 
 #: How k is chosen for the map's views: "auto" takes M's k unless M degenerates (k <= 2), then
 #: Davies-Bouldin's.
@@ -83,7 +83,7 @@ def _run(log, out_dir, seed, k_max, time_limit, quantum_deg, view_criterion, det
     nn = {d: nn_on_revisits(images, truth, d) for d in DESCRIPTORS}
     odometry = [s.odometry for s in scans]
     dead = dead_reckoned_dstates([odometry[i] for i in tableau.meta["dstates"]["scans"]], odometry, radius_m,
-                                 turn_ends(tableau.actions))
+                                 turn_ends(tableau.actions), travel_ends(tableau.actions))
     recognition = None if cmap is None else recognition_section(images, cmap.dstate_of, "1-NN", seed)
     lap("recognise_s")
     results = {

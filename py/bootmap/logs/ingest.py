@@ -96,7 +96,7 @@ def log_tableau(scans: list[Scan], detector: TurnDetector = TurnDetector(), max_
     chosen = dstate_scans(turns, passes)
     actions = _actions(chosen, turns, distance, heading)
     has_truth = all(s.truth is not None for s in scans)
-    truth = _truth(scans, chosen, turn_ends(actions), radius_m) if has_truth else [None] * len(chosen)
+    truth = _truth(scans, chosen, actions, radius_m) if has_truth else [None] * len(chosen)
     steps = tuple(Step(action=actions[k] if k < len(actions) else None,
                        image=to_image(scans[i], IMAGE_BEAMS, max_range), truth=truth[k],
                        pose=_rounded(scans[i].truth) if has_truth else None)
@@ -124,10 +124,16 @@ def turn_ends(actions: list) -> list[tuple[int, int]]:
     return [(k, k + 1) for k, action in enumerate(actions) if isinstance(action, Turn)]
 
 
-def _truth(scans: list[Scan], chosen: list[int], together: list[tuple[int, int]], radius_m: float) -> list[str]:
-    """True dstates of the chosen scans, sectors aligned to the axis of the whole true path."""
+def travel_ends(actions: list) -> list[tuple[int, int]]:
+    """The (start, end) step pairs of the travels: a travel always leaves its place."""
+    return [(k, k + 1) for k, action in enumerate(actions) if isinstance(action, Travel)]
+
+
+def _truth(scans: list[Scan], chosen: list[int], actions: list, radius_m: float) -> list[str]:
+    """True dstates of the chosen scans, sectors aligned to the axis of the whole true path: places of
+    poses within the radius, a turn's two ends in one, a travel's never."""
     axis = main_axis([s.truth for s in scans])
-    return true_dstates([scans[i].truth for i in chosen], radius_m, axis, together)
+    return true_dstates([scans[i].truth for i in chosen], radius_m, axis, turn_ends(actions), travel_ends(actions))
 
 
 def _rounded(pose) -> tuple[float, float, float]:

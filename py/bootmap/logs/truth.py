@@ -26,8 +26,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from .dstates import FoundTurn, odometry_track
@@ -37,17 +35,41 @@ SECTORS = "ENWS"  # as bootmap.sim.world.heading_sector names them, here in the 
 
 
 def place_labels(poses: list[Pose] | np.ndarray, radius_m: float = 3.0,
-                 together: list[tuple[int, int]] = ()) -> list[int]:
+                 together: list[tuple[int, int]] = (), apart: list[tuple[int, int]] = ()) -> list[int]:
     """A place index per pose: poses within ``radius_m`` of each other, directly or in a chain, share one,
-    and so does each pair in ``together`` (a turn's two ends: a turn never leaves its place).
+    and so does each pair in ``together`` (a turn's two ends: a turn never leaves its place); but never
+    a pair in ``apart`` (a travel's two ends: a travel always leaves its place, so a chain of poses that
+    would join them stops short). Pairs are joined nearest first, so a chain breaks at its longest link.
     Places are numbered in the order they are first visited."""
     xy = np.asarray(poses, dtype=float).reshape(-1, 3)[:, :2]
-    pairs = cKDTree(xy).query_pairs(radius_m, output_type="ndarray")
-    pairs = np.concatenate([pairs.reshape(-1, 2), np.asarray(together, dtype=int).reshape(-1, 2)])
-    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(xy), len(xy)))
-    _, labels = connected_components(graph, directed=False)
+    parent = list(range(len(xy)))
+    members = [{i} for i in range(len(xy))]
+    never = [set() for _ in range(len(xy))]
+    for a, b in apart:
+        never[a].add(b)
+        never[b].add(a)
+
+    def root(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    def join(a: int, b: int, forced: bool = False) -> None:
+        ra, rb = root(a), root(b)
+        if ra == rb or (not forced and any(never[i] & members[rb] for i in members[ra])):
+            return
+        parent[rb] = ra
+        members[ra] |= members[rb]
+
+    for a, b in together:
+        join(a, b, forced=True)
+    pairs = cKDTree(xy).query_pairs(radius_m, output_type="ndarray").reshape(-1, 2)
+    lengths = np.hypot(*(xy[pairs[:, 0]] - xy[pairs[:, 1]]).T)
+    for k in np.argsort(lengths, kind="stable"):
+        join(int(pairs[k, 0]), int(pairs[k, 1]))
     first_seen: dict[int, int] = {}
-    return [first_seen.setdefault(int(c), len(first_seen)) for c in labels]
+    return [first_seen.setdefault(root(i), len(first_seen)) for i in range(len(xy))]
 
 
 def main_axis(poses: list[Pose] | np.ndarray, tolerance_m: float = 1.0) -> float:
@@ -63,13 +85,13 @@ def main_axis(poses: list[Pose] | np.ndarray, tolerance_m: float = 1.0) -> float
 
 
 def true_dstates(poses: list[Pose] | np.ndarray, radius_m: float = 3.0, axis_rad: float | None = None,
-                 together: list[tuple[int, int]] = ()) -> list[str]:
+                 together: list[tuple[int, int]] = (), apart: list[tuple[int, int]] = ()) -> list[str]:
     """The true dstate of each pose: its place (:func:`place_labels`) and its heading's sector in the
     building's frame."""
     p = np.asarray(poses, dtype=float).reshape(-1, 3)
     axis = main_axis(p) if axis_rad is None else axis_rad
     sectors = np.rint(wrap(p[:, 2] - axis) / (np.pi / 2)).astype(int) % 4
-    return [f"P{place}:{SECTORS[s]}" for place, s in zip(place_labels(p, radius_m, together), sectors)]
+    return [f"P{place}:{SECTORS[s]}" for place, s in zip(place_labels(p, radius_m, together, apart), sectors)]
 
 
 def simplify(xy: np.ndarray, tolerance_m: float) -> np.ndarray:
