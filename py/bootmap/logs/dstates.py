@@ -184,10 +184,10 @@ def find_passes(left: np.ndarray, right: np.ndarray, distance: np.ndarray, turns
                 if detector.min_width_m <= width <= detector.max_width_m and \
                         min(distance[middle] - distance[start], distance[end] - distance[middle]) >= detector.margin_m:
                     passes.add(int(middle))
-    return _apart(sorted(passes), distance, detector.margin_m)
+    return _one_per_crossing(sorted(passes), distance, detector.margin_m)
 
 
-def _apart(passes: list[int], distance: np.ndarray, margin_m: float) -> list[int]:
+def _one_per_crossing(passes: list[int], distance: np.ndarray, margin_m: float) -> list[int]:
     """Openings on both sides at once (a crossing) are one pass: the first of any within the margin."""
     kept: list[int] = []
     for i in passes:

@@ -129,18 +129,20 @@ def find_suspects(views: Sequence[Hashable], actions: Sequence[Hashable],
                          {i: v for v, i in view_ids.items()}, {i: a for a, i in action_ids.items()})
     rare = {t for ts in rare_views(views, typical=RARE_AMONG).values() for t in ts}
     costs = _margin_costs(views, images)
-    sides_of = [contexts.sides(t) for t in range(n)]
-    clear_at = {t for t in range(n) if _surprising(sides_of[t], n) and _clear(sides_of[t])}
+    # How surprising each view is after what came before it, and before what came after: read once.
+    around = [(contexts.before(t), contexts.after(t)) for t in range(n)]
+    sides_of = [[side for side in pair if side is not None] for pair in around]
+    surprising = [_surprising(sides, n) for sides in sides_of]
+    clear_at = {t for t in range(n) if surprising[t] and _clear(sides_of[t])}
     found = []
     for t in range(n):
-        # How surprising the view is after what came before it, and before what came after.
         sides = sides_of[t]
-        expected = _expected(_trusted(contexts, t, clear_at)) or _expected(sides)
+        expected = _expected(_trusted(around[t], t, clear_at)) or _expected(sides)
         if t in rare:
             found.append(Suspect(t, RARE_VIEW_COST, expected, RARE_VIEW))
-        elif _surprising(sides, n):
+        elif surprising[t]:
             base = MISREAD_COST if costs is None else int(costs[t])
-            clear = _clear(sides)
+            clear = t in clear_at
             # Where one side looks ordinary, thin evidence on the other (a context seen only a few
             # times) makes a misread the dearer explanation. Surprise on both sides is evidence enough:
             # the search still takes a misread only where it saves dstates.
@@ -152,15 +154,15 @@ def find_suspects(views: Sequence[Hashable], actions: Sequence[Hashable],
     return found
 
 
-def _trusted(contexts: "_Contexts", t: int, clear_at: set[int]) -> list:
-    """The sides of t whose contexts say what t's view should have been: a side whose neighbour is
-    itself clearly surprising (two misreads in a row) saw that neighbour's misread, so what it expects
-    is not evidence (a true L.RB read as LFRB, just before a LFR. read as LF.B, was expected only as .FRB,
-    and no map with its misreads could explain it). Both sides, where both neighbours are. (Where the
-    side left expects no other view, t is ordinary there, and the caller reads both.)"""
-    sides = [side for side, neighbour in ((contexts.before(t), t - 1), (contexts.after(t), t + 1))
-             if side is not None and neighbour not in clear_at]
-    return sides or contexts.sides(t)
+def _trusted(around: tuple, t: int, clear_at: set[int]) -> list:
+    """Of t's sides (before, after; None where there is nothing), those whose contexts say what t's view
+    should have been: a side whose neighbour is itself clearly surprising (two misreads in a row) saw
+    that neighbour's misread, so what it expects is not evidence (a true L.RB read as LFRB, just before
+    a LFR. read as LF.B, was expected only as .FRB, and no map with its misreads could explain it).
+    Empty where both neighbours are; where the sides left expect no other view, t is ordinary there:
+    the caller then reads both sides."""
+    return [side for side, neighbour in zip(around, (t - 1, t + 1))
+            if side is not None and neighbour not in clear_at]
 
 
 def _clear(sides: list) -> bool:

@@ -119,9 +119,9 @@ class MotionPrimitives:
             # How far this kind's readings stray from their types: the noise every type of it shares.
             pooled = float(np.sqrt(sum(n * sd * sd for _, sd, n in mine) / total)) if total else 0.0
             # Readings without noise (a hand-written or simulated tableau) are all primitives.
-            keep = [(m, pooled) for m, sd, n in mine
+            keep = [(m, pooled) for i, (m, sd, n) in enumerate(mine)
                     if n >= max(3, MIN_SHARE * total) or (n >= 2 and sd < SAME_DEG) or pooled < EXACT_DEG
-                    or (n >= 3 and _apart(m, [o for o, _, _ in mine if o != m], pooled))]
+                    or (n >= 3 and _apart(m, [o for j, (o, _, _) in enumerate(mine) if j != i], pooled))]
             common += keep or [(m, pooled) for m, _, _ in mine]
             # A few readings (a tail, at most TAIL) set the grid only where no grid angle is near them:
             # three turn-arounds read at -153 beside eighteen at +175 +- 8 are a tail of 180, not a
@@ -143,7 +143,7 @@ def _apart(mean: float, others: Sequence[float], pooled: float) -> bool:
     A 45-degree bend read five times among 168 travels at 0 and +-90 (sd 4) is 11 spreads from any; three
     turn-arounds read at -153 beside +175 +- 8 are 4."""
     reach = max(2 * BIAS_DEG, FAR_SDS * pooled)
-    return all(abs(float(_wrap(np.array([mean - o]))[0])) > reach for o in others)
+    return all(_between(mean, o) > reach for o in others)
 
 
 def measured_angle(action: Action) -> float:
@@ -277,6 +277,11 @@ def _refined(values: np.ndarray, clusters: list[np.ndarray]) -> list[np.ndarray]
     return [np.flatnonzero(labels == c) for c in range(len(clusters))]
 
 
+def _between(a: float, b: float) -> float:
+    """Degrees between two angles, the short way round the circle."""
+    return abs(float(_wrap(np.array([a - b]))[0]))
+
+
 def _circular_mean(a: np.ndarray) -> float:
     r = np.radians(a)
     return float(_wrap(np.array([np.degrees(np.arctan2(np.sin(r).mean(), np.cos(r).mean()))]))[0])
@@ -290,11 +295,9 @@ def _coarsest_grid(types: Sequence[tuple[float, float]], grids: Sequence[int], f
     """The coarsest grid near every type: its mean within three spreads (sd, the noise of its kind), or
     :data:`BIAS_DEG` for tight readings, of a grid angle, and less than a third of a step away; the
     means of types of a ``few`` readings only less than a third of a step away."""
-    def off(m: float, q: int) -> float:
-        return abs(_wrap(np.array([m - quantise(m, q)]))[0])
-
     for q in grids:
-        if all(off(m, q) < min(q / 3, max(3 * sd, BIAS_DEG)) for m, sd in types) and all(off(m, q) < q / 3 for m in few):
+        if all(_between(m, quantise(m, q)) < min(q / 3, max(3 * sd, BIAS_DEG)) for m, sd in types) and \
+                all(_between(m, quantise(m, q)) < q / 3 for m in few):
             return q
     return grids[-1]
 
@@ -422,5 +425,5 @@ def _neighbour_angle(reading: float, angle: int, grid_deg: int) -> int:
     pair = [quantise(low, grid_deg), quantise(low + grid_deg, grid_deg)]
     others = [a for a in pair if a != angle]
     if len(others) == 2:
-        others.sort(key=lambda a: abs(_wrap(np.array([reading - a]))[0]))
+        others.sort(key=lambda a: _between(reading, a))
     return others[0]
