@@ -1,6 +1,7 @@
 """The bootmap command, run as a user runs it: exit codes, help, text and JSON maps."""
 
 import json
+import math
 import subprocess
 import sys
 
@@ -146,3 +147,22 @@ def test_map_of_images_takes_a_view_with_a_single_image_as_a_misread(tmp_path, c
     result = json.loads(capsys.readouterr().out)
     assert [s["t"] for s in result["suspect_steps"]] == [37]
     assert result["summary"]["dstates"] == len({s["truth"] for s in run["steps"]})
+
+
+def test_map_closes_loops_from_odometry_when_asked(tmp_path):
+    # Three laps of a square whose corners all look alike, with the robot's odometry at every step.
+    steps, x, y, heading = [], 0.0, 0.0, 0
+    for _ in range(3):
+        for _ in range(4):
+            steps.append({"view": "corner", "odometry": [x, y, 0], "action": {"type": "travel", "distance_m": 6}})
+            x, y = x + 6 * round(math.cos(math.radians(heading))), y + 6 * round(math.sin(math.radians(heading)))
+            steps.append({"view": "corner", "odometry": [x, y, 0], "action": {"type": "turn", "angle_deg": 90}})
+            heading += 90
+    steps.append({"view": "corner", "odometry": [x, y, 0]})
+    path = tmp_path / "laps.json"
+    path.write_text(json.dumps({"format": "bootmap.tableau/1", "steps": steps}))
+    out = bootmap("map", path, "--close-loops")
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.startswith("8 dstates, 4 places, 4 paths; loop-closed from odometry, every axiom holds")
+    data = json.loads(bootmap("map", path, "--close-loops", "--format", "json").stdout)
+    assert data["summary"]["found_by"] == "loop closing" and data["summary"]["proved_minimal"] is False

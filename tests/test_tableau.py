@@ -155,3 +155,16 @@ def test_a_bad_step_among_repeated_good_ones_is_named_by_its_own_index(laps, whe
     assert repeated.value.where.startswith(f"tableau: steps[{where}]")
     assert repeated.value.reason == alone.value.reason
     assert Tableau.from_dict(doc(good)).steps[:2] == Tableau.from_dict(doc(OK_STEPS)).steps[:2]
+
+
+def test_odometry_round_trips_and_a_bad_one_is_named():
+    steps = [{"view": "a", "odometry": [1.5, -2.0, 0.25], "action": {"type": "travel", "distance_m": 3}},
+             {"view": "b", "odometry": [4.5, -2.0, 0.25]}]
+    t = Tableau.from_dict(doc(steps))
+    assert t.steps[1].odometry == (4.5, -2.0, 0.25) and Tableau.loads(t.dumps()) == t
+    assert t.with_views(["x", "y"]).steps[0].odometry == (1.5, -2.0, 0.25)  # kept through copies
+    assert t.prefix(1).steps[0].odometry == (1.5, -2.0, 0.25)
+    with pytest.raises(TableauError, match=r"steps\[1\]\.odometry"):
+        Tableau.from_dict(doc([steps[0], {"view": "b", "odometry": [1, 2]}]))
+    with pytest.raises(TableauError, match=r"steps\[1\]\.odometry\[2\]"):
+        Tableau.from_dict(doc([steps[0], {"view": "b", "odometry": [1, 2, math.nan]}]))

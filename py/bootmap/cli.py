@@ -37,6 +37,10 @@ def cmd_map(args: argparse.Namespace) -> int:
     tableau = _with_views(load(args.tableau))
     resolver = Resolver(axioms=args.axioms, levels=args.levels, quantum_deg=args.quantum,
                         time_limit=args.time_limit, max_models=args.max_models, misreads=args.misreads)
+    if args.close_loops:
+        from .mapping.loops import LoopCloser
+
+        resolver = LoopCloser(resolver)
     left = _time_left(args)
     deadline = Deadline.after(None) if left is None else Deadline(time.perf_counter() + left, args.time_limit)
     try:
@@ -182,7 +186,8 @@ def _log_experiment(args: argparse.Namespace) -> int:
 
     r = run_log_experiment(args.log, out_dir=args.output, seed=args.seed, k_max=args.k_max,
                            time_limit=args.time_limit, quantum_deg=args.quantum, view_criterion=args.views,
-                           progress=True, junctions=JunctionDetector() if args.junctions else None)
+                           progress=True, junctions=JunctionDetector() if args.junctions else None,
+                           mapper=args.map)
     print("\n".join(headline(r)))
     print(f"report: {args.output}/report.md")
     return EXIT_FAILURE if "error" in r["map"] else EXIT_OK
@@ -269,6 +274,11 @@ def build_parser() -> argparse.ArgumentParser:
                    help="read every view as seen; by default a few suspect views may be taken as misclustered "
                         "images when that explains the experience with far fewer dstates (listed as "
                         "suspect_steps)")
+    p.add_argument("--close-loops", action="store_true",
+                   help="the map odometry supports instead of the fewest dstates: visits that dead reckoning "
+                        "(the steps' odometry, else the actions) puts at one place, or that the robot reached "
+                        "by the same actions, are joined where every axiom accepts it; views count as soft "
+                        "evidence (bootmap.mapping.loops). For logs, whose views barely tell dstates apart")
     _add_theory_options(p)
     p.set_defaults(handler=cmd_map)
 
@@ -328,6 +338,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--views", choices=("auto", "M", "davies-bouldin"), default="auto",
                    help="--log: how k is chosen for the map's views (auto: M's k unless M picks 1 or 2, then "
                         "the Davies-Bouldin index's; both are reported)")
+    p.add_argument("--map", choices=("loops", "fewest"), default="loops",
+                   help="--log: how the map is found: loops (default: odometry proposes, every axiom checks; "
+                        "bootmap.mapping.loops) or fewest (the paper's minimal map, which the log's views "
+                        "cannot carry)")
     p.add_argument("--junctions", action="store_true",
                    help="--log: a junction passed straight through (a side corridor's opening, mid-travel) is "
                         "a dstate too, not only a turn's two ends (bootmap.logs.dstates.JunctionDetector)")

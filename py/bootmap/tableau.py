@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from importlib import resources
 from pathlib import Path
@@ -66,6 +66,9 @@ class Step:
     image: tuple[float, ...] | None = None
     truth: str | int | None = None
     pose: tuple[float, float, float] | None = None
+    #: The robot's own dead-reckoned pose here (x, y metres, theta radians, in its odometry frame): evidence
+    #: the learning may use, where ``pose`` is the truth it never sees.
+    odometry: tuple[float, float, float] | None = None
 
     def to_dict(self) -> dict:
         d: dict[str, Any] = {}
@@ -79,6 +82,8 @@ class Step:
             d["truth"] = self.truth
         if self.pose is not None:
             d["pose"] = list(self.pose)
+        if self.odometry is not None:
+            d["odometry"] = list(self.odometry)
         return d
 
 
@@ -112,7 +117,7 @@ class Tableau:
         """A copy with the given view labels (one per step), e.g. after clustering images."""
         if len(views) != len(self.steps):
             raise TableauError(f"got {len(views)} views for {len(self.steps)} steps")
-        steps = tuple(Step(v, s.action, s.image, s.truth, s.pose) for v, s in zip(views, self.steps))
+        steps = tuple(replace(s, view=v) for v, s in zip(views, self.steps))
         return Tableau(steps, self.world, dict(self.meta))
 
     def prefix(self, n: int) -> "Tableau":
@@ -120,7 +125,7 @@ class Tableau:
         if not 1 <= n <= len(self.steps):
             raise TableauError(f"a prefix of 1 to {len(self.steps)} time points, not {n}")
         last = self.steps[n - 1]
-        steps = self.steps[:n - 1] + (Step(last.view, None, last.image, last.truth, last.pose),)
+        steps = self.steps[:n - 1] + (replace(last, action=None),)
         return Tableau(steps, self.world, dict(self.meta))
 
     @property
@@ -155,7 +160,7 @@ class Tableau:
                 raise TableauError(f"has {len(step.image)} values where the stored steps have {length}",
                                    f"{source}: steps[{i}].image")
         last = self.steps[-1]
-        joined = Step(last.view, link, last.image, last.truth, last.pose)
+        joined = replace(last, action=link)
         return Tableau(self.steps[:-1] + (joined,) + new.steps, self.world, dict(self.meta))
 
     def to_dict(self) -> dict:
@@ -301,10 +306,9 @@ def _step(d: dict, i: int, last: bool, source: str) -> Step:
     image = None
     if "image" in d:
         image = tuple(_finite(x, f"{where}.image[{j}]") for j, x in enumerate(d["image"]))
-    pose = None
-    if "pose" in d:
-        pose = tuple(_finite(x, f"{where}.pose[{j}]") for j, x in enumerate(d["pose"]))
-    return Step(d.get("view"), action, image, d.get("truth"), pose)  # type: ignore[arg-type]
+    pose, odometry = (tuple(_finite(x, f"{where}.{key}[{j}]") for j, x in enumerate(d[key])) if key in d else None
+                      for key in ("pose", "odometry"))
+    return Step(d.get("view"), action, image, d.get("truth"), pose, odometry)  # type: ignore[arg-type]
 
 
 def _action(a: dict, where: str) -> Action:

@@ -28,12 +28,25 @@ def test_two_laps_of_a_square_give_its_map_by_hand(square_run):
     # 4 corners, each turned at twice: 16 dstates, 8 true ones (a corner and a heading), 4 places, 4 sides.
     assert (r["images"], r["truth"]["true_dstates"]) == (16, 8)
     m = r["map"]
-    assert (m["dstates"], m["places"], m["paths"]) == (8, 4, 4) and m["proved_minimal"]
+    # By loop closing (the default): exact odometry puts every revisit on its first visit.
+    assert (m["dstates"], m["places"], m["paths"]) == (8, 4, 4) and m["found_by"] == "loop closing"
     assert (m["true_dstates"], m["true_places"]) == (8, 4)
     assert m["dstate_accuracy"] == 1.0 and m["place_accuracy"] == 1.0
     assert m["every_visit_own_dstate_accuracy"] == 0.5  # each true dstate seen twice: half by renaming
     # Exact odometry: dead-reckoned places are the true ones.
     assert r["dead_reckoning"] == {"dstates": 8, "dstate_accuracy": 1.0}
+
+
+def test_the_papers_fewest_dstates_give_the_square_too(square):
+    r = run_log_experiment(square, mapper="fewest")
+    m = r["map"]
+    assert (m["dstates"], m["places"], m["paths"]) == (8, 4, 4)
+    assert m["found_by"] == "fewest dstates" and m["proved_minimal"] and m["dstate_accuracy"] == 1.0
+
+
+def test_an_unknown_mapper_is_refused(square):
+    with pytest.raises(BadInput, match="unknown mapper 'guess'"):
+        run_log_experiment(square, mapper="guess")
 
 
 def test_the_square_meets_every_target_and_says_so(square_run):
@@ -103,14 +116,12 @@ def test_the_whole_killian_log_in_under_two_minutes(tmp_path, capsys):
     r = json.loads((tmp_path / "results.json").read_text())
     assert (r["scans"], r["images"], r["truth"]["true_dstates"]) == (3873, 98, 75)
     assert sum(r["timings"].values()) < 120
-    # Measured, not promised: with the robot's action types on a 90-degree grid the exact headings find
-    # no map within the limit (exit 1, said in the report); were one found, it would have to beat chance.
+    # The map by loop closing meets the target (80% of visits in their true dstate) and beats
+    # a dstate per visit, which most of the log's dstates (seen once) would make look good.
     m, nn = r["map"], r["nn_revisited"]
-    assert code == (0 if "dstate_accuracy" in m else 1)
-    if code == 0:
-        assert m["dstate_accuracy"] > 0.5
-    else:
-        assert "time limit" in m["error"]
+    assert code == 0 and m["found_by"] == "loop closing"
+    assert m["dstate_accuracy"] >= 0.8 and r["targets"]["visits_in_true_dstate"]["met"]
+    assert m["dstate_accuracy"] > m["every_visit_own_dstate_accuracy"]
     # Tolerating a turn of a few beams helps nearest neighbour; odometry is good locally.
     assert nn["shift"]["revisited"] > nn["raw"]["revisited"]
     assert r["dead_reckoning"]["dstate_accuracy"] > 0.8

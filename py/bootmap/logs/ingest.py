@@ -9,8 +9,10 @@ actions odometry measured between them.
    dstate where a travel passes straight through a junction.
 3. :func:`log_tableau` writes one step per dstate: the scan as an image (the simulator's format), the
    action to the next dstate as odometry measured it (a turn: its angle; a travel: its length and net
-   heading change), the true pose as ``pose`` and, when the log has true poses, the true dstate as
-   ``truth`` (:mod:`bootmap.logs.truth`). The learning never reads ``pose`` or ``truth``.
+   heading change), the odometry's pose as ``odometry`` (evidence: :mod:`bootmap.mapping.loops`), the
+   true pose as ``pose`` and, when the log has true poses, the true dstate as ``truth``
+   (:mod:`bootmap.logs.truth`). The learning never reads ``pose`` or ``truth``. The tableau says
+   ``passes_through``: the robot did not stop at its dstates, so a travel may have passed some.
 """
 
 from __future__ import annotations
@@ -99,7 +101,7 @@ def log_tableau(scans: list[Scan], detector: TurnDetector = TurnDetector(), max_
     truth = _truth(scans, chosen, actions, radius_m) if has_truth else [None] * len(chosen)
     steps = tuple(Step(action=actions[k] if k < len(actions) else None,
                        image=to_image(scans[i], IMAGE_BEAMS, max_range), truth=truth[k],
-                       pose=_rounded(scans[i].truth) if has_truth else None)
+                       pose=_rounded(scans[i].truth) if has_truth else None, odometry=_rounded(scans[i].odometry))
                   for k, i in enumerate(chosen))
     meta = _meta(scans, chosen, turns, detector, max_range, radius_m, source, has_truth, junctions, passes)
     return Tableau(steps, None, meta)
@@ -141,7 +143,9 @@ def _rounded(pose) -> tuple[float, float, float]:
 
 
 def _meta(scans, chosen, turns, detector, max_range, radius_m, source, has_truth, junctions, passes) -> dict:
-    meta = {"generator": "bootmap.logs", "source": source, "scans": len(scans),
+    # The robot drove on through dstates (a junction passed straight, a corner it only slowed at): a
+    # travel may end at any dstate further on (causal.lp's travel_action_passing).
+    meta = {"generator": "bootmap.logs", "source": source, "scans": len(scans), "passes_through": True,
             "laser": {"angle_min": IMAGE_ANGLE_MIN, "angle_max": IMAGE_ANGLE_MAX,
                       "angle_increment": (IMAGE_ANGLE_MAX - IMAGE_ANGLE_MIN) / (IMAGE_BEAMS - 1),
                       "range_max": max_range, "beams": IMAGE_BEAMS,

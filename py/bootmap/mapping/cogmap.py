@@ -75,6 +75,9 @@ class CognitiveMap:
     suspect_steps : list of dict
         The time points whose views the map takes as misreads: ``t``, the view ``observed``, the view
         its dstate shows (``expected``) and what calling it a misread cost (a dstate costs 4).
+    found_by : str
+        ``"fewest dstates"`` (the paper's minimal map, :class:`~.resolver.Resolver`) or ``"loop closing"``
+        (odometry's merges that every axiom accepts, :class:`~.loops.LoopCloser`; never proved minimal).
     retyped_steps : list of dict
         The actions the map takes as mistyped (:func:`~bootmap.mapping.motion.type_suspects`): ``t``,
         ``kind``, the reading (``measured_deg``), the type it was learned as (``learned_deg``), the angle
@@ -105,6 +108,7 @@ class CognitiveMap:
     action_types: list[ActionType] = field(default_factory=list)
     suspect_steps: list[dict] = field(default_factory=list)
     retyped_steps: list[dict] = field(default_factory=list)
+    found_by: str = "fewest dstates"
 
     @property
     def n_dstates(self) -> int:
@@ -126,7 +130,8 @@ class CognitiveMap:
         return {
             "summary": {"dstates": self.n_dstates, "places": self.n_places, "paths": self.n_paths,
                         "proved_minimal": self.minimal, "minimal_maps": self.n_models, "unique": self.unique,
-                        "minimal_maps_capped": self.models_capped, "levels": self.levels},
+                        "minimal_maps_capped": self.models_capped, "levels": self.levels,
+                        "found_by": self.found_by},
             "steps": self.steps,
             "dstates": {d: {"view": self.views[d], "heading_deg": self.headings.get(d),
                             "place": self.place_of.get(d),
@@ -147,7 +152,8 @@ class CognitiveMap:
 
     def to_text(self, all_steps: bool = True) -> str:
         lines = [f"{self.n_dstates} dstates, {self.n_places} places, {self.n_paths} paths; "
-                 + ("NOT PROVED MINIMAL (time-out)" if not self.minimal else
+                 + ("loop-closed from odometry, every axiom holds (not minimal)" if self.found_by == "loop closing"
+                    else "NOT PROVED MINIMAL (time-out)" if not self.minimal else
                     "unique minimal map" if self.unique else
                     f"{self.n_models}{'+' if self.models_capped else ''} minimal maps")
                  + f"  (levels: {', '.join(self.levels)}; {self.stats.total_s:.3f} s)", ""]

@@ -43,7 +43,7 @@ from clingo import String, Symbol
 from ..errors import ExplainError, SolveTimeout
 from ..tableau import Tableau
 from .cogmap import CognitiveMap, action_text
-from .facts import action_symbol, excerpt_facts, read_actions, tableau_facts
+from .facts import action_symbol, action_symbols, excerpt_facts, read_actions, tableau_facts
 from .grounding import Classes, Deadline, Grounding, key_with_view, prepass
 from .misreads import find_suspects
 from .proof import Failure, Names, ProofNode, merged, node, rule_dict
@@ -237,7 +237,7 @@ class Explainer:
         cmap = self.minimal_map(tableau, deadline or Deadline.after(self.time_limit))
         t, _ = _time_points(cmap, t, t)
         angles, _ = read_actions(tableau, self.quantum_deg)
-        actions = [action_symbol(s.action, a) for s, a in zip(tableau.steps, angles)]
+        actions = action_symbols(tableau, angles)
         suspect = {s.t: s for s in find_suspects(tableau.views, actions)}.get(t)
         taken = {s["t"]: s for s in cmap.suspect_steps}.get(t)
         d = cmap.dstate_of[t]

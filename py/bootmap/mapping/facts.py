@@ -19,7 +19,7 @@ from clingo import Function, Number, String, Symbol
 
 from ..tableau import Action, Tableau, Travel, Turn
 from .motion import ActionType, MotionPrimitives, action_types, length_types, measured_angle, quantise
-from .vocabulary import LENGTH, RESUME, TRAVEL, TURN, VIEW, action_term
+from .vocabulary import LENGTH, PASSES_THROUGH, RESUME, TRAVEL, TURN, VIEW, action_term
 
 
 def read_actions(tableau: Tableau, quantum_deg: float | None = None) -> tuple[list[int], list[ActionType]]:
@@ -43,11 +43,24 @@ def typed_actions(tableau: Tableau, quantum_deg: float | None = None) -> tuple[l
     return angles, action_types(actions, angles), None
 
 
-def action_symbol(action: Action | None, angle: int) -> Symbol | None:
-    """The action as the causal level names it (``turn(-90)``, ``travel``), or None after the last step."""
+def action_symbol(action: Action | None, angle: int, length: int | None = None) -> Symbol | None:
+    """The action as the causal level names it (``turn(-90)``, ``travel``; ``travel(79)`` with the travel's
+    length type where the tableau passes through dstates), or None after the last step."""
     if action is None:
         return None
-    return action_term("turn" if isinstance(action, Turn) else "travel", angle)
+    return action_term("turn" if isinstance(action, Turn) else "travel", angle, length)
+
+
+def passes_through(tableau: Tableau) -> bool:
+    """Whether the robot drove through dstates without stopping at them (a log, whose dstates are chosen
+    afterwards: ``meta["passes_through"]``), so that a travel may end at any dstate further on."""
+    return bool(tableau.meta.get("passes_through", False))
+
+
+def action_symbols(tableau: Tableau, angles: Sequence[int]) -> list[Symbol | None]:
+    """Every step's action as the causal level names it (:func:`action_symbol`), None after the last."""
+    lengths = travel_lengths(tableau) if passes_through(tableau) else {}
+    return [action_symbol(s.action, a, lengths.get(t)) for t, (s, a) in enumerate(zip(tableau.steps, angles))]
 
 
 def tableau_facts(tableau: Tableau, quantum_deg: float | None = None,
@@ -74,6 +87,8 @@ def tableau_facts(tableau: Tableau, quantum_deg: float | None = None,
             out.append(Function(name, [time, numbers.get(angle) or numbers.setdefault(angle, Number(angle))]))
             if t in lengths:
                 out.append(Function(length_name, [time, Number(lengths[t])]))
+    if passes_through(tableau):
+        out.append(PASSES_THROUGH())
     return out
 
 
@@ -100,7 +115,8 @@ def excerpt_facts(facts: Sequence[Symbol], keep: Iterable[int]) -> list[Symbol]:
     An excerpt is how an explanation states its evidence: these steps alone force the conclusion.
     """
     kept = set(keep)
-    out = [sym for sym in facts
-           if (t := sym.arguments[0].number) in kept and (VIEW.matches(sym) or t + 1 in kept)]
+    out = [sym for sym in facts if not sym.arguments]  # what holds of the whole tableau (passes_through)
+    out += [sym for sym in facts if sym.arguments
+            and (t := sym.arguments[0].number) in kept and (VIEW.matches(sym) or t + 1 in kept)]
     out += [RESUME(t) for t in sorted(kept) if t > 0 and t - 1 not in kept]
     return out

@@ -34,7 +34,7 @@ from itertools import combinations
 
 from ..tableau import Tableau
 from .cogmap import CognitiveMap
-from .facts import action_symbol, read_actions
+from .facts import action_symbols, read_actions
 from .grounding import Deadline
 from .resolver import Resolver
 from .vocabulary import action_word
@@ -145,7 +145,7 @@ class Rehearsal:
             return Plan([])
         angles, _ = read_actions(tableau, resolver.quantum_deg)
         actions = [action_word(a) if a is not None else None
-                   for a in (action_symbol(s.action, x) for s, x in zip(tableau.steps, angles))]
+                   for a in action_symbols(tableau, angles)]
         views = [s.view for s in tableau.steps]
         hyps = [_Hypothesis.of(m, views, actions) for m in maps]
         taken_at_view: dict[str, set[str]] = {}

@@ -46,7 +46,7 @@ from ..images import as_images
 from ..tableau import Tableau
 from .cogmap import CognitiveMap, SolveStats, Try, build_map
 from .diagnosis import diagnosed
-from .facts import action_symbol, tableau_facts, typed_actions
+from .facts import action_symbols, tableau_facts, typed_actions
 from .motion import TypeSuspect, action_types, type_suspects
 from .grounding import Classes, Deadline, Grounding, PartialFeatures, key_with_view, prepass
 from .theory import Theory, load_theory
@@ -382,7 +382,7 @@ class _Search:
                        - set(self.suspects))
         # Each may have been misread from the views its contexts show instead (any view where they show
         # none): every other view would make each ghost a candidate of every class with its heading.
-        actions = [action_symbol(s.action, a) for s, a in zip(self.tableau.steps, self.angles)]
+        actions = action_symbols(self.tableau, self.angles)
         expected = context_views(self.tableau.views, actions, times)
         return [Suspect(t, MISREAD_COST, expected[t], GHOST) for t in times]
 
@@ -444,7 +444,7 @@ class _Search:
         if not self.resolver.misreads or (found and not rare_clustered_views(self.tableau)):
             return []
         images = _images(self.tableau)
-        actions = [action_symbol(s.action, a) for s, a in zip(self.tableau.steps, self.angles)]
+        actions = action_symbols(self.tableau, self.angles)
         suspects = find_suspects(self.tableau.views, actions, images)
         if images is None:
             # A rare view is suspect where views come from clustering images (one image a passer-by

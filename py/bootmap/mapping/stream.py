@@ -45,7 +45,7 @@ from clingo import Function, Number, Symbol
 
 from ..tableau import Tableau
 from .cogmap import CognitiveMap, SolveStats, Try, build_map, step_row
-from .facts import action_symbol, tableau_facts, travel_lengths, typed_actions
+from .facts import action_symbol, action_symbols, passes_through, tableau_facts, travel_lengths, typed_actions
 from .grounding import Deadline, Grounding, prepass
 from .misreads import MIN_VISITS, find_suspects, has_images, rare_clustered_views
 from .motion import ActionType, type_suspects
@@ -116,6 +116,8 @@ class MapStream:
         n = len(old)
         if len(tableau) <= n or not _extends(tableau, old):
             return None
+        if passes_through(tableau):
+            return None  # a travel may end at any dstate further on: determinism alone places nothing
         if angles[:n - 1] != self._angles[:n - 1]:
             return None  # the action types learned from the longer experience read an old action anew
         self._images = self._images and all(s.image is not None for s in tableau.steps[n:])
@@ -155,7 +157,7 @@ class MapStream:
         return replace(cmap, steps=rows, dstate_of=list(dstate_of), action_types=types, stats=stats)
 
     def _suspect(self, tableau: Tableau, angles: list[int]) -> bool:
-        actions = [action_symbol(s.action, a) for s, a in zip(tableau.steps, angles)]
+        actions = action_symbols(tableau, angles)
         return bool(find_suspects(tableau.views, actions))
 
     def _exact_stands(self, facts: list[Symbol], dstate_of: list[str]) -> bool:

@@ -108,6 +108,7 @@ TURN = Predicate("turn", 2, "tableau", "at t{0} it turned {1} degrees")
 TRAVEL = Predicate("travel", 2, "tableau", "at t{0} it travelled along the path (net heading change {1} degrees)")
 LENGTH = Predicate("length", 2, "tableau", "the travel from t{0} was {1} dm long")
 RESUME = Predicate("resume", 1, "tableau", "the evidence resumes at t{0} after a gap (headings start afresh)")
+PASSES_THROUGH = Predicate("passes_through", 0, "tableau", "the robot drove through dstates without stopping at them")
 
 # --------------------------------------------------------------------------------------------------
 # The search layout (core/partition.lp reads these)
@@ -182,16 +183,22 @@ def predicate(symbol: Symbol) -> Predicate | None:
 # Actions, as the causal level names them
 # --------------------------------------------------------------------------------------------------
 
-def action_term(kind: str, angle: int) -> Symbol:
+def action_term(kind: str, angle: int, length: int | None = None) -> Symbol:
     """The term causal.lp makes of an action (``turn_action``, ``travel_action``): a turn by its
-    quantised angle, ``turn(A)``, or ``travel`` whatever its length and bend."""
-    return Function("turn", [Number(angle)]) if kind == "turn" else Function("travel")
+    quantised angle, ``turn(A)``, or ``travel`` whatever its length and bend; where the robot drove
+    through dstates without stopping (``travel_action_passing``), a travel by its length type,
+    ``travel(L)``."""
+    if kind == "turn":
+        return Function("turn", [Number(angle)])
+    return Function("travel") if length is None else Function("travel", [Number(length)])
 
 
 def action_word(term: Symbol) -> str:
     """An action term as a person reads it: ``turn(-90)`` -> "turn -90", ``travel`` -> "travel"."""
     if term.name == "turn" and len(term.arguments) == 1:
         return f"turn {term.arguments[0].number:+d}"
+    if term.name == "travel" and len(term.arguments) == 1:
+        return f"travel {term.arguments[0].number / 10:g} m"
     return term.name
 
 

@@ -99,6 +99,8 @@ class StepIn(BaseModel):
                                                                  "(e.g. 180 laser ranges in metres), values within +-1e9.")
     truth: Union[StrictStr, IntegerValued] = optional(description="The true dstate id, for evaluation only.")
     pose: list[float] = optional(min_length=3, max_length=3, description="[x, y, theta], for evaluation only.")
+    odometry: list[float] = optional(min_length=3, max_length=3,
+                                     description="The robot's own dead-reckoned [x, y, theta] at this dstate.")
 
     @model_validator(mode="after")
     def _view_or_image(self) -> "StepIn":
@@ -151,6 +153,8 @@ class MapSummary(Out):
     unique: bool = Field(description="Exactly one minimal map explains the tableau.")
     minimal_maps_capped: bool
     levels: list[str]
+    found_by: str = Field(description="How the map was found: 'fewest dstates' (the paper's minimal map) or "
+                                      "'loop closing' (odometry's merges every axiom accepts).")
 
 
 class StepRow(Out):

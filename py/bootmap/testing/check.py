@@ -80,7 +80,7 @@ def check_map(tableau: Tableau, dstate_of: Sequence[Hashable],
     exp = Experience.build(tableau, [str(d) for d in dstate_of], quantum_deg, times)
     out = _one_view(exp) + _deterministic(exp)
     if "metrical" in levels:
-        out += _one_heading(exp) + _one_length(exp)
+        out += _one_heading(exp) + ([] if exp.passes_through else _one_length(exp))
     if "topological" in levels:
         out += Topology.build(exp).violations()
     return out
@@ -101,6 +101,7 @@ class Experience:
     actions: list[object]               # "travel" or a quantised turn angle (int), or None
     changes: list[int | None]           # quantised heading change of each action
     lengths: list[int | None]           # a kept travel's length in decimetres, else None
+    passes_through: bool = False        # a log: travels are named by their length, which is no feature
     next: dict[tuple[str, object], dict[str, int]] = field(default_factory=dict)
 
     @classmethod
@@ -111,10 +112,14 @@ class Experience:
         steps = [tableau.steps[t] for t in times]
         linked = [s.action if t + 1 in kept else None for t, s in zip(times, steps)]
         changes = [None if a is None else _heading_change(a, quantum_deg) for a in linked]
-        # A turn is named by its quantised angle (which is also its heading change), a travel by "travel".
-        actions = [None if a is None else c if isinstance(a, Turn) else TRAVEL for a, c in zip(linked, changes)]
+        # A turn is named by its quantised angle (which is also its heading change), a travel by "travel"
+        # (where the robot drove through dstates, by ("travel", its length in decimetres)).
         lengths = [round(a.distance_m * 10) if isinstance(a, Travel) else None for a in linked]
-        exp = cls(times, dstate_of, [s.view for s in steps], actions, changes, lengths)   # type: ignore[arg-type]
+        passing = bool(tableau.meta.get("passes_through", False))
+        actions = [None if a is None else c if isinstance(a, Turn) else (TRAVEL, n) if passing else TRAVEL
+                   for a, c, n in zip(linked, changes, lengths)]
+        exp = cls(times, dstate_of, [s.view for s in steps], actions, changes, lengths,   # type: ignore[arg-type]
+                  passing)
         for i, a in enumerate(actions):
             if a is not None:
                 # Remember the first time each transition was made, to cite it.
@@ -132,6 +137,8 @@ class Experience:
 
 
 def action_name(a: object) -> str:
+    if isinstance(a, tuple):
+        return f"travel({a[1]})"
     return TRAVEL if a == TRAVEL else f"turn({a})"
 
 
@@ -358,7 +365,7 @@ def _links(exp: Experience) -> tuple[list, set, list]:
     """turn_link (a turn that is not a turn-around), around (both ways) and travel_link, from next/3."""
     turn_links, around, travel_links = [], set(), []
     for d, a, d2 in exp.transitions():
-        if a == TRAVEL:
+        if a == TRAVEL or isinstance(a, tuple):
             travel_links.append((d, d2))
         elif a == AROUND:
             around |= {(d, d2), (d2, d)}

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
-from ..tableau import Step, Tableau, Travel, Turn
+from ..tableau import Tableau, Travel, Turn
 
 
 def with_odometry_noise(tableau: Tableau, turn_sd: float, drift_sd: float, rng: np.random.Generator) -> Tableau:
@@ -23,7 +25,7 @@ def with_odometry_noise(tableau: Tableau, turn_sd: float, drift_sd: float, rng: 
             a = Turn(a.angle_deg + float(rng.normal(0, turn_sd)))
         elif isinstance(a, Travel):
             a = Travel(a.distance_m, a.heading_change_deg + float(rng.normal(0, drift_sd)))
-        steps.append(Step(s.view, a, s.image, s.truth, s.pose))
+        steps.append(replace(s, action=a))
     return Tableau(tuple(steps), tableau.world, dict(tableau.meta))
 
 
@@ -48,7 +50,7 @@ def with_misreads(tableau: Tableau, fraction: float, rng: np.random.Generator) -
         others = labels != views[i]
         p = counts[others] / counts[others].sum()
         s = steps[i]
-        steps[i] = Step(str(rng.choice(labels[others], p=p)), s.action, s.image, s.truth, s.pose)
+        steps[i] = replace(s, view=str(rng.choice(labels[others], p=p)))
     return Tableau(tuple(steps), tableau.world, dict(tableau.meta)), wrong
 
 
@@ -71,5 +73,5 @@ def with_mistyped_action(tableau: Tableau, rng: np.random.Generator, off_deg: tu
     steps = list(tableau.steps)
     s = steps[at]
     off = float(rng.uniform(*off_deg)) * float(rng.choice([-1.0, 1.0]))
-    steps[at] = Step(s.view, Turn(s.action.angle_deg + off), s.image, s.truth, s.pose)  # type: ignore[union-attr]
+    steps[at] = replace(s, action=Turn(s.action.angle_deg + off))  # type: ignore[union-attr]
     return Tableau(tuple(steps), tableau.world, dict(tableau.meta)), at

@@ -1,0 +1,168 @@
+"""Loop closing (bootmap.mapping.loops): odometry proposes which visits are one dstate, every axiom checks;
+and the axioms for a robot that drove through dstates without stopping (passes_through)."""
+
+import itertools
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, note, settings
+from hypothesis import strategies as st
+
+from bootmap.errors import SolveTimeout
+from bootmap.mapping.grounding import Deadline
+from bootmap.mapping.loops import LoopCloser, dead_reckoning
+from bootmap.mapping.resolver import Resolver
+from bootmap.sim.simulation import simulate
+from bootmap.sim.world import load_world
+from bootmap.mapping.facts import typed_actions
+from bootmap.tableau import Tableau, Travel, Turn
+from bootmap.testing.check import check_map, true_partition
+from bootmap.testing.gridworld import random_world, walk
+from bootmap.testing.noise import with_odometry_noise
+
+FORMAT = "bootmap.tableau/1"
+
+
+def square_laps(laps: int, side_m: float = 6.0, view=lambda corner: "corner") -> Tableau:
+    """Laps of a square room, turning left at each corner; truth names corner and heading."""
+    steps = []
+    for lap in range(laps):
+        for corner in range(4):
+            heading = corner * 90
+            steps.append({"view": view(corner), "truth": f"c{corner}:{heading}",
+                          "action": {"type": "travel", "distance_m": side_m}})
+            steps.append({"view": view((corner + 1) % 4), "truth": f"c{(corner + 1) % 4}:{heading}",
+                          "action": {"type": "turn", "angle_deg": 90}})
+    steps.append({"view": view(0), "truth": "c0:0"})
+    return Tableau.from_dict({"format": FORMAT, "steps": steps})
+
+
+def same_partition(a, b) -> bool:
+    return all((a[i] == a[j]) == (b[i] == b[j]) for i, j in itertools.combinations(range(len(a)), 2))
+
+
+def test_odometry_closes_the_loops_that_views_cannot():
+    square = square_laps(3)
+    cmap = LoopCloser().resolve(square)
+    assert same_partition(cmap.dstate_of, true_partition(square))
+    assert (cmap.n_dstates, cmap.n_places, cmap.n_paths) == (8, 4, 4)
+    assert cmap.found_by == "loop closing" and not cmap.minimal and cmap.suspect_steps == []
+    assert "loop-closed from odometry" in cmap.to_text()
+
+
+def test_a_misread_view_is_outvoted_and_named():
+    square = square_laps(3, view=lambda corner: f"V{corner}")
+    steps = [s.to_dict() for s in square.steps]
+    steps[9]["view"] = "V3"  # corner 1 seen as corner 3, once
+    misread = Tableau.from_dict({"format": FORMAT, "steps": steps})
+    cmap = LoopCloser().resolve(misread)
+    assert same_partition(cmap.dstate_of, true_partition(square))
+    assert [(s["t"], s["observed"], s["expected"]) for s in cmap.suspect_steps] == [(9, "V3", "V1")]
+
+
+def test_dead_reckoning_reads_odometry_or_else_the_actions():
+    square = square_laps(1, side_m=5.0)
+    xy, along = dead_reckoning(square)
+    assert np.allclose(xy[[0, 2, 4, 6, 8]], [[0, 0], [5, 0], [5, 5], [0, 5], [0, 0]], atol=1e-9)
+    assert along[-1] == pytest.approx(20.0)
+    steps = [{**s.to_dict(), "odometry": [t, 2 * t, 0]} for t, s in enumerate(square.steps)]
+    xy, along = dead_reckoning(Tableau.from_dict({"format": FORMAT, "steps": steps}))
+    assert xy[3].tolist() == [3, 6] and along[2] == pytest.approx(5 + math.hypot(1, 2))  # max(hop, travel)
+
+
+def test_out_of_time_gives_the_last_map_the_axioms_accepted_or_none():
+    with pytest.raises(SolveTimeout) as e:
+        LoopCloser().resolve(square_laps(3), Deadline.after(0.0))
+    assert e.value.stage == "loop closing"
+
+
+@st.composite
+def noisy_walks(draw):
+    seed = draw(st.integers(0, 2**32 - 1), label="seed")
+    rng = np.random.default_rng(seed)
+    world = random_world(rng, draw(st.integers(3, 4)), draw(st.integers(3, 4)), extra_edges=draw(st.integers(0, 3)),
+                         landmarks=draw(st.sampled_from([0.0, 0.3])), cell_m=8.0)
+    clean = walk(world, draw(st.integers(10, 60)), rng, policy=draw(st.sampled_from(["random", "explore"])))
+    noise = draw(st.sampled_from([0.0, 2.0, 5.0]), label="turn_sd")
+    return world, with_odometry_noise(clean, noise, noise / 2, rng)
+
+
+def _typed(action, angle):
+    if action is None:
+        return None
+    return Turn(angle) if isinstance(action, Turn) else Travel(action.distance_m, angle)
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(noisy_walks())
+def test_a_loop_closed_map_satisfies_every_axiom_and_keeps_within_odometry(walked):
+    world, tableau = walked
+    note(f"tableau: {tableau.dumps()}")
+    closer = LoopCloser()
+    cmap = closer.resolve(tableau)
+    # Every axiom holds (the independent re-check, on the angles of the learned action types), each
+    # dstate showing the view the map gives it (the others are misreads) ...
+    angles, _, _ = typed_actions(tableau)
+    typed = Tableau(tuple(replace(s, view=cmap.views[d], action=_typed(s.action, a))
+                          for s, d, a in zip(tableau.steps, cmap.dstate_of, angles + [None])))
+    assert check_map(typed, cmap.dstate_of, quantum_deg=1) == []
+    assert {s["t"] for s in cmap.suspect_steps} == {t for t, s in enumerate(tableau.steps)
+                                                   if s.view != cmap.views[cmap.dstate_of[t]]}
+    # ... and no two visits of one dstate face two ways or lie beyond what odometry may drift between them.
+    heading = np.concatenate([[0], np.cumsum(angles)]) % 360
+    xy, along = dead_reckoning(tableau, angles)
+    for i, j in itertools.combinations(range(len(tableau)), 2):
+        if cmap.dstate_of[i] == cmap.dstate_of[j]:
+            assert heading[i] == heading[j]
+            assert math.dist(xy[i], xy[j]) <= closer.radius_m + closer.drift_share * (along[j] - along[i]) + 1e-9
+    assert LoopCloser().resolve(tableau).dstate_of == cmap.dstate_of  # deterministic
+
+
+@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.integers(0, 2**32 - 1))
+def test_exact_odometry_on_a_walk_with_landmarks_everywhere_gives_the_true_map(seed):
+    # Every node looks different: the true partition is what views and odometry both say.
+    rng = np.random.default_rng(seed)
+    world = random_world(rng, 4, 4, extra_edges=2, landmarks=1.0, letters="ABCDEFGHIJKLMNOP", cell_m=8.0)
+    tableau = walk(world, 40, rng, policy="explore")
+    note(f"tableau: {tableau.dumps()}")
+    cmap = LoopCloser().resolve(tableau)
+    assert same_partition(cmap.dstate_of, true_partition(tableau)) and cmap.suspect_steps == []
+
+
+# -- the axioms for a robot that drove through dstates ------------------------------------------------
+
+def corridor_passed_through(passes_through: bool) -> Tableau:
+    """A corridor A - B - C: from A east to B (5 m), back to A, then east again straight past B to C (10 m).
+    Where the robot stopped at every dstate, the second travel from A east would have ended at B."""
+    go = lambda m: {"type": "travel", "distance_m": m}  # noqa: E731
+    back = {"type": "turn", "angle_deg": 180}
+    steps = [{"view": "a", "action": go(5)}, {"view": "b", "action": back}, {"view": "b'", "action": go(5)},
+             {"view": "a'", "action": back}, {"view": "a", "action": go(10)}, {"view": "c"}]
+    return Tableau.from_dict({"format": FORMAT, "steps": steps,
+                              "meta": {"passes_through": True} if passes_through else {}})
+
+
+def test_a_travel_may_pass_a_dstate_only_where_the_tableau_says_so():
+    passing = Resolver().resolve(corridor_passed_through(True))
+    assert passing.dstate_of[0] == passing.dstate_of[4]  # A east both times: travels of 5 and 10 m differ
+    stopping = Resolver().resolve(corridor_passed_through(False))
+    assert stopping.dstate_of[0] != stopping.dstate_of[4]  # from one dstate a travel always goes as far
+    # The independent re-check of the axioms agrees on both readings.
+    assert check_map(corridor_passed_through(True), passing.dstate_of) == []
+    assert check_map(corridor_passed_through(False), passing.dstate_of) != []
+    # On the topological level both travels from A east run along one path, B before C.
+    assert passing.n_paths == 1 and len(passing.paths["Pa0"]) == 3
+
+
+
+def test_odometry_alone_maps_a_simulated_taylor_hall():
+    # The simulated robot (pymunk, its real-robot odometry) explores the paper's building; with every
+    # view the same, the map is still the true one: dead reckoning on the learned action types.
+    world = load_world("taylor_hall")
+    tableau = simulate(world, policy=world.policy, steps=100, seed=7)
+    blind = tableau.with_views(["corridor"] * len(tableau))
+    cmap = LoopCloser().resolve(blind)
+    assert cmap.n_dstates == 20 and same_partition(cmap.dstate_of, true_partition(tableau))
