@@ -14,6 +14,7 @@ from bootmap.errors import SolveTimeout
 from bootmap.mapping.grounding import Deadline
 from bootmap.mapping.loops import LoopCloser, dead_reckoning
 from bootmap.mapping.resolver import Resolver
+from bootmap.mapping.stream import MapStream
 from bootmap.sim.simulation import simulate
 from bootmap.sim.world import load_world
 from bootmap.mapping.facts import typed_actions
@@ -166,3 +167,12 @@ def test_odometry_alone_maps_a_simulated_taylor_hall():
     blind = tableau.with_views(["corridor"] * len(tableau))
     cmap = LoopCloser().resolve(blind)
     assert cmap.n_dstates == 20 and same_partition(cmap.dstate_of, true_partition(tableau))
+
+
+def test_a_stream_resolves_a_passing_tableau_anew_at_every_step():
+    # Determinism alone places nothing where a travel may end at any dstate further on.
+    full = corridor_passed_through(True)
+    stream = MapStream()
+    for n in range(1, len(full) + 1):
+        assert stream.update(full.prefix(n)).dstate_of == Resolver().resolve(full.prefix(n)).dstate_of
+    assert stream.extended_ == 0
