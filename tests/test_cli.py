@@ -161,8 +161,12 @@ def test_map_closes_loops_from_odometry_when_asked(tmp_path):
     steps.append({"view": "corner", "odometry": [x, y, 0]})
     path = tmp_path / "laps.json"
     path.write_text(json.dumps({"format": "bootmap.tableau/1", "steps": steps}))
-    out = bootmap("map", path, "--close-loops")
+    out = bootmap("map", path, "--map", "loops")
     assert out.returncode == 0, out.stderr
     assert out.stdout.startswith("8 dstates, 4 places, 4 paths; loop-closed from odometry, every axiom holds")
-    data = json.loads(bootmap("map", path, "--close-loops", "--format", "json").stdout)
+    data = json.loads(bootmap("map", path, "--map", "loops", "--format", "json").stdout)
     assert data["summary"]["found_by"] == "loop closing" and data["summary"]["proved_minimal"] is False
+    # By default the fewest dstates, unless the tableau says the robot drove through dstates (a log).
+    assert json.loads(bootmap("map", path, "--format", "json").stdout)["summary"]["found_by"] == "fewest dstates"
+    path.write_text(json.dumps({"format": "bootmap.tableau/1", "steps": steps, "meta": {"passes_through": True}}))
+    assert json.loads(bootmap("map", path, "--format", "json").stdout)["summary"]["found_by"] == "loop closing"

@@ -37,10 +37,10 @@ def cmd_map(args: argparse.Namespace) -> int:
     tableau = _with_views(load(args.tableau))
     resolver = Resolver(axioms=args.axioms, levels=args.levels, quantum_deg=args.quantum,
                         time_limit=args.time_limit, max_models=args.max_models, misreads=args.misreads)
-    if args.close_loops:
-        from .mapping.loops import LoopCloser
+    if args.map != "fewest":
+        from .mapping.loops import mapper_for
 
-        resolver = LoopCloser(resolver)
+        resolver = mapper_for(tableau, resolver, args.map)
     left = _time_left(args)
     deadline = Deadline.after(None) if left is None else Deadline(time.perf_counter() + left, args.time_limit)
     try:
@@ -274,11 +274,12 @@ def build_parser() -> argparse.ArgumentParser:
                    help="read every view as seen; by default a few suspect views may be taken as misclustered "
                         "images when that explains the experience with far fewer dstates (listed as "
                         "suspect_steps)")
-    p.add_argument("--close-loops", action="store_true",
-                   help="the map odometry supports instead of the fewest dstates: visits that dead reckoning "
-                        "(the steps' odometry, else the actions) puts at one place, or that the robot reached "
-                        "by the same actions, are joined where every axiom accepts it; views count as soft "
-                        "evidence (bootmap.mapping.loops). For logs, whose views barely tell dstates apart")
+    p.add_argument("--map", choices=("auto", "loops", "fewest"), default="auto",
+                   help="how the map is found: fewest (the paper's fewest dstates), loops (loop closing: visits "
+                        "that dead reckoning, from the steps' odometry or else the actions, puts at one place, "
+                        "or that the robot reached by the same actions, are joined where every axiom accepts "
+                        "it; views count as soft evidence; bootmap.mapping.loops), or auto (the default: loops "
+                        "for a log's tableau, which says the robot drove through dstates, else fewest)")
     _add_theory_options(p)
     p.set_defaults(handler=cmd_map)
 

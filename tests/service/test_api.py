@@ -301,3 +301,21 @@ def test_unknown_routes_and_methods_are_problems_too(client):
     assert r.status_code == 404 and r.headers["content-type"] == PROBLEM and "/docs" in r.json()["detail"]
     r = client.delete("/tableaux")
     assert r.status_code == 405 and r.headers["allow"] == "GET, HEAD, POST"
+
+
+def test_a_logs_tableau_is_mapped_by_loop_closing(client):
+    # Laps of a square whose corners all look alike, from a log (the robot drove through dstates):
+    # the fewest dstates would merge what only odometry tells apart, so the service closes loops.
+    steps, x, y = [], 0, 0
+    for _ in range(3):
+        for dx, dy in ((6, 0), (0, 6), (-6, 0), (0, -6)):
+            steps.append({"view": "corner", "odometry": [x, y, 0], "action": {"type": "travel", "distance_m": 6}})
+            x, y = x + dx, y + dy
+            steps.append({"view": "corner", "odometry": [x, y, 0], "action": {"type": "turn", "angle_deg": 90}})
+    steps.append({"view": "corner", "odometry": [x, y, 0]})
+    doc = {"format": "bootmap.tableau/1", "steps": steps, "meta": {"passes_through": True}}
+    created = client.post("/tableaux", json=doc)
+    assert created.status_code == 201, created.text
+    m = client.get(f"/tableaux/{created.json()['id']}/map").json()
+    assert m["summary"]["found_by"] == "loop closing" and m["summary"]["dstates"] == 8
+    assert m["summary"]["places"] == 4 and not m["summary"]["proved_minimal"]

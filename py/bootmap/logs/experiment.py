@@ -28,7 +28,7 @@ import numpy as np
 
 from ..errors import BadInput, LogError, SolveTimeout
 from ..experiment import Laps, _jsonable, curves_figure, recognition_section, views_figure
-from ..mapping.loops import LoopCloser
+from ..mapping.loops import MAPPERS, mapper_for
 from ..mapping.resolver import Resolver
 from ..metrics import dstate_accuracy
 from ..views import ViewClusterer, davies_bouldin_k, view_labels, view_table
@@ -39,8 +39,6 @@ from .ingest import log_tableau, read_log, travel_ends, turn_ends
 #: How k is chosen for the map's views: "auto" takes M's k unless M degenerates (k <= 2), then
 #: Davies-Bouldin's.
 VIEW_CRITERIA = ("auto", "M", "davies-bouldin")
-#: How the map is found: by loop closing (odometry proposes, the axioms check) or the paper's fewest dstates.
-MAPPERS = ("loops", "fewest")
 #: The issue's targets (set from an outside probe of the Killian log; ambitious).
 TARGETS = {"corner_recall": 0.95, "angles_within_10_deg": 1.0, "visits_in_true_dstate": 0.80,
            "nn_revisited": 0.60}
@@ -83,11 +81,10 @@ def _run(log, out_dir, seed, k_max, time_limit, quantum_deg, view_criterion, det
     views = view_labels(clusterer.labels_per_k_[views_section["k"]])
     views_section.update(table=_jsonable(view_table(images, views)), labels=views)
     lap("views_s")
-    resolver = Resolver(time_limit=time_limit, quantum_deg=quantum_deg)
-    if mapper == "loops":
-        resolver = LoopCloser(resolver, radius_m=radius_m)
+    mapped = tableau.with_views(views)
+    resolver = mapper_for(mapped, Resolver(time_limit=time_limit, quantum_deg=quantum_deg), mapper)
     try:
-        cmap, map_note = resolver.resolve(tableau.with_views(views)), None
+        cmap, map_note = resolver.resolve(mapped), None
     except SolveTimeout as e:
         cmap, map_note = e.best_map, str(e)
     lap("map_s")

@@ -60,7 +60,11 @@ from .motion import measured_angle
 from .resolver import Resolver
 from .vocabulary import FIXED
 
-__all__ = ["LoopCloser", "dead_reckoning"]
+__all__ = ["LoopCloser", "MAPPERS", "dead_reckoning", "mapper_for"]
+
+#: How a map is found: ``auto`` (loop closing where the robot drove through dstates, as a log's tableau
+#: says, else the fewest dstates), ``loops`` or ``fewest`` (the paper's, :class:`~.resolver.Resolver`).
+MAPPERS = ("auto", "loops", "fewest")
 
 
 @dataclass(frozen=True)
@@ -100,6 +104,17 @@ class LoopCloser:
         """
         tableau.require_views()
         return _Closing(self, tableau, deadline or Deadline.after(self.resolver.time_limit)).run()
+
+
+def mapper_for(tableau: Tableau, resolver: Resolver, how: str = "auto") -> "Resolver | LoopCloser":
+    """What finds the map of ``tableau``: ``resolver`` itself (the fewest dstates), or a :class:`LoopCloser`
+    around it. ``auto`` closes loops where the tableau says the robot drove through dstates without
+    stopping (``passes_through``: a log), whose views the fewest dstates cannot rest on."""
+    if how not in MAPPERS:
+        raise ValueError(f"unknown mapper {how!r}; known: {', '.join(MAPPERS)}")
+    if how == "loops" or (how == "auto" and passes_through(tableau)):
+        return LoopCloser(resolver)
+    return resolver
 
 
 def dead_reckoning(tableau: Tableau, angles: Sequence[int] | None = None) -> tuple[np.ndarray, np.ndarray]:

@@ -175,13 +175,17 @@ def _run(job: Job, cache: dict) -> tuple:
 
 def _solve(job: SolveJob, cache: dict) -> tuple:
     from ..mapping import Deadline
+    from ..mapping.facts import passes_through
+    from ..mapping.loops import mapper_for
 
     start = time.perf_counter()
     deadline = Deadline.after(job.time_limit_s)  # validation and clustering count against it too
     try:
         tableau, k = _views(_tableau(job.document))
         resolver = _cached(cache, ("map", job.axioms, job.quantum_deg, job.max_models), lambda: _resolver(job))
-        if job.stream is None:
+        if passes_through(tableau):  # a log: its views cannot carry the fewest dstates (mapping/loops.py)
+            cmap = mapper_for(tableau, resolver).resolve(tableau, deadline)
+        elif job.stream is None:
             cmap = resolver.resolve(tableau, deadline)
         else:  # the same map as a resolve, sooner when the steps repeat what this solver saw last time
             from ..mapping.stream import MapStream
