@@ -170,3 +170,20 @@ def test_map_closes_loops_from_odometry_when_asked(tmp_path):
     assert json.loads(bootmap("map", path, "--format", "json").stdout)["summary"]["found_by"] == "fewest dstates"
     path.write_text(json.dumps({"format": "bootmap.tableau/1", "steps": steps, "meta": {"passes_through": True}}))
     assert json.loads(bootmap("map", path, "--format", "json").stdout)["summary"]["found_by"] == "loop closing"
+
+
+def test_why_explains_the_loop_closed_map_of_a_log(tmp_path):
+    steps = []
+    for _ in range(2):
+        for corner in range(4):
+            steps += [{"view": "corner", "action": {"type": "travel", "distance_m": 6}},
+                      {"view": "corner", "action": {"type": "turn", "angle_deg": 90}}]
+    path = tmp_path / "log.json"
+    path.write_text(json.dumps({"format": "bootmap.tableau/1", "steps": steps + [{"view": "corner"}],
+                                "meta": {"passes_through": True}}))
+    out = bootmap("why", path, "t0", "t8")
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.startswith("t0 (S0) vs t8 (S0): same (loop-closed map)")
+    assert "proposed (near): dead reckoning puts them 0.0 m apart after 24 m driven (within 3.2 m)" in out.stdout
+    one = bootmap("why", path, "t3")
+    assert one.returncode == 2 and "ask why about two time points" in one.stderr

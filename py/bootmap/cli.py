@@ -104,6 +104,19 @@ def cmd_why(args: argparse.Namespace) -> int:
     from .tableau import load
 
     tableau = _with_views(load(args.tableau))
+    if args.map != "fewest":
+        from .mapping.loops import LoopCloser, mapper_for
+        from .mapping.resolver import Resolver
+
+        closer = mapper_for(tableau, Resolver(axioms=args.axioms, levels=args.levels, quantum_deg=args.quantum,
+                                              time_limit=args.time_limit), args.map)
+        if isinstance(closer, LoopCloser):
+            if args.b is None:
+                raise BadInput("a loop-closed map lists its misreads (bootmap map); ask why about two time points "
+                               "or dstates")
+            explanation = run_within(lambda: closer.explain(tableau, args.a, args.b), args.time_limit)
+            print(json.dumps(explanation.to_dict(), indent=1) if args.format == "json" else explanation.to_text())
+            return EXIT_OK
     explainer = Explainer(axioms=args.axioms, levels=args.levels, quantum_deg=args.quantum,
                           time_limit=args.time_limit)
     if args.b is None:  # one time point: is its view read as seen, or as a misread?
@@ -302,6 +315,10 @@ def build_parser() -> argparse.ArgumentParser:
                                         "at time point a is read as seen or as a misread, and why")
     p.add_argument("--format", choices=["text", "json"], default="text")
     p.add_argument("--time-limit", type=arguments.seconds, default=60.0, metavar="S", help="seconds for the map (default 60)")
+    p.add_argument("--map", choices=("auto", "loops", "fewest"), default="auto",
+                   help="which map to explain, as bootmap map finds it (auto: the loop-closed map of a log's "
+                        "tableau, else the minimal map): for a loop-closed map, the joins that made two time "
+                        "points one dstate, or what keeps them apart")
     _add_theory_options(p)
     p.set_defaults(handler=cmd_why)
 

@@ -10,7 +10,7 @@ import pytest
 from hypothesis import HealthCheck, given, note, settings
 from hypothesis import strategies as st
 
-from bootmap.errors import SolveTimeout
+from bootmap.errors import ExplainError, SolveTimeout
 from bootmap.mapping.grounding import Deadline
 from bootmap.mapping.loops import LoopCloser, dead_reckoning
 from bootmap.mapping.resolver import Resolver
@@ -176,3 +176,27 @@ def test_a_stream_resolves_a_passing_tableau_anew_at_every_step():
     for n in range(1, len(full) + 1):
         assert stream.update(full.prefix(n)).dstate_of == Resolver().resolve(full.prefix(n)).dstate_of
     assert stream.extended_ == 0
+
+
+def test_why_two_visits_are_one_dstate_names_each_join_and_its_evidence():
+    square = square_laps(3)
+    e = LoopCloser().explain(square, "t1", "t17")
+    assert e.verdict == "same" and e.names[0] == e.names[1]
+    # Every join on the way from t1 to t17 is cited, each proposed by odometry or forced by determinism.
+    assert e.joins and all(" = " in j and (": proposed (" in j or ": forced: " in j) for j in e.joins)
+    assert any("dead reckoning puts them 0.0 m apart" in j for j in e.joins)
+    assert e.to_dict()["found_by"] == "loop closing" and "t1 (S1) vs t17 (S1): same" in e.to_text()
+
+
+def test_why_two_visits_are_different_dstates_names_what_keeps_them_apart():
+    square = square_laps(3)
+    closer = LoopCloser()
+    heading = closer.explain(square, 0, 2)  # corner 0 facing east, corner 1 facing north
+    assert heading.verdict == "different" and "they face different ways (headings 0 and 90" in heading.sentence
+    far = closer.explain(square, 0, 1)  # two corners, one side apart, both facing east
+    assert "dead reckoning puts them 6.0 m apart after 6 m driven, more than odometry may drift" in far.sentence
+    # Joining t1 to a later visit of corner 0 would join corner 0 and corner 1 through their dstates.
+    folded = closer.explain(square, 1, 24)
+    assert folded.verdict == "different" and "making them one makes t" in folded.sentence
+    with pytest.raises(ExplainError, match="time point 99 is not in the tableau"):
+        closer.explain(square, 0, 99)

@@ -319,3 +319,10 @@ def test_a_logs_tableau_is_mapped_by_loop_closing(client):
     m = client.get(f"/tableaux/{created.json()['id']}/map").json()
     assert m["summary"]["found_by"] == "loop closing" and m["summary"]["dstates"] == 8
     assert m["summary"]["places"] == 4 and not m["summary"]["proved_minimal"]
+    # ... and asked why, it explains that map: the join that made two laps' corners one dstate.
+    why = client.get(f"/tableaux/{created.json()['id']}/why", params={"a": "t0", "b": "t8"})
+    assert why.status_code == 200, why.text
+    e = why.json()
+    assert e["verdict"] == "same" and e["found_by"] == "loop closing"
+    assert e["joins"] == ["t0 = t8: proposed (near): dead reckoning puts them 0.0 m apart after 24 m driven "
+                          "(within 3.2 m)"]

@@ -86,7 +86,8 @@ class Explanation:
                 "axioms": [rule_dict(r) for r in self.axioms],
                 "failures": [f.to_dict() for f in self.failures], "rules_cited": self.rules_cited(),
                 "agree_steps": self.agree_steps, "suggestion": self.suggestion,
-                "alternatives": self.alternatives, "levels": self.levels, "stats": {"total_s": self.total_s}}
+                "alternatives": self.alternatives, "levels": self.levels, "found_by": "fewest dstates", "joins": [],
+                "stats": {"total_s": self.total_s}}
 
     def to_text(self) -> str:
         out = [f"t{self.a} ({self.names[0]}) vs t{self.b} ({self.names[1]}): {self.verdict}",

@@ -45,8 +45,8 @@ import math
 import time
 from collections import Counter
 from dataclasses import dataclass, field, replace
-from functools import cached_property
-from typing import Sequence
+from functools import cached_property, partial
+from typing import Callable, Sequence
 
 import numpy as np
 from clingo import Function, Number, Symbol
@@ -55,12 +55,13 @@ from ..errors import InconsistentTableau, SolveTimeout
 from ..tableau import Tableau, Travel, Turn
 from .cogmap import CognitiveMap, SolveStats, Try, build_map
 from .facts import action_symbols, passes_through, tableau_facts, travel_lengths, typed_actions
+from .explain import _time_points
 from .grounding import Deadline, Grounding
 from .motion import measured_angle
 from .resolver import Resolver
-from .vocabulary import FIXED
+from .vocabulary import FIXED, action_word
 
-__all__ = ["LoopCloser", "MAPPERS", "dead_reckoning", "mapper_for"]
+__all__ = ["LoopCloser", "LoopExplanation", "MAPPERS", "dead_reckoning", "mapper_for"]
 
 #: How a map is found: ``auto`` (loop closing where the robot drove through dstates, as a log's tableau
 #: says, else the fewest dstates), ``loops`` or ``fewest`` (the paper's, :class:`~.resolver.Resolver`).
@@ -104,6 +105,16 @@ class LoopCloser:
         """
         tableau.require_views()
         return _Closing(self, tableau, deadline or Deadline.after(self.resolver.time_limit)).run()
+
+    def explain(self, tableau: Tableau, a, b, deadline: Deadline | None = None) -> "LoopExplanation":
+        """Why time points (``t4``, ``4``) or dstates (``S4``) ``a`` and ``b`` are one dstate of the loop-closed
+        map, or not: the joins that made them one (each proposed by odometry or forced by determinism), or
+        what keeps them apart (odometry, or the axioms that reject the map joining them)."""
+        tableau.require_views()
+        closing = _Closing(self, tableau, deadline or Deadline.after(self.resolver.time_limit))
+        cmap = closing.run()
+        x, y = _time_points(cmap, a, b)
+        return closing.explain(cmap, x, y)
 
 
 def mapper_for(tableau: Tableau, resolver: Resolver, how: str = "auto") -> "Resolver | LoopCloser":
@@ -164,6 +175,8 @@ class _Closing:
         self.xy, self.along = dead_reckoning(tableau, self.angles)
         self.views = tableau.views
         self.dstates = _Partition(n)
+        self.kinds: dict[tuple[int, int], str] = {}  # each proposal: "near" or "retraced"
+        self.refused: tuple[int, int, str] | None = None  # the last pair a fold refused, and why
         self.best: CognitiveMap | None = None
         self.tries: list[Try] = []
         self.checks = 0
@@ -218,6 +231,7 @@ class _Closing:
                             and self._apart(i, j, self.closer.drift_share) <= 1.0)
                 if near <= 1.0 or retraced:
                     ranked.append((-agree, near, i, j))
+                    self.kinds[i, j] = "near" if near <= 1.0 else "retraced"
         ranked.sort()
         return [(i, j) for _, _, i, j in ranked]
 
@@ -238,34 +252,62 @@ class _Closing:
         return after + before
 
     # ------------------------------------------------------------------------------------------
-    def _fold(self, i: int, j: int) -> bool:
+    def _fold(self, i: int, j: int, why: Join | None = None) -> bool:
         """Join i's and j's dstates and every pair determinism then joins; False if some pair joined would
-        face two ways or lie beyond the drift bound (the caller undoes the joins made)."""
-        queue = [(i, j)]
+        face two ways or lie beyond the drift bound (``refused`` says which; the caller undoes the joins
+        made)."""
+        queue = [why or Join(i, j, "proposed", self.kinds.get((i, j), ""))]
         members = self.dstates.members
         while queue:
-            a, b = (self.dstates.root[x] for x in queue.pop())
+            join = queue.pop()
+            a, b = self.dstates.root[join.x], self.dstates.root[join.y]
             if a == b:
                 continue
-            if not all(self._may_join(x, y) for x in members[a] for y in members[b]):
+            refused = next(((x, y, cause) for x in members[a] for y in members[b]
+                            if (cause := self._kept_apart(x, y))), None)
+            if refused:
+                self.refused = refused
                 return False
-            a = self.dstates.join(a, b)
+            a = self.dstates.join(a, b, join)
             led: dict[Symbol, int] = {}
             for t in members[a]:
                 action = self.fold_key[t]
                 if action is not None:
                     if action in led:
-                        queue.append((led[action], t + 1))
+                        queue.append(Join(led[action] + 1, t + 1, "forced", action=action_word(action),
+                                          after=(led[action], t)))
                     else:
-                        led[action] = t + 1
+                        led[action] = t
         return True
 
-    def _may_join(self, x: int, y: int) -> bool:
-        """Whether visits x and y may be one dstate: they face one way, travel on equally far (where the
-        robot stopped at every dstate) and lie within the drift bound."""
+    def _kept_apart(self, x: int, y: int) -> str:
+        """What keeps visits x and y from being one dstate before any axiom is asked ("" if nothing): they
+        face two ways, travel on unequally far (where the robot stopped at every dstate), or lie beyond the
+        drift bound."""
+        if self.heading[x] != self.heading[y]:
+            return f"they face different ways (headings {self.heading[x]} and {self.heading[y]}: metrical level)"
         lx, ly = self.length_of.get(x), self.length_of.get(y)
-        return (self.heading[x] == self.heading[y] and (lx is None or ly is None or lx == ly)
-                and self._apart(x, y, self.closer.drift_share) <= 1.0)
+        if lx is not None and ly is not None and lx != ly:
+            return f"the travels from them differ ({lx} and {ly} dm: length_is_feature)"
+        if self._apart(x, y, self.closer.drift_share) > 1.0:
+            return (f"{self._odometry(x, y)}, more than odometry may drift "
+                    f"({self._bound(x, y, self.closer.drift_share):.1f} m)")
+        return ""
+
+    def _odometry(self, x: int, y: int) -> str:
+        return (f"dead reckoning puts them {float(np.hypot(*(self.xy[x] - self.xy[y]))):.1f} m apart after "
+                f"{abs(self.along[y] - self.along[x]):.0f} m driven")
+
+    def _bound(self, x: int, y: int, share: float) -> float:
+        return self.closer.radius_m + share * abs(self.along[y] - self.along[x])
+
+    def _evidence(self, x: int, y: int) -> str:
+        """The odometry behind a proposal, in words."""
+        i, j = min(x, y), max(x, y)
+        if self.kinds.get((i, j)) == "retraced":
+            return (f"the same {self._agreeing(i, j)} actions around them, one view, and {self._odometry(x, y)} "
+                    f"(within {self._bound(x, y, self.closer.drift_share):.1f} m)")
+        return f"{self._odometry(x, y)} (within {self._bound(x, y, self.closer.near_share):.1f} m)"
 
     def _accepted(self) -> bool:
         """Check the partition with every axiom; keep its map if they accept it."""
@@ -274,9 +316,10 @@ class _Closing:
             self.best = found
         return found is not None
 
-    def _checked(self, dstate_of: list[int]) -> CognitiveMap | None:
-        """The map of this partition if every axiom accepts it, each dstate showing its visits' most common
-        view (the other visits' views are misreads)."""
+    def _checked(self, dstate_of: list[int], resolver: Resolver | None = None) -> CognitiveMap | None:
+        """The map of this partition if every axiom (of ``resolver``, default the closer's) accepts it, each
+        dstate showing its visits' most common view (the other visits' views are misreads)."""
+        resolver = resolver or self.resolver
         self.checks += 1
         groups: dict[int, list[int]] = {}
         for t, d in enumerate(dstate_of):
@@ -285,8 +328,8 @@ class _Closing:
         shown = {d: Counter(views[t] for t in ts).most_common(1)[0][0] for d, ts in groups.items()}
         as_shown = self.tableau.with_views([shown[d] for d in dstate_of])
         fixed = [FIXED(t, Function("s", [Number(d)])) for t, d in enumerate(dstate_of)]
-        grounding = Grounding(self.resolver.theory, tableau_facts(as_shown, angles=self.angles) + fixed,
-                              self.resolver.future_depth, ["1"]).ground()
+        grounding = Grounding(resolver.theory, tableau_facts(as_shown, angles=self.angles) + fixed,
+                              resolver.future_depth, ["1"]).ground()
         models: list[list[Symbol]] = []
         result = grounding.solve(self.deadline, lambda m: models.append(m.symbols(shown=True)))
         self.tries.append(Try(f"{len(groups)} dstates (loop closing)", "sat" if models else
@@ -295,11 +338,73 @@ class _Closing:
             raise self._timed_out()  # not a rejection: the axioms did not answer in time
         if not models:
             return None
-        cmap = build_map(self.tableau, models, True, self.resolver.theory.levels, self._stats(), minimal=False,
+        cmap = build_map(self.tableau, models, True, resolver.theory.levels, self._stats(), minimal=False,
                          action_types=self.action_types)
         misreads = [{"t": t, "observed": views[t], "expected": cmap.views[cmap.dstate_of[t]], "cost": None}
                     for t in range(self.n) if views[t] != shown[dstate_of[t]]]
         return replace(cmap, suspect_steps=misreads, found_by="loop closing")
+
+    def explain(self, cmap: CognitiveMap, a: int, b: int) -> "LoopExplanation":
+        """Why a and b are one dstate of ``cmap`` (this closing's map), or not."""
+        names = (cmap.dstate_of[a], cmap.dstate_of[b])
+        answer = partial(LoopExplanation, a, b, names, levels=list(self.resolver.theory.levels))
+        if names[0] == names[1]:
+            chain = [j.text(self._evidence) for j in self._chain(a, b)]
+            return answer("same", f"t{a} and t{b} are one dstate: loop closing joined them (below) and every "
+                                  f"axiom accepts the map.", chain, total_s=time.perf_counter() - self.start)
+        return answer("different", self._kept_apart_why(a, b), total_s=time.perf_counter() - self.start)
+
+    def _chain(self, a: int, b: int) -> list[Join]:
+        """The joins that link a to b (a path in the forest of the joins standing)."""
+        links: dict[int, list[tuple[int, Join]]] = {}
+        for join in self.dstates.reasons():
+            links.setdefault(join.x, []).append((join.y, join))
+            links.setdefault(join.y, []).append((join.x, join))
+        came: dict[int, tuple[int, Join] | None] = {a: None}
+        frontier = [a]
+        while frontier and b not in came:
+            frontier = [u for t in frontier for u, join in links.get(t, []) if u not in came
+                        and not came.__setitem__(u, (t, join))]
+        chain, t = [], b
+        while came.get(t):
+            t, join = came[t]
+            chain.append(join)
+        return chain[::-1]
+
+    def _kept_apart_why(self, a: int, b: int) -> str:
+        cause = self._kept_apart(a, b)
+        if cause:
+            return f"t{a} and t{b} are different dstates: {cause}."
+        mark = self.dstates.mark()
+        try:
+            if not self._fold(a, b, Join(a, b, "asked")):
+                x, y, cause = self.refused
+                return (f"t{a} and t{b} are different dstates: making them one makes t{x} and t{y} one (by their "
+                        f"dstates, or by determinism), but {cause}.")
+            failing = self._failing_levels(self._partition())
+        finally:
+            self.dstates.undo(mark)
+        if failing:
+            return (f"t{a} and t{b} are different dstates: the axioms reject the map that makes them one (with "
+                    f"what determinism then joins): {', '.join(failing)} fails.")
+        proposed = self.kinds.get((min(a, b), max(a, b)))
+        why = (f"it was proposed ({proposed}) but rejected beside joins made before it" if proposed else
+               f"nothing proposed them ({self._odometry(a, b)}: beyond {self._bound(a, b, self.closer.near_share):.1f} "
+               f"m for visits proposed as near; {self._agreeing(min(a, b), max(a, b))} actions around them agree, where "
+               f"{self.closer.context} and one view propose visits as retraced)")
+        return (f"t{a} and t{b} are different dstates only for want of evidence: {why}. Every axiom would accept "
+                f"them as one dstate; loop closing joins only what odometry proposes.")
+
+    def _failing_levels(self, dstate_of: list[int]) -> list[str]:
+        """The levels that reject this partition, each beside the causal level (the causal level alone if it
+        does); empty if every axiom accepts it."""
+        if self._checked(dstate_of) is not None:
+            return []
+        levels = self.resolver.theory.levels
+        for trial in [["causal"]] + [["causal", lv] for lv in levels if lv != "causal"]:
+            if self._checked(dstate_of, self.resolver.with_levels(trial)) is None:
+                return trial[-1:] if trial != ["causal"] else ["causal"]
+        return ["the levels together"]
 
     def _stats(self) -> SolveStats:
         return SolveStats(classes=self.n, lower_bound=0, total_s=time.perf_counter() - self.start,
@@ -313,19 +418,66 @@ class _Closing:
                             f"checked); {found}", best_map=best, time_limit_s=limit, stage="loop closing")
 
 
+@dataclass(frozen=True)
+class LoopExplanation:
+    """The answer to "are time points a and b one dstate of the loop-closed map, and why?"."""
+
+    a: int
+    b: int
+    names: tuple[str, str]              # their dstates in the map
+    verdict: str                        # "same" or "different"
+    sentence: str
+    joins: list[str] = field(default_factory=list)  # same: the joins that made them one, in order
+    levels: list[str] = field(default_factory=list)
+    total_s: float = 0.0
+
+    def to_dict(self) -> dict:
+        # The keys of a minimal map's explanation (:class:`~.explain.Explanation`), those of proofs empty.
+        return {"a": self.a, "b": self.b, "dstates": list(self.names), "verdict": self.verdict,
+                "sentence": self.sentence, "evidence": [], "axioms": [], "failures": [], "rules_cited": [],
+                "agree_steps": 0, "suggestion": [], "alternatives": [], "levels": self.levels,
+                "found_by": "loop closing", "joins": self.joins, "stats": {"total_s": self.total_s}}
+
+    def to_text(self) -> str:
+        out = [f"t{self.a} ({self.names[0]}) vs t{self.b} ({self.names[1]}): {self.verdict} (loop-closed map)",
+               f"levels: {', '.join(self.levels)}", "", self.sentence]
+        return "\n".join(out + ([""] + [f"  {j}" for j in self.joins] if self.joins else []))
+
+
+@dataclass(frozen=True)
+class Join:
+    """Why time points ``x`` and ``y`` were put in one dstate: ``proposed`` by odometry (``kind`` near or
+    retraced), or ``forced`` by determinism (``after``: the time points before them, already one dstate,
+    took the same ``action``)."""
+
+    x: int
+    y: int
+    how: str                                 # "proposed" or "forced"
+    kind: str = ""                           # proposed: "near" or "retraced"
+    action: str = ""                         # forced: the action both took
+    after: tuple[int, int] | None = None     # forced: the time points that took it
+
+    def text(self, evidence: Callable[[int, int], str]) -> str:
+        if self.how == "proposed":
+            return f"t{self.x} = t{self.y}: proposed ({self.kind}): {evidence(self.x, self.y)}"
+        u, v = self.after
+        return (f"t{self.x} = t{self.y}: forced: t{u} and t{v} are one dstate and both took {self.action} "
+                f"(deterministic_action: one action from one dstate reaches one dstate)")
+
+
 class _Partition:
     """Time points grouped into dstates, with every join undoable (a log of joins, undone last first)."""
 
     def __init__(self, n: int):
         self.root = list(range(n))  # each time point's dstate, named by one of its time points
         self.members = {t: [t] for t in range(n)}
-        self._joins: list[tuple[int, int, int]] = []  # (kept, joined, how many the kept one had)
+        self._joins: list[tuple[int, int, int, Join]] = []  # (kept, joined, how many the kept one had, why)
 
-    def join(self, a: int, b: int) -> int:
-        """Join dstates a and b (roots); returns the root kept."""
+    def join(self, a: int, b: int, why: "Join") -> int:
+        """Join dstates a and b (roots) for the reason ``why``; returns the root kept."""
         if len(self.members[a]) < len(self.members[b]):
             a, b = b, a
-        self._joins.append((a, b, len(self.members[a])))
+        self._joins.append((a, b, len(self.members[a]), why))
         for t in self.members[b]:
             self.root[t] = a
         self.members[a] += self.members.pop(b)
@@ -334,10 +486,14 @@ class _Partition:
     def mark(self) -> int:
         return len(self._joins)
 
+    def reasons(self) -> list["Join"]:
+        """Why each join standing was made, in order."""
+        return [why for _, _, _, why in self._joins]
+
     def undo(self, mark: int) -> None:
         """Undo the joins made since ``mark``."""
         while len(self._joins) > mark:
-            a, b, had = self._joins.pop()
+            a, b, had, _ = self._joins.pop()
             self.members[b] = self.members[a][had:]
             del self.members[a][had:]
             for t in self.members[b]:

@@ -362,6 +362,10 @@ class ExplanationOut(Out):
     suggestion: list[str] = Field(description="Experience that would test a 'same' verdict.")
     alternatives: list[AlternativeOut]
     levels: list[str]
+    found_by: str = Field("fewest dstates", description="The map explained: 'fewest dstates' (the minimal map) "
+                                                        "or 'loop closing' (a log's tableau).")
+    joins: list[str] = Field([], description="Loop closing, 'same': the joins that made them one dstate, each "
+                                             "proposed by odometry or forced by determinism.")
     stats: dict[str, Any]
     text: str = Field(description="The whole explanation as text.")
 

@@ -213,12 +213,18 @@ def _remember(cache: dict, job: SolveJob, tableau: Tableau, cmap) -> None:
 
 
 def _explain(job: ExplainJob, cache: dict) -> tuple:
-    from ..mapping import Deadline, Explainer
+    from ..mapping import Deadline, Explainer, Resolver
+    from ..mapping.facts import passes_through
+    from ..mapping.loops import LoopCloser
 
     start = time.perf_counter()
     deadline = Deadline.after(job.time_limit_s)
     try:
         tableau, _ = _views(_tableau(job.document))
+        if passes_through(tableau):  # a log's map is loop-closed (_solve): explain that map
+            e = LoopCloser(Resolver(axioms=job.axioms, levels=job.levels, quantum_deg=job.quantum_deg)).explain(
+                tableau, job.a, job.b, deadline)
+            return "ok", Explained(e.to_dict(), e.to_text(), time.perf_counter() - start)
         explainer = _cached(cache, ("explain", job.axioms, job.levels, job.quantum_deg),
                             lambda: Explainer(axioms=job.axioms, levels=job.levels, quantum_deg=job.quantum_deg))
         e = explainer.explain(tableau, job.a, job.b, deadline)
