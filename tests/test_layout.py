@@ -53,6 +53,19 @@ def test_travels_that_do_not_close_fall_back_to_the_graph_layout():
     assert len(drawn["places"]) == 4
 
 
+def test_travels_that_do_not_close_are_drawn_at_the_robots_odometry_when_the_steps_carry_it():
+    # The same open room, now with the robot's own dead-reckoned pose at each step (a log's): each place
+    # at the mean of its visits' odometry, in the frame of the first step (turned so it faces along x).
+    cycle = [Turn(-90.0), Travel(4.0), Turn(-90.0), Travel(2.0), Turn(-90.0), Travel(1.0), Turn(-90.0), Travel(2.0)]
+    corners = [(10, 5), (10, 5), (10, 1), (10, 1), (8, 1), (8, 1), (8, 4), (8, 4)]  # facing north at first
+    steps = [Step(view=f"V{t % 8}", action=cycle[t % 8], odometry=(*corners[t % 8], math.pi / 2))
+             for t in range(16)] + [Step(view="V0", odometry=(10, 5, math.pi / 2))]
+    drawn = _drawn(Tableau(tuple(steps), "open room, with odometry"))
+    assert drawn["method"] == "odometry"
+    xy = {p: v["xy"] for p, v in drawn["places"].items()}
+    assert xy == {"P0": [0.0, 0.0], "P1": [-4.0, 0.0], "P2": [-4.0, 2.0], "P3": [-1.0, 2.0]}
+
+
 def test_poses_give_the_true_trajectory_in_their_own_frame():
     rng = np.random.default_rng(7)
     world = random_world(rng, 3, 3, extra_edges=1, landmarks=1.0)

@@ -10,8 +10,12 @@ every time, by every browser. Two ways, tried in this order:
     the tableau is one such measurement; the places' positions are the least-squares fit of all of them
     (the first place at the origin). When the measurements close (the fit's RMS residual is under
     :data:`CLOSURE_TOLERANCE` of a typical travel) that fit is the layout.
+``odometry``
+    When the travels do not close but the tableau's steps carry the robot's own dead-reckoned poses (a
+    log), each place is drawn at the mean of its visits' odometry, turned so that the first step faces
+    along x from the origin, as the map's headings count: the robot's frame, drift and all.
 ``graph``
-    Without headings (the metrical level off), or when the loops do not close (odometry that the
+    Without headings (the metrical level off), or when the loops do not close and there is no odometry (odometry that the
     metrical level's types absorbed but the lengths did not), the places are placed by classical
     multidimensional scaling of their shortest travel distances: near in travel, near on the page.
 
@@ -73,7 +77,7 @@ def layout(cmap: dict, tableau: dict) -> dict:
     Returns
     -------
     dict
-        ``method`` ("metrical" or "graph"), ``closure_rms_m`` (the metrical fit's RMS residual, None when
+        ``method`` ("metrical", "odometry" or "graph"), ``closure_rms_m`` (the metrical fit's RMS residual, None when
         there are no headings), ``places`` (node -> ``{"xy", "dstates"}``), ``dstates`` (-> ``{"xy",
         "place"}``), ``paths`` (-> ``{"places", "points"}``), ``trajectory`` (the poses' ``[x, y]`` per
         step that has one, else None) and ``bounds`` ``[xmin, ymin, xmax, ymax]`` of the map's points.
@@ -83,8 +87,11 @@ def layout(cmap: dict, tableau: dict) -> dict:
     travels = _travels(rows, steps, cmap["dstates"])
     xy, method, rms = _metrical(nodes, travels)
     if xy is None:
-        xy = _graph(nodes, travels, cmap.get("paths", {}))
-    xy = _side_by_side(xy, nodes, travels)
+        xy, method = _odometry(nodes, rows, steps), "odometry"
+    if xy is None:
+        xy, method = _graph(nodes, travels, cmap.get("paths", {})), "graph"
+    if method != "odometry":  # odometry puts every part in one frame already
+        xy = _side_by_side(xy, nodes, travels)
     places = {n: {"xy": _pt(xy[i]), "dstates": members} for i, (n, members) in enumerate(nodes.items())}
     dstates = _dstate_positions(cmap["dstates"], nodes, xy)
     paths = {p: {"places": ps, "points": [places[q]["xy"] for q in ps if q in places]}
@@ -127,6 +134,24 @@ def _travels(rows: list[dict], steps: list[dict], dstates: dict) -> list[Travel]
         direction = math.radians(heading) + bend / 2
         out.append(Travel(t, a, b, length, chord * math.cos(direction), chord * math.sin(direction)))
     return out
+
+
+def _odometry(nodes: dict, rows: list[dict], steps: list[dict]) -> np.ndarray | None:
+    """Each node at the mean odometry of its visits, in the frame of the first step (None unless every step
+    has odometry)."""
+    if not steps or any("odometry" not in s for s in steps):
+        return None
+    odometry = np.array([s["odometry"] for s in steps], dtype=float)
+    x0, y0, theta0 = odometry[0]
+    c, s_ = math.cos(-theta0), math.sin(-theta0)
+    local = (odometry[:, :2] - (x0, y0)) @ np.array([[c, s_], [-s_, c]])
+    index = {n: i for i, n in enumerate(nodes)}
+    sums, counts = np.zeros((len(nodes), 2)), np.zeros(len(nodes))
+    for row, point in zip(rows, local):
+        i = index[row["place"] or row["dstate"]]
+        sums[i] += point
+        counts[i] += 1
+    return sums / counts[:, None]
 
 
 def _metrical(nodes: dict, travels: list[Travel]) -> tuple[np.ndarray | None, str, float | None]:

@@ -30,9 +30,11 @@ from ..tableau import Step, Tableau, Travel, Turn
 from .dstates import (FoundTurn, JunctionDetector, TurnDetector, dstate_scans, find_passes, find_turns,
                       odometry_track, side_ranges)
 from .scans import IMAGE_ANGLE_MAX, IMAGE_ANGLE_MIN, IMAGE_BEAMS, Scan, to_image, wrap
-from .truth import corner_recall, corners_in_poses, main_axis, true_dstates
+from .truth import corner_recall, corners_in_poses, main_axis, simplify, true_dstates
 
 ROS_SUFFIXES = (".bag", ".db3", ".mcap")
+#: How far the drawn true path may stray from the log's poses (metres).
+TRAJECTORY_TOLERANCE_M = 0.05
 
 
 def read_log(log: str | Path, progress: bool = False, **ros_options) -> list[Scan]:
@@ -157,7 +159,10 @@ def _meta(scans, chosen, turns, detector, max_range, radius_m, source, has_truth
         recall = corner_recall(turns, truth, corners_in_poses(truth))
         meta["truth"] = {"radius_m": radius_m, "axis_deg": round(math.degrees(main_axis(truth)), 2),
                          "corner_recall": recall.to_dict()}
-        meta["trajectory"] = np.round(np.asarray(truth)[:, :2], 2).tolist()
+        # The true path to draw, thinned to within 5 cm (Ramer-Douglas-Peucker): a whole log's poses
+        # would outgrow what a tableau's meta may hold in the service (64 KiB by default).
+        xy = np.asarray(truth)[:, :2]
+        meta["trajectory"] = np.round(xy[simplify(xy, TRAJECTORY_TOLERANCE_M)], 2).tolist()
     return meta
 
 

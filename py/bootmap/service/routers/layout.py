@@ -41,10 +41,11 @@ class PathDrawn(Out):
 
 
 class Layout(Out):
-    method: Literal["metrical", "graph"] = Field(description="metrical: least squares of the travels along "
-                                                             "the dstates' headings; graph: multidimensional "
-                                                             "scaling of travel distances (no headings, or the "
-                                                             "travels do not close).")
+    method: Literal["metrical", "odometry", "graph"] = Field(
+        description="metrical: least squares of the travels along the dstates' headings; odometry: each place "
+                    "at the mean of its visits' dead-reckoned poses (the travels do not close, the steps carry "
+                    "odometry: a log); graph: multidimensional scaling of travel distances (no headings, or the "
+                    "travels do not close).")
     closure_rms_m: float | None = Field(description="RMS residual of the metrical fit, metres (null: no headings).")
     places: dict[str, PlaceDrawn] = Field(description="Places (dstates when the map has no places).")
     dstates: dict[str, DstateDrawn]

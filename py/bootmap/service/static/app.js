@@ -85,11 +85,13 @@ async function refresh() {
 function draw() {
   const d = state.drawing, m = d.map, s = m.summary;
   drawMap($("map"), d, { onDstate: (name) => pick({ dstate: name }), onHover: hover });
-  $("layout-method").textContent = d.layout.method === "metrical"
-    ? `(laid out by headings and travels; closes to ${d.layout.closure_rms_m.toFixed(3)} m RMS)`
-    : "(laid out by travel distances: no headings, or the travels do not close)";
+  $("layout-method").textContent = {
+    metrical: `(laid out by headings and travels; closes to ${(d.layout.closure_rms_m ?? 0).toFixed(3)} m RMS)`,
+    odometry: "(laid out at the robot's own dead-reckoned positions: the travels do not close)",
+  }[d.layout.method] ?? "(laid out by travel distances: no headings, or the travels do not close)";
   $("summary").textContent = `${s.dstates} dstates, ${s.places} places, ${s.paths} paths; revision ${d.revision}` +
-    (s.unique ? "; unique minimal map" : `; ${s.minimal_maps}${s.minimal_maps_capped ? "+" : ""} minimal maps`);
+    (s.found_by === "loop closing" ? "; loop-closed from odometry (not minimal)"
+      : s.unique ? "; unique minimal map" : `; ${s.minimal_maps}${s.minimal_maps_capped ? "+" : ""} minimal maps`);
   // Measured by the tests and the benchmark: the map is on the page.
   document.body.dataset.drawn = String(d.revision);
   window.bootmapTimes = { ...(window.bootmapTimes || {}), drawn: performance.now() };
