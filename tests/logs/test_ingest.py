@@ -67,6 +67,10 @@ def test_killian_whole_log_truth():
     # No travel starts and ends at one true place (the SSH: a travel leaves its place).
     places = [s.truth.split(":")[0] for s in t.steps]
     assert all(places[k] != places[k + 1] for k, a in enumerate(t.actions) if isinstance(a, Travel))
+    # The robot's own odometry at every dstate, the flag that it drove through dstates, and a true path
+    # thinned to fit what the service takes as a tableau's meta (64 KiB by default).
+    assert all(s.odometry is not None for s in t.steps) and t.meta["passes_through"] is True
+    assert 100 < len(t.meta["trajectory"]) < 3873 and len(json.dumps(t.meta)) < 64 * 1024
 
 
 def _corridor_log():
