@@ -216,7 +216,7 @@ class Explainer:
         deadline = deadline or Deadline.after(self.time_limit)
         cmap = self.minimal_map(tableau, deadline)
         q = _Question(self, tableau, deadline, cmap)
-        a, b = _time_points(cmap, a, b)
+        a, b = time_points(cmap, a, b)
         maps = [cmap.dstate_of] + cmap.alternatives
         apart = [m[a] != m[b] for m in maps]
         names = (cmap.dstate_of[a], cmap.dstate_of[b])
@@ -236,7 +236,7 @@ class Explainer:
     def explain_step(self, tableau: Tableau, t: int | str, deadline: Deadline | None = None) -> StepExplanation:
         """Why the map reads the view seen at ``t`` as seen, or as a misread."""
         cmap = self.minimal_map(tableau, deadline or Deadline.after(self.time_limit))
-        t, _ = _time_points(cmap, t, t)
+        t, _ = time_points(cmap, t, t)
         angles, _ = read_actions(tableau, self.quantum_deg)
         actions = action_symbols(tableau, angles)
         suspect = {s.t: s for s in find_suspects(tableau.views, actions)}.get(t)
@@ -524,7 +524,7 @@ def _suggest(tableau: Tableau, cmap: CognitiveMap, a: int, b: int, agree: int, a
             "what follows could show it)" for x in vocabulary if x not in taken]
 
 
-def _time_points(cmap: CognitiveMap, a, b) -> tuple[int, int]:
+def time_points(cmap: CognitiveMap, a, b) -> tuple[int, int]:
     """Time points for the question: numbers and ``tN`` name time points; dstate names (``S4``) the
     closest pair of their visits."""
     n = len(cmap.dstate_of)

@@ -24,7 +24,10 @@ Here the robot's odometry proposes which visits are one dstate, and the axioms d
 
 The result satisfies every axiom but is not proved minimal (``minimal`` is False): it is the map
 odometry supports, not the smallest one the views allow. A tableau whose steps carry ``odometry``
-(a log) is dead-reckoned from it; otherwise from its actions (turns on the spot, as the simulator's).
+(a log) is dead-reckoned from it; otherwise from its actions (turns on the spot, as the simulator's,
+at the learned types' angles). :meth:`LoopCloser.explain` says why two time points are one dstate of
+the map (each join, proposed or forced) or not (headings, odometry, the level that rejects joining them,
+or no evidence); :func:`mapper_for` picks loop closing for a log's tableau (``passes_through``).
 
 Example
 -------
@@ -55,7 +58,7 @@ from ..errors import InconsistentTableau, SolveTimeout
 from ..tableau import Tableau, Travel, Turn
 from .cogmap import CognitiveMap, SolveStats, Try, build_map
 from .facts import action_symbols, passes_through, tableau_facts, travel_lengths, typed_actions
-from .explain import _time_points
+from .explain import time_points
 from .grounding import Deadline, Grounding
 from .motion import measured_angle
 from .resolver import Resolver
@@ -113,7 +116,7 @@ class LoopCloser:
         tableau.require_views()
         closing = _Closing(self, tableau, deadline or Deadline.after(self.resolver.time_limit))
         cmap = closing.run()
-        x, y = _time_points(cmap, a, b)
+        x, y = time_points(cmap, a, b)
         return closing.explain(cmap, x, y)
 
 
@@ -360,11 +363,16 @@ class _Closing:
         for join in self.dstates.reasons():
             links.setdefault(join.x, []).append((join.y, join))
             links.setdefault(join.y, []).append((join.x, join))
-        came: dict[int, tuple[int, Join] | None] = {a: None}
+        came: dict[int, tuple[int, Join] | None] = {a: None}  # breadth first from a: how each was reached
         frontier = [a]
         while frontier and b not in came:
-            frontier = [u for t in frontier for u, join in links.get(t, []) if u not in came
-                        and not came.__setitem__(u, (t, join))]
+            reached = []
+            for t in frontier:
+                for u, join in links.get(t, []):
+                    if u not in came:
+                        came[u] = (t, join)
+                        reached.append(u)
+            frontier = reached
         chain, t = [], b
         while came.get(t):
             t, join = came[t]
@@ -396,8 +404,8 @@ class _Closing:
                 f"them as one dstate; loop closing joins only what odometry proposes.")
 
     def _failing_levels(self, dstate_of: list[int]) -> list[str]:
-        """The levels that reject this partition, each beside the causal level (the causal level alone if it
-        does); empty if every axiom accepts it."""
+        """The level that rejects this partition: the causal level alone, else the first level that does beside
+        it (or all levels together); empty if every axiom accepts it."""
         if self._checked(dstate_of) is not None:
             return []
         levels = self.resolver.theory.levels
