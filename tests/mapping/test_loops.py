@@ -3,6 +3,7 @@ and the axioms for a robot that drove through dstates without stopping (passes_t
 
 import itertools
 import math
+import re
 from dataclasses import replace
 
 import numpy as np
@@ -200,3 +201,16 @@ def test_why_two_visits_are_different_dstates_names_what_keeps_them_apart():
     assert folded.verdict == "different" and "making them one makes t" in folded.sentence
     with pytest.raises(ExplainError, match="time point 99 is not in the tableau"):
         closer.explain(square, 0, 99)
+
+
+def test_why_names_the_axiom_that_rejects_joining_two_visits():
+    # Odometry that hardly moved over a 5 m travel proposes its two ends as one dstate; a travel always
+    # leaves its place, so the axioms refuse, and the explanation cites the rule, file and line.
+    steps = [{"view": "a", "odometry": [0, 0, 0], "action": {"type": "travel", "distance_m": 5}},
+             {"view": "a", "odometry": [0.5, 0, 0]}]
+    glitch = Tableau.from_dict({"format": FORMAT, "steps": steps})
+    closer = LoopCloser()
+    assert closer.resolve(glitch).n_dstates == 2
+    e = closer.explain(glitch, 0, 1)
+    assert e.verdict == "different"
+    assert re.search(r"it breaks order_(irreflexive|asymmetric) \(topological\.lp:\d+\)\.$", e.sentence)

@@ -26,7 +26,7 @@ The result satisfies every axiom but is not proved minimal (``minimal`` is False
 odometry supports, not the smallest one the views allow. A tableau whose steps carry ``odometry``
 (a log) is dead-reckoned from it; otherwise from its actions (turns on the spot, as the simulator's,
 at the learned types' angles). :meth:`LoopCloser.explain` says why two time points are one dstate of
-the map (each join, proposed or forced) or not (headings, odometry, the level that rejects joining them,
+the map (each join, proposed or forced) or not (headings, odometry, the rules that reject joining them,
 or no evidence); :func:`mapper_for` picks loop closing for a log's tableau (``passes_through``).
 
 Example
@@ -62,6 +62,7 @@ from .explain import time_points
 from .grounding import Deadline, Grounding
 from .motion import measured_angle
 from .resolver import Resolver
+from .trace import RuleRef
 from .vocabulary import FIXED, action_word
 
 __all__ = ["LoopCloser", "LoopExplanation", "MAPPERS", "dead_reckoning", "mapper_for"]
@@ -319,20 +320,26 @@ class _Closing:
             self.best = found
         return found is not None
 
+    def _facts(self, dstate_of: list[int], resolver: Resolver) -> tuple[list[Symbol], dict[int, str]]:
+        """The tableau's facts with the partition fixed, each dstate showing its visits' commonest view (and
+        that view, per dstate)."""
+        groups: dict[int, list[int]] = {}
+        for t, d in enumerate(dstate_of):
+            groups.setdefault(d, []).append(t)
+        shown = {d: Counter(self.views[t] for t in ts).most_common(1)[0][0] for d, ts in groups.items()}
+        as_shown = self.tableau.with_views([shown[d] for d in dstate_of])
+        fixed = [FIXED(t, Function("s", [Number(d)])) for t, d in enumerate(dstate_of)]
+        return tableau_facts(as_shown, angles=self.angles) + fixed, shown
+
     def _checked(self, dstate_of: list[int], resolver: Resolver | None = None) -> CognitiveMap | None:
         """The map of this partition if every axiom (of ``resolver``, default the closer's) accepts it, each
         dstate showing its visits' most common view (the other visits' views are misreads)."""
         resolver = resolver or self.resolver
         self.checks += 1
-        groups: dict[int, list[int]] = {}
-        for t, d in enumerate(dstate_of):
-            groups.setdefault(d, []).append(t)
+        facts, shown = self._facts(dstate_of, resolver)
+        groups = set(dstate_of)
         views = self.views
-        shown = {d: Counter(views[t] for t in ts).most_common(1)[0][0] for d, ts in groups.items()}
-        as_shown = self.tableau.with_views([shown[d] for d in dstate_of])
-        fixed = [FIXED(t, Function("s", [Number(d)])) for t, d in enumerate(dstate_of)]
-        grounding = Grounding(resolver.theory, tableau_facts(as_shown, angles=self.angles) + fixed,
-                              resolver.future_depth, ["1"]).ground()
+        grounding = Grounding(resolver.theory, facts, resolver.future_depth, ["1"]).ground()
         models: list[list[Symbol]] = []
         result = grounding.solve(self.deadline, lambda m: models.append(m.symbols(shown=True)))
         self.tries.append(Try(f"{len(groups)} dstates (loop closing)", "sat" if models else
@@ -389,12 +396,12 @@ class _Closing:
                 x, y, cause = self.refused
                 return (f"t{a} and t{b} are different dstates: making them one makes t{x} and t{y} one (by their "
                         f"dstates, or by determinism), but {cause}.")
-            failing = self._failing_levels(self._partition())
+            failing = self._failing_rules(self._partition())
         finally:
             self.dstates.undo(mark)
         if failing:
             return (f"t{a} and t{b} are different dstates: the axioms reject the map that makes them one (with "
-                    f"what determinism then joins): {', '.join(failing)} fails.")
+                    f"what determinism then joins): it breaks {' and '.join(r.cite() for r in failing)}.")
         proposed = self.kinds.get((min(a, b), max(a, b)))
         why = (f"it was proposed ({proposed}) but rejected beside joins made before it" if proposed else
                f"nothing proposed them ({self._odometry(a, b)}: beyond {self._bound(a, b, self.closer.near_share):.1f} "
@@ -403,16 +410,23 @@ class _Closing:
         return (f"t{a} and t{b} are different dstates only for want of evidence: {why}. Every axiom would accept "
                 f"them as one dstate; loop closing joins only what odometry proposes.")
 
-    def _failing_levels(self, dstate_of: list[int]) -> list[str]:
-        """The level that rejects this partition: the causal level alone, else the first level that does beside
-        it (or all levels together); empty if every axiom accepts it."""
+    def _failing_rules(self, dstate_of: list[int]) -> list[RuleRef]:
+        """The constraints this partition breaks: a subset-minimal set that still rules it out (each switched
+        off in turn, kept off if the partition stays ruled out); empty if every axiom accepts it."""
         if self._checked(dstate_of) is not None:
             return []
-        levels = self.resolver.theory.levels
-        for trial in [["causal"]] + [["causal", lv] for lv in levels if lv != "causal"]:
-            if self._checked(dstate_of, self.resolver.with_levels(trial)) is None:
-                return trial[-1:] if trial != ["causal"] else ["causal"]
-        return ["the levels together"]
+        facts, _ = self._facts(dstate_of, self.resolver)
+        traced = Grounding(self.resolver.theory, facts, self.resolver.future_depth, ["1"], instrumented=True).ground()
+        rules = traced.rules
+        needed = list(rules.switchable)
+        for r in list(needed):
+            trial = [x for x in needed if x != r]
+            result = traced.solve(self.deadline, assumptions=[(rules.on(x), x in trial) for x in rules.switchable])
+            if result is None:
+                raise self._timed_out()
+            if not result.satisfiable:
+                needed = trial
+        return [rules.rules[r] for r in needed]
 
     def _stats(self) -> SolveStats:
         return SolveStats(classes=self.n, lower_bound=0, total_s=time.perf_counter() - self.start,
