@@ -214,3 +214,4 @@ def test_why_names_the_axiom_that_rejects_joining_two_visits():
     e = closer.explain(glitch, 0, 1)
     assert e.verdict == "different"
     assert re.search(r"it breaks order_(irreflexive|asymmetric) \(topological\.lp:\d+\)\.$", e.sentence)
+    assert e.to_dict()["rules_cited"] == [r.name for r in e.axioms] and e.axioms[0].level == "topological"

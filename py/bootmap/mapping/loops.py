@@ -57,10 +57,11 @@ from clingo import Function, Number, Symbol
 from ..errors import InconsistentTableau, SolveTimeout
 from ..tableau import Tableau, Travel, Turn
 from .cogmap import CognitiveMap, SolveStats, Try, build_map
-from .facts import action_symbols, passes_through, tableau_facts, travel_lengths, typed_actions
 from .explain import time_points
+from .facts import action_symbols, passes_through, tableau_facts, travel_lengths, typed_actions
 from .grounding import Deadline, Grounding
 from .motion import measured_angle
+from .proof import rule_dict
 from .resolver import Resolver
 from .trace import RuleRef
 from .vocabulary import FIXED, action_word
@@ -362,7 +363,8 @@ class _Closing:
             chain = [j.text(self._evidence) for j in self._chain(a, b)]
             return answer("same", f"t{a} and t{b} are one dstate: loop closing joined them (below) and every "
                                   f"axiom accepts the map.", chain, total_s=time.perf_counter() - self.start)
-        return answer("different", self._kept_apart_why(a, b), total_s=time.perf_counter() - self.start)
+        sentence, axioms = self._kept_apart_why(a, b)
+        return answer("different", sentence, axioms=axioms, total_s=time.perf_counter() - self.start)
 
     def _chain(self, a: int, b: int) -> list[Join]:
         """The joins that link a to b (a path in the forest of the joins standing)."""
@@ -386,29 +388,30 @@ class _Closing:
             chain.append(join)
         return chain[::-1]
 
-    def _kept_apart_why(self, a: int, b: int) -> str:
+    def _kept_apart_why(self, a: int, b: int) -> tuple[str, list[RuleRef]]:
+        """What keeps a and b apart, in words, and the constraints joining them would break (if any)."""
         cause = self._kept_apart(a, b)
         if cause:
-            return f"t{a} and t{b} are different dstates: {cause}."
+            return f"t{a} and t{b} are different dstates: {cause}.", []
         mark = self.dstates.mark()
         try:
             if not self._fold(a, b, Join(a, b, "asked")):
                 x, y, cause = self.refused
                 return (f"t{a} and t{b} are different dstates: making them one makes t{x} and t{y} one (by their "
-                        f"dstates, or by determinism), but {cause}.")
+                        f"dstates, or by determinism), but {cause}."), []
             failing = self._failing_rules(self._partition())
         finally:
             self.dstates.undo(mark)
         if failing:
             return (f"t{a} and t{b} are different dstates: the axioms reject the map that makes them one (with "
-                    f"what determinism then joins): it breaks {' and '.join(r.cite() for r in failing)}.")
+                    f"what determinism then joins): it breaks {' and '.join(r.cite() for r in failing)}."), failing
         proposed = self.kinds.get((min(a, b), max(a, b)))
         why = (f"it was proposed ({proposed}) but rejected beside joins made before it" if proposed else
                f"nothing proposed them ({self._odometry(a, b)}: beyond {self._bound(a, b, self.closer.near_share):.1f} "
                f"m for visits proposed as near; {self._agreeing(min(a, b), max(a, b))} actions around them agree, where "
                f"{self.closer.context} and one view propose visits as retraced)")
         return (f"t{a} and t{b} are different dstates only for want of evidence: {why}. Every axiom would accept "
-                f"them as one dstate; loop closing joins only what odometry proposes.")
+                f"them as one dstate; loop closing joins only what odometry proposes."), []
 
     def _failing_rules(self, dstate_of: list[int]) -> list[RuleRef]:
         """The constraints this partition breaks: a subset-minimal set that still rules it out (each switched
@@ -450,13 +453,15 @@ class LoopExplanation:
     verdict: str                        # "same" or "different"
     sentence: str
     joins: list[str] = field(default_factory=list)  # same: the joins that made them one, in order
+    axioms: list[RuleRef] = field(default_factory=list)  # different: the constraints joining them breaks
     levels: list[str] = field(default_factory=list)
     total_s: float = 0.0
 
     def to_dict(self) -> dict:
         # The keys of a minimal map's explanation (:class:`~.explain.Explanation`), those of proofs empty.
         return {"a": self.a, "b": self.b, "dstates": list(self.names), "verdict": self.verdict,
-                "sentence": self.sentence, "evidence": [], "axioms": [], "failures": [], "rules_cited": [],
+                "sentence": self.sentence, "evidence": [], "axioms": [rule_dict(r) for r in self.axioms],
+                "failures": [], "rules_cited": [r.name for r in self.axioms],
                 "agree_steps": 0, "suggestion": [], "alternatives": [], "levels": self.levels,
                 "found_by": "loop closing", "joins": self.joins, "stats": {"total_s": self.total_s}}
 
