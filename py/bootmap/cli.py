@@ -37,10 +37,9 @@ def cmd_map(args: argparse.Namespace) -> int:
     tableau = _with_views(load(args.tableau))
     resolver = Resolver(axioms=args.axioms, levels=args.levels, quantum_deg=args.quantum,
                         time_limit=args.time_limit, max_models=args.max_models, misreads=args.misreads)
-    if args.map != "fewest":
-        from .mapping.loops import mapper_for
+    from .mapping.loops import mapper_for
 
-        resolver = mapper_for(tableau, resolver, args.map)
+    resolver = mapper_for(tableau, resolver, args.map)
     left = _time_left(args)
     deadline = Deadline.after(None) if left is None else Deadline(time.perf_counter() + left, args.time_limit)
     try:
@@ -104,19 +103,19 @@ def cmd_why(args: argparse.Namespace) -> int:
     from .tableau import load
 
     tableau = _with_views(load(args.tableau))
-    if args.map != "fewest":
-        from .mapping.loops import LoopCloser, mapper_for
+    from .mapping.loops import LoopCloser, closes_loops
+
+    if closes_loops(tableau, args.map):
+        if args.b is None:
+            raise BadInput("a loop-closed map lists its misreads (bootmap map); ask why about two time points "
+                           "or dstates")
         from .mapping.resolver import Resolver
 
-        closer = mapper_for(tableau, Resolver(axioms=args.axioms, levels=args.levels, quantum_deg=args.quantum,
-                                              time_limit=args.time_limit), args.map)
-        if isinstance(closer, LoopCloser):
-            if args.b is None:
-                raise BadInput("a loop-closed map lists its misreads (bootmap map); ask why about two time points "
-                               "or dstates")
-            explanation = run_within(lambda: closer.explain(tableau, args.a, args.b), args.time_limit)
-            print(json.dumps(explanation.to_dict(), indent=1) if args.format == "json" else explanation.to_text())
-            return EXIT_OK
+        closer = LoopCloser(Resolver(axioms=args.axioms, levels=args.levels, quantum_deg=args.quantum,
+                                     time_limit=args.time_limit))
+        explanation = run_within(lambda: closer.explain(tableau, args.a, args.b), args.time_limit)
+        print(json.dumps(explanation.to_dict(), indent=1) if args.format == "json" else explanation.to_text())
+        return EXIT_OK
     explainer = Explainer(axioms=args.axioms, levels=args.levels, quantum_deg=args.quantum,
                           time_limit=args.time_limit)
     if args.b is None:  # one time point: is its view read as seen, or as a misread?

@@ -1,7 +1,7 @@
 """Where to draw a cognitive map: its places in the plane, computed from the map itself.
 
 The viewer (``service/static/``) draws what this module computes, so the same map is drawn the same way
-every time, by every browser. Two ways, tried in this order:
+every time, by every browser. Three ways, tried in this order:
 
 ``metrical``
     The metrical level gives every dstate a heading (degrees, counter-clockwise, S0 facing 0). A travel
@@ -15,9 +15,10 @@ every time, by every browser. Two ways, tried in this order:
     log), each place is drawn at the mean of its visits' odometry, turned so that the first step faces
     along x from the origin, as the map's headings count: the robot's frame, drift and all.
 ``graph``
-    Without headings (the metrical level off), or when the loops do not close and there is no odometry (odometry that the
-    metrical level's types absorbed but the lengths did not), the places are placed by classical
-    multidimensional scaling of their shortest travel distances: near in travel, near on the page.
+    Without headings (the metrical level off), or when the loops do not close (odometry that the
+    metrical level's types absorbed but the lengths did not) and the steps carry no odometry, the places
+    are placed by classical multidimensional scaling of their shortest travel distances: near in travel,
+    near on the page.
 
 Dstates are drawn around their place, each in the direction of its heading (evenly spread when there
 are no headings). The true trajectory, when the tableau's steps carry poses (simulated runs, real logs),
@@ -77,8 +78,8 @@ def layout(cmap: dict, tableau: dict) -> dict:
     Returns
     -------
     dict
-        ``method`` ("metrical", "odometry" or "graph"), ``closure_rms_m`` (the metrical fit's RMS residual, None when
-        there are no headings), ``places`` (node -> ``{"xy", "dstates"}``), ``dstates`` (-> ``{"xy",
+        ``method`` ("metrical", "odometry" or "graph"), ``closure_rms_m`` (the metrical fit's RMS residual,
+        None when there are no headings), ``places`` (node -> ``{"xy", "dstates"}``), ``dstates`` (-> ``{"xy",
         "place"}``), ``paths`` (-> ``{"places", "points"}``), ``trajectory`` (the poses' ``[x, y]`` per
         step that has one, else None) and ``bounds`` ``[xmin, ymin, xmax, ymax]`` of the map's points.
     """

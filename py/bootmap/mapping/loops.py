@@ -64,9 +64,9 @@ from .motion import measured_angle
 from .proof import rule_dict
 from .resolver import Resolver
 from .trace import RuleRef
-from .vocabulary import FIXED, action_word
+from .vocabulary import FIXED, VIEW, Predicate, action_word
 
-__all__ = ["LoopCloser", "LoopExplanation", "MAPPERS", "dead_reckoning", "mapper_for"]
+__all__ = ["LoopCloser", "LoopExplanation", "MAPPERS", "closes_loops", "dead_reckoning", "mapper_for"]
 
 #: How a map is found: ``auto`` (loop closing where the robot drove through dstates, as a log's tableau
 #: says, else the fewest dstates), ``loops`` or ``fewest`` (the paper's, :class:`~.resolver.Resolver`).
@@ -122,15 +122,19 @@ class LoopCloser:
         return closing.explain(cmap, x, y)
 
 
-def mapper_for(tableau: Tableau, resolver: Resolver, how: str = "auto") -> "Resolver | LoopCloser":
-    """What finds the map of ``tableau``: ``resolver`` itself (the fewest dstates), or a :class:`LoopCloser`
-    around it. ``auto`` closes loops where the tableau says the robot drove through dstates without
-    stopping (``passes_through``: a log), whose views the fewest dstates cannot rest on."""
+def closes_loops(tableau: Tableau, how: str = "auto") -> bool:
+    """Whether the map of ``tableau`` is found by loop closing: ``how`` is ``loops``, or ``auto`` and the
+    tableau says the robot drove through dstates without stopping (``passes_through``: a log), whose views
+    the fewest dstates cannot rest on."""
     if how not in MAPPERS:
         raise ValueError(f"unknown mapper {how!r}; known: {', '.join(MAPPERS)}")
-    if how == "loops" or (how == "auto" and passes_through(tableau)):
-        return LoopCloser(resolver)
-    return resolver
+    return how == "loops" or (how == "auto" and passes_through(tableau))
+
+
+def mapper_for(tableau: Tableau, resolver: Resolver, how: str = "auto") -> "Resolver | LoopCloser":
+    """What finds the map of ``tableau``: a :class:`LoopCloser` around ``resolver`` where
+    :func:`closes_loops`, else ``resolver`` itself (the fewest dstates)."""
+    return LoopCloser(resolver) if closes_loops(tableau, how) else resolver
 
 
 def dead_reckoning(tableau: Tableau, angles: Sequence[int] | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -161,7 +165,8 @@ def dead_reckoning(tableau: Tableau, angles: Sequence[int] | None = None) -> tup
 
 
 class _Closing:
-    """One loop closing: the evidence, the partition (union-find) and the last map the axioms accepted."""
+    """One loop closing: the evidence, the partition (with every join undoable) and the last map the axioms
+    accepted."""
 
     def __init__(self, closer: LoopCloser, tableau: Tableau, deadline: Deadline):
         self.closer, self.tableau, self.deadline = closer, tableau, deadline
@@ -179,6 +184,9 @@ class _Closing:
         self.heading = np.concatenate([[0], np.cumsum(self.angles)]).astype(int) % 360
         self.xy, self.along = dead_reckoning(tableau, self.angles)
         self.views = tableau.views
+        # What every check of a partition shares: the actions as the axioms see them (not the views)
+        self.action_facts = [f for f in tableau_facts(tableau, angles=self.angles) if not VIEW.matches(f)]
+        self.made: dict[tuple, Symbol] = {}  # the views' and the partition's facts made so far (_fact)
         self.dstates = _Partition(n)
         self.kinds: dict[tuple[int, int], str] = {}  # each proposal: "near" or "retraced"
         self.refused: tuple[int, int, str] | None = None  # the last pair a fold refused, and why
@@ -321,23 +329,31 @@ class _Closing:
             self.best = found
         return found is not None
 
-    def _facts(self, dstate_of: list[int], resolver: Resolver) -> tuple[list[Symbol], dict[int, str]]:
+    def _facts(self, dstate_of: list[int]) -> tuple[list[Symbol], dict[int, str]]:
         """The tableau's facts with the partition fixed, each dstate showing its visits' commonest view (and
-        that view, per dstate)."""
+        that view, per dstate). Only the views and the partition change from one check to the next."""
         groups: dict[int, list[int]] = {}
         for t, d in enumerate(dstate_of):
             groups.setdefault(d, []).append(t)
         shown = {d: Counter(self.views[t] for t in ts).most_common(1)[0][0] for d, ts in groups.items()}
-        as_shown = self.tableau.with_views([shown[d] for d in dstate_of])
-        fixed = [FIXED(t, Function("s", [Number(d)])) for t, d in enumerate(dstate_of)]
-        return tableau_facts(as_shown, angles=self.angles) + fixed, shown
+        views = [self._fact(VIEW, t, shown[d]) for t, d in enumerate(dstate_of)]
+        fixed = [self._fact(FIXED, t, d) for t, d in enumerate(dstate_of)]
+        return views + self.action_facts + fixed, shown
 
-    def _checked(self, dstate_of: list[int], resolver: Resolver | None = None) -> CognitiveMap | None:
-        """The map of this partition if every axiom (of ``resolver``, default the closer's) accepts it, each
-        dstate showing its visits' most common view (the other visits' views are misreads)."""
-        resolver = resolver or self.resolver
+    def _fact(self, predicate: Predicate, t: int, value: str | int) -> Symbol:
+        """``view(t, value)`` or ``fixed(t, s(value))``, each made once: a check repeats most of the last one's
+        facts, and every symbol made is a call into clingo."""
+        key = (predicate.name, t, value)
+        if key not in self.made:
+            self.made[key] = predicate(t, value if predicate is VIEW else Function("s", [Number(value)]))
+        return self.made[key]
+
+    def _checked(self, dstate_of: list[int]) -> CognitiveMap | None:
+        """The map of this partition if every axiom accepts it, each dstate showing its visits' most common
+        view (the other visits' views are misreads)."""
+        resolver = self.resolver
         self.checks += 1
-        facts, shown = self._facts(dstate_of, resolver)
+        facts, shown = self._facts(dstate_of)
         groups = set(dstate_of)
         views = self.views
         grounding = Grounding(resolver.theory, facts, resolver.future_depth, ["1"]).ground()
@@ -418,7 +434,7 @@ class _Closing:
         off in turn, kept off if the partition stays ruled out); empty if every axiom accepts it."""
         if self._checked(dstate_of) is not None:
             return []
-        facts, _ = self._facts(dstate_of, self.resolver)
+        facts, _ = self._facts(dstate_of)
         traced = Grounding(self.resolver.theory, facts, self.resolver.future_depth, ["1"], instrumented=True).ground()
         rules = traced.rules
         needed = list(rules.switchable)

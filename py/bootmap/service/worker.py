@@ -175,16 +175,15 @@ def _run(job: Job, cache: dict) -> tuple:
 
 def _solve(job: SolveJob, cache: dict) -> tuple:
     from ..mapping import Deadline
-    from ..mapping.facts import passes_through
-    from ..mapping.loops import mapper_for
+    from ..mapping.loops import LoopCloser, closes_loops
 
     start = time.perf_counter()
     deadline = Deadline.after(job.time_limit_s)  # validation and clustering count against it too
     try:
         tableau, k = _views(_tableau(job.document))
         resolver = _cached(cache, ("map", job.axioms, job.quantum_deg, job.max_models), lambda: _resolver(job))
-        if passes_through(tableau):  # a log: its views cannot carry the fewest dstates (mapping/loops.py)
-            cmap = mapper_for(tableau, resolver).resolve(tableau, deadline)
+        if closes_loops(tableau):  # a log: its views cannot carry the fewest dstates (mapping/loops.py)
+            cmap = LoopCloser(resolver).resolve(tableau, deadline)
         elif job.stream is None:
             cmap = resolver.resolve(tableau, deadline)
         else:  # the same map as a resolve, sooner when the steps repeat what this solver saw last time
@@ -214,16 +213,17 @@ def _remember(cache: dict, job: SolveJob, tableau: Tableau, cmap) -> None:
 
 def _explain(job: ExplainJob, cache: dict) -> tuple:
     from ..mapping import Deadline, Explainer, Resolver
-    from ..mapping.facts import passes_through
-    from ..mapping.loops import LoopCloser
+    from ..mapping.loops import LoopCloser, closes_loops
 
     start = time.perf_counter()
     deadline = Deadline.after(job.time_limit_s)
     try:
         tableau, _ = _views(_tableau(job.document))
-        if passes_through(tableau):  # a log's map is loop-closed (_solve): explain that map
-            e = LoopCloser(Resolver(axioms=job.axioms, levels=job.levels, quantum_deg=job.quantum_deg)).explain(
-                tableau, job.a, job.b, deadline)
+        if closes_loops(tableau):  # a log's map is loop-closed (_solve): explain that map
+            closer = _cached(cache, ("loops", job.axioms, job.levels, job.quantum_deg),
+                             lambda: LoopCloser(Resolver(axioms=job.axioms, levels=job.levels,
+                                                         quantum_deg=job.quantum_deg)))
+            e = closer.explain(tableau, job.a, job.b, deadline)
             return "ok", Explained(e.to_dict(), e.to_text(), time.perf_counter() - start)
         explainer = _cached(cache, ("explain", job.axioms, job.levels, job.quantum_deg),
                             lambda: Explainer(axioms=job.axioms, levels=job.levels, quantum_deg=job.quantum_deg))
@@ -273,8 +273,8 @@ def _resolver(job: SolveJob):
 
 
 def _cached(cache: dict, key: tuple, make):
-    """A resolver or explainer for the job's theory, kept: loading a theory parses every file. Both are
-    immutable, and each job passes its own deadline."""
+    """A resolver, loop closer or explainer for the job's theory, kept: loading a theory parses every file.
+    All are immutable, and each job passes its own deadline."""
     if key not in cache:
         if len(cache) > 16:
             cache.clear()
