@@ -306,9 +306,15 @@ def _step(d: dict, i: int, last: bool, source: str) -> Step:
     image = None
     if "image" in d:
         image = tuple(_finite(x, f"{where}.image[{j}]") for j, x in enumerate(d["image"]))
-    pose, odometry = (tuple(_finite(x, f"{where}.{key}[{j}]") for j, x in enumerate(d[key])) if key in d else None
-                      for key in ("pose", "odometry"))
-    return Step(d.get("view"), action, image, d.get("truth"), pose, odometry)  # type: ignore[arg-type]
+    return Step(d.get("view"), action, image, d.get("truth"), _pose(d, "pose", where),  # type: ignore[arg-type]
+                _pose(d, "odometry", where))
+
+
+def _pose(d: dict, key: str, where: str) -> tuple[float, ...] | None:
+    """A step's ``pose`` or ``odometry`` (x, y, theta), each number finite, or None where it has none."""
+    if key not in d:
+        return None
+    return tuple(_finite(x, f"{where}.{key}[{j}]") for j, x in enumerate(d[key]))
 
 
 def _action(a: dict, where: str) -> Action:

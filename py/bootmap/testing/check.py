@@ -23,6 +23,7 @@ from collections import defaultdict
 from dataclasses import dataclass, field
 from typing import Hashable, Iterable, Sequence
 
+from ..mapping.facts import passes_through
 from ..mapping.motion import quantise
 from ..mapping.vocabulary import QUANTUM_DEG
 from ..tableau import Tableau, Travel, Turn
@@ -115,7 +116,7 @@ class Experience:
         # A turn is named by its quantised angle (which is also its heading change), a travel by "travel"
         # (where the robot drove through dstates, by ("travel", its length in decimetres)).
         lengths = [round(a.distance_m * 10) if isinstance(a, Travel) else None for a in linked]
-        passing = bool(tableau.meta.get("passes_through", False))
+        passing = passes_through(tableau)
         actions = [None if a is None else c if isinstance(a, Turn) else (TRAVEL, n) if passing else TRAVEL
                    for a, c, n in zip(linked, changes, lengths)]
         exp = cls(times, dstate_of, [s.view for s in steps], actions, changes, lengths,   # type: ignore[arg-type]
