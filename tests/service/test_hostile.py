@@ -197,3 +197,51 @@ def test_images_at_the_bound_are_clustered_and_recognised_with_finite_distances(
                                           ("/tableaux/01", 422), ("/tableaux/%201", 422), ("/tableaux/1_0", 422)])
 def test_absurd_ids_are_refused(client, path, status):
     refused(client, status, "GET", path)
+
+
+# --- Bodies that mean different things to different JSON readers ------------------------------------
+
+ONE = '{"format": "bootmap.tableau/1", "steps": [{"view": "a"}]}'
+
+
+@pytest.mark.parametrize("encoding", ["utf-16", "utf-16-le", "utf-32"])
+def test_a_body_in_another_encoding_than_utf8_is_400(client, encoding):
+    problem = post_raw(client, ONE.encode(encoding))  # json.loads(bytes) would have read it
+    assert problem["type"].endswith("/malformed-json")
+    assert "not UTF-8" in problem["detail"] or "not valid JSON" in problem["detail"]
+
+
+def test_a_key_given_twice_is_400_not_last_one_wins(client):
+    body = b'{"format": "bootmap.tableau/1", "steps": [{"view": "a", "view": "b"}]}'
+    assert "'view' appears twice" in post_raw(client, body)["detail"]
+
+
+@pytest.mark.parametrize("field, value", [("world", "w" * 201), ("world", "a\u0000b"),
+                                          ("steps[0].truth", "t" * 201), ("steps[0].truth", "S\u00000")])
+def test_world_and_truth_are_short_text_without_nul(client, field, value):
+    doc = tableau({"view": "a"})
+    if field == "world":
+        doc["world"] = value
+    else:
+        doc["steps"][0]["truth"] = value
+    problem = refused(client, 422, "POST", "/tableaux", json=doc)
+    assert problem["field"] == field
+
+
+def test_an_integer_beyond_64_bits_in_meta_is_refused(client):
+    body = ('{"format": "bootmap.tableau/1", "meta": {"seeds": [1, ' + "9" * 4000 + ']}, '
+            '"steps": [{"view": "a"}]}').encode()
+    problem = post_raw(client, body, status=422)
+    assert problem["field"] == "meta.seeds[1]" and "beyond 64 bits" in problem["detail"]
+    assert client.post("/tableaux", json=tableau({"view": "a"}, meta={"seed": 2**63 - 1})).status_code == 201
+
+
+def test_path_parameters_publish_their_bounds_as_openapi_does(client):
+    spec = client.get("/openapi.json").json()
+    for path, operations in spec["paths"].items():
+        for operation in operations.values():
+            for parameter in operation.get("parameters", []):
+                schema = parameter["schema"]
+                assert not {"ge", "le", "gt", "lt"} & set(schema), (path, parameter["name"], schema)
+    read = spec["paths"]["/tableaux/{tableau_id}"]["get"]["parameters"][0]["schema"]
+    assert read["minimum"] == 1 and read["maximum"] == 2**63 - 1

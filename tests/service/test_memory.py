@@ -26,6 +26,7 @@ import threading
 import time
 from urllib.parse import urlsplit
 
+import numpy as np
 import pytest
 from service_helpers import Server
 
@@ -37,7 +38,8 @@ MB = 2**20
 
 @pytest.fixture(scope="module")
 def memory_server(tmp_path_factory):
-    s = Server(tmp_path_factory.mktemp("memory_server"), solve_time_limit_s=60, body_timeout_s=2).start()
+    s = Server(tmp_path_factory.mktemp("memory_server"), solve_time_limit_s=60, body_timeout_s=2,
+               send_timeout_s=3).start()
     yield s
     s.stop()
 
@@ -57,6 +59,17 @@ def big_tableau() -> dict:
     centres = {v: [rng.uniform(0.5, 4.5) for _ in range(180)] for v in ("V0", "V1", "V2", "V3")}
     for step in doc["steps"]:
         step["image"] = [round(x + rng.gauss(0, 0.01), 3) for x in centres[step["view"]]]
+    return doc
+
+
+def valid_16_mb_tableau(seed: int) -> dict:
+    """A valid tableau of 15 MB as JSON: the paper's world, 40 circuits, each step with its view and a
+    3,000-value image written to 13 decimals (under the default limits of 16 MiB and a million values)."""
+    doc = examples.notched_rectangle(circuits=40).to_dict()
+    rng = np.random.default_rng(seed)
+    centres = {v: rng.uniform(0.5, 4.5, 3000) for v in ("V0", "V1", "V2", "V3")}
+    for step in doc["steps"]:
+        step["image"] = np.round(centres[step["view"]] + rng.normal(0, 0.01, 3000), 13).tolist()
     return doc
 
 
@@ -165,3 +178,98 @@ def test_connections_stalled_mid_body_are_closed_at_the_body_time_out(memory_ser
         assert reply.startswith(b"HTTP/1.1 408") and b"did not arrive within 2 s" in reply
         sock.close()
     assert time.monotonic() - t0 < 2 + 5
+
+
+@pytest.mark.slow
+def test_valid_16_mb_posts_layouts_recognitions_and_reads_keep_the_server_under_its_bound(memory_server):
+    """Everything that reads or parses a whole tableau, many at once: four valid 15 MB posts while twelve
+    clients read a stored tableau, then twelve layouts and twelve recognitions of a 15 MB tableau, then
+    forty layouts of a 2.5 MB one. Parsing and laying out happen in the intake processes, so the server
+    process stays under BOUND_MB (before, layouts were parsed in the server: 778 MiB with twelve)."""
+    s = memory_server
+    docs = [json.dumps(valid_16_mb_tableau(seed)).encode() for seed in range(4)]
+    assert all(15 * MB < len(d) < 16 * MB for d in docs)
+    with s.client() as c:
+        small = c.post("/tableaux", json=big_tableau())
+        assert small.status_code == 201, small.text[:500]
+        small_id = small.json()["id"]
+        expected = c.get(f"/tableaux/{small_id}").content
+    answers: list[tuple[str, int]] = []
+
+    def run(what: str, method: str, path: str, **kw):
+        with s.client(timeout=120) as c:
+            r = c.request(method, path, **kw)
+            answers.append((what, r.status_code))
+            return r
+
+    def at_once(calls) -> None:
+        threads = [threading.Thread(target=run, args=call[:3], kwargs=call[3]) for call in calls]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+
+    timer = HealthTimer(s.url)
+    time.sleep(0.3)
+    at_once([("post", "POST", "/tableaux", {"content": d, "headers": {"content-type": "application/json"}})
+             for d in docs] + [("read", "GET", f"/tableaux/{small_id}", {}) for _ in range(12)])
+    with s.client() as c:
+        large_id = max(item["id"] for item in c.get("/tableaux?limit=1000").json()["items"])
+        image = c.get(f"/tableaux/{large_id}").json()["tableau"]["steps"][5]["image"]
+    at_once([("layout", "GET", f"/tableaux/{large_id}/layout", {}) for _ in range(12)]
+            + [("recognise", "POST", f"/tableaux/{large_id}/recognise", {"json": {"image": image}})
+               for _ in range(12)])
+    at_once([("layout", "GET", f"/tableaux/{small_id}/layout", {}) for _ in range(40)])
+    took = timer.stop()
+
+    assert sorted(set(answers)) == [("layout", 200), ("post", 201), ("read", 200), ("recognise", 200)], answers
+    assert len(answers) == 4 + 12 + 24 + 40
+    with s.client() as c:
+        assert c.post(f"/tableaux/{large_id}/recognise", json={"image": image}).json()["view"] == "V1"
+        assert c.get(f"/tableaux/{small_id}").content == expected
+    peak = vm(s.process.pid, "VmHWM")
+    print(f"server peak {peak:.0f} MiB; /health max {max(took):.3f} s, median {statistics.median(took):.3f} s")
+    assert peak < BOUND_MB, f"the server's resident set peaked at {peak:.0f} MiB"
+    assert statistics.median(took) < 0.1, took
+
+
+def test_idle_readers_hold_no_database_connection_and_are_closed_at_the_send_time_out(memory_server):
+    """Forty-five clients ask for a 15 MB tableau (more than the kernel's buffers hold) and read nothing.
+    Each read is copied from the database and the connection given back at once, so /health and other
+    reads are answered meanwhile (before, each idle reader held a database connection: /health answered
+    503 after 30 s). A client that reads nothing for the send time-out (3 s here) has its connection
+    closed, its answer cut short."""
+    s = memory_server
+    url = urlsplit(s.url)
+    with s.client(timeout=120) as c:
+        ids = []
+        for doc in (big_tableau(), valid_16_mb_tableau(9)):
+            stored = c.post("/tableaux", json=doc)
+            assert stored.status_code == 201, stored.text[:500]
+            ids.append(stored.json()["id"])
+        small, large = ids
+        expected = {tid: len(c.get(f"/tableaux/{tid}").content) for tid in ids}
+
+    def idle_reader(tid: int) -> socket.socket:
+        sock = socket.socket()
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)  # a small window: the server must wait
+        sock.connect((url.hostname, url.port))
+        sock.sendall(f"GET /tableaux/{tid} HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n".encode())
+        return sock
+
+    idle = [idle_reader(large) for _ in range(45)]
+    time.sleep(1.0)
+    t0 = time.monotonic()
+    with s.client(timeout=10) as c:
+        assert c.get("/health").status_code == 200
+        assert len(c.get(f"/tableaux/{small}").content) == expected[small]
+    assert time.monotonic() - t0 < 5
+    time.sleep(3 + 1)
+    for sock in idle:
+        sock.settimeout(15)
+        got = b""
+        while chunk := sock.recv(1 << 20):  # what was sent before the time-out, then the server's close
+            got += chunk
+        sock.close()
+        assert got.startswith(b"HTTP/1.1 200") and not got.endswith(b"0\r\n\r\n")  # the chunked body is cut short
+        assert len(got) < expected[large]

@@ -108,7 +108,7 @@ def test_two_servers_on_one_postgresql_share_tokens_quotas_and_appends(tmp_path,
         mallory = bearer(make_token("mallory", db=postgres_url))
         tid = a.post("/tableaux", json=examples.notched_rectangle(circuits=50).to_dict(), headers=alice).json()["id"]
         assert b.get(f"/tableaux/{tid}/map", headers=alice).json()["summary"]["dstates"] == 8
-        assert b.post(f"/tableaux/{tid}/steps", json=MORE, headers=mallory).status_code == 403
+        assert b.post(f"/tableaux/{tid}/steps", json=MORE, headers=mallory).status_code == 404
 
         # A quota is shared: alice's one solve place, taken by a hard solve on a, is taken on b too.
         hard = threading.Thread(target=lambda: a.post("/tableaux", json=ONE_VIEW, headers=alice))

@@ -5,8 +5,11 @@ default loopback mode without tokens, where the Host and cross-site checks still
 """
 
 import os
+import socket
 import subprocess
 import sys
+import time
+from urllib.parse import urlsplit
 
 import pytest
 from service_helpers import SESSION_SETTINGS, Server, bearer, make_token
@@ -78,7 +81,7 @@ def test_without_a_token_every_write_and_read_of_tableaux_is_401(tokens_server, 
         assert tokens_required.status_code == 200
 
 
-def test_another_owners_token_gets_403_and_changes_nothing(tokens_server, alices):
+def test_another_owners_private_tableau_is_404_as_if_it_did_not_exist_and_nothing_changes(tokens_server, alices):
     alice, bob = bearer(tokens_server.tokens["alice"]), bearer(tokens_server.tokens["bob"])
     with tokens_server.client() as c:
         before = c.get(f"/tableaux/{alices}", headers=alice).json()
@@ -87,7 +90,10 @@ def test_another_owners_token_gets_403_and_changes_nothing(tokens_server, alices
                                    ("GET", f"/tableaux/{alices}/map/text", None), ("GET", f"/tableaux/{alices}/maps", None),
                                    ("GET", f"/tableaux/{alices}/why?a=0&b=4", None),
                                    ("PUT", f"/tableaux/{alices}/sharing", {"public": True})]:
-            assert problem(c.request(method, path, json=body, headers=bob), 403)["type"].endswith("/forbidden")
+            r = c.request(method, path, json=body, headers=bob)
+            missing = c.request(method, path.replace(f"/{alices}", "/999999"), json=body, headers=bob)
+            # The same answer as for an id that does not exist: nothing tells bob that alice's tableau does.
+            assert problem(r, 404)["detail"] == problem(missing, 404)["detail"].replace("999999", str(alices))
         assert c.get(f"/tableaux/{alices}", headers=alice).json() == before
         assert alices not in [t["id"] for t in c.get("/tableaux", headers=bob).json()["items"]]
         assert alices in [t["id"] for t in c.get("/tableaux", headers=alice).json()["items"]]
@@ -133,7 +139,7 @@ def test_only_an_admin_reloads_axioms_and_makes_tokens(tokens_server):
         problem(c.get("/tableaux", headers=bearer(made.json()["token"])), 401)
         problem(c.delete("/tokens/dave", headers=bearer(tokens_server.tokens["admin"])), 404)
         assert c.get(f"/tableaux/{tid}", headers=bearer(tokens_server.tokens["admin"])).status_code == 200
-        problem(c.get(f"/tableaux/{tid}", headers=bearer(tokens_server.tokens["alice"])), 403)
+        problem(c.get(f"/tableaux/{tid}", headers=bearer(tokens_server.tokens["alice"])), 404)
 
 
 # --- Hosts and other web sites (the default loopback server, no tokens) ------------------------------
@@ -195,3 +201,38 @@ def test_without_tokens_on_loopback_the_local_user_does_everything(client):
     created = client.post("/tableaux", json={"format": FORMAT, "steps": [{"view": "a"}]})
     assert created.status_code == 201
     assert client.delete(f"/tableaux/{created.json()['id']}").status_code == 204
+
+
+def test_a_body_is_never_read_for_a_token_the_server_does_not_know(tokens_server):
+    """Eight connections announce 4 MiB bodies (all the body memory the server lends at once), send one
+    byte and trickle: with a made-up token each is answered 401 at once, before its body, so it holds
+    nothing, and an honest post goes through meanwhile (before, the bodies were read first: every POST
+    waited for the trickles' 20 s body time-out)."""
+    url = urlsplit(tokens_server.url)
+    trickles = []
+    for path in ["/tokens", "/tableaux/1/sharing", "/tableaux/1/recognise", "/tableaux"] * 2:
+        sock = socket.create_connection((url.hostname, url.port), timeout=5)
+        sock.sendall(f"POST {path} HTTP/1.1\r\nHost: 127.0.0.1\r\nAuthorization: Bearer bm_{'x' * 43}\r\n"
+                     f"Content-Type: application/json\r\nContent-Length: {4 * 2**20}\r\n\r\n{{".encode())
+        trickles.append(sock)
+    for sock in trickles:
+        assert sock.recv(65536).startswith(b"HTTP/1.1 401"), "answered before the body"
+    t0 = time.monotonic()
+    with tokens_server.client() as c:
+        assert c.post("/tableaux", json=SMALL, headers=bearer(tokens_server.tokens["alice"])).status_code == 201
+    assert time.monotonic() - t0 < 10
+    for sock in trickles:
+        sock.close()
+
+
+@pytest.mark.parametrize("headers", [{"Sec-Fetch-Site": "cross-site"}, {"Origin": "http://evil.example"}])
+def test_a_page_elsewhere_cannot_start_a_solve_with_a_get(client, paper_id, headers):
+    for path in [f"/tableaux/{paper_id}/why?a=0&b=4", f"/tableaux/{paper_id}/rehearsal"]:
+        assert "start a solve" in problem(client.get(path, headers=headers), 403)["detail"]
+    assert client.get(f"/tableaux/{paper_id}/map", headers=headers).status_code == 200  # reading is fine
+
+
+def test_an_https_origin_is_not_this_http_server(client, server):
+    host = urlsplit(server.url).netloc
+    problem(client.post("/axioms/reload", headers={"Origin": f"https://{host}"}), 403)
+    assert client.post("/axioms/reload", headers={"Origin": f"http://{host}"}).status_code == 200

@@ -55,14 +55,14 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app = FastAPI(title="bootmap", version=__version__, description=DESCRIPTION, lifespan=lifespan)
     app.state.settings = settings
     problems.install(app)
-    # Added last = outermost: the guard sees a request first, then CORS, then the body limit.
+    # Added last = outermost: the guard sees a request first, then the send time-out, CORS, the body limit.
     app.add_middleware(problems.BodyLimit, max_bytes=settings.max_body_bytes, timeout_s=settings.body_timeout_s,
                        held_bytes=settings.max_held_body_bytes)
     if settings.cors_origins:
         app.add_middleware(CORSMiddleware, allow_origins=settings.cors_origins, allow_methods=["*"],
                            allow_headers=["Authorization", "Content-Type"], expose_headers=["Location", "Retry-After"])
-    app.add_middleware(Guard, hosts=settings.hosts, origins=settings.cors_origins,
-                       tokens_required=settings.tokens_required)
+    app.add_middleware(problems.SendTimeout, timeout_s=settings.send_timeout_s)
+    app.add_middleware(Guard, hosts=settings.hosts, origins=settings.cors_origins)
     for router in ROUTERS:
         app.include_router(router)
     app.openapi = lambda: _openapi(app, settings)  # type: ignore[method-assign]

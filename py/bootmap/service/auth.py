@@ -26,9 +26,10 @@ from fastapi import Depends, Request
 from fastapi.concurrency import run_in_threadpool
 from starlette.types import ASGIApp, Receive, Scope, Send
 
-from .deps import Services, ServicesDep
-from .problems import Problem, problem_response
-from .store import TableauRecord
+from ..errors import BootmapError
+from .deps import Services
+from .problems import Problem, from_bootmap_error, not_found, problem_response
+from .store import ANY, TableauRecord
 
 PREFIX = "bm_"
 
@@ -52,6 +53,11 @@ class Caller:
     def owns(self, record: TableauRecord) -> bool:
         return self.admin or (self.token_id is not None and record.owner_id == self.token_id)
 
+    @property
+    def owner(self) -> int | None:
+        """Whose tableaux this caller's writes may touch: its token's (a token id), or ANY (an admin)."""
+        return ANY if self.admin else self.token_id
+
 
 LOCAL = Caller(None, "local", admin=True)
 
@@ -64,8 +70,7 @@ def forbidden(detail: str) -> Problem:
     return Problem(403, "forbidden", "Not allowed", detail)
 
 
-def _bearer(request: Request) -> str | None:
-    header = request.headers.get("authorization")
+def _bearer(header: str | None) -> str | None:
     if header is None:
         return None
     scheme, _, token = header.partition(" ")
@@ -74,13 +79,17 @@ def _bearer(request: Request) -> str | None:
     return token.strip()
 
 
-async def get_caller(request: Request, services: ServicesDep) -> Caller:
-    """The caller of this request; a token holder's request is counted against its per-minute limit."""
-    token = _bearer(request)
+NEEDS_TOKEN = ("this server needs an API token: send 'Authorization: Bearer <token>' "
+               "(an admin makes one with 'bootmap token create NAME')")
+
+
+async def authenticate(services: Services, authorization: str | None) -> Caller:
+    """Who sends this Authorization header (401 if nobody the server knows); a token holder's request is
+    counted against its per-minute limit (429 beyond). Called by :class:`Guard`, before any body is read."""
+    token = _bearer(authorization)
     if token is None:
         if services.settings.tokens_required:
-            raise unauthorized("this server needs an API token: send 'Authorization: Bearer <token>' "
-                               "(an admin makes one with 'bootmap token create NAME')")
+            raise unauthorized(NEEDS_TOKEN)
         return LOCAL
     record = await run_in_threadpool(services.store.token_by_digest, digest(token))
     if record is None:
@@ -88,6 +97,14 @@ async def get_caller(request: Request, services: ServicesDep) -> Caller:
     await run_in_threadpool(services.store.count_request, record.id, services.settings.token_requests_per_minute,
                             time.time())
     return Caller(record.id, record.name, record.admin)
+
+
+def get_caller(request: Request) -> Caller:
+    """The caller :class:`Guard` authenticated for this request."""
+    caller = request.scope.get("state", {}).get("caller")
+    if caller is None:  # a route on an open path asked for a caller: it has none
+        raise unauthorized(NEEDS_TOKEN)
+    return caller
 
 
 CallerDep = Annotated[Caller, Depends(get_caller)]
@@ -104,7 +121,7 @@ AdminDep = Annotated[Caller, Depends(get_admin)]
 
 async def readable(services: Services, caller: Caller, tableau_id: int) -> TableauRecord:
     """The tableau's record (no document) if the caller may read it: its owner, an admin, or anyone when
-    it is public; else 403."""
+    it is public; else 404, as if it did not exist (a 403 would tell who may not read it that it does)."""
     record = await run_in_threadpool(services.store.head, tableau_id)
     check_read(caller, record)
     return record
@@ -112,12 +129,14 @@ async def readable(services: Services, caller: Caller, tableau_id: int) -> Table
 
 def check_read(caller: Caller, record: TableauRecord) -> None:
     if not (record.public or caller.owns(record)):
-        raise forbidden(f"tableau {record.id} belongs to another token and is not public")
+        raise not_found(record.id)
 
 
 async def writable(services: Services, caller: Caller, tableau_id: int) -> TableauRecord:
-    """The tableau's record if the caller may change it (append, delete, publish): its owner or an admin."""
-    record = await run_in_threadpool(services.store.head, tableau_id)
+    """The tableau's record if the caller may change it (append, delete, publish): its owner or an admin;
+    404 if the caller may not even read it, 403 if it may read it (public) but not change it. The write
+    itself checks the owner again, in the statement that writes (``Caller.owner``)."""
+    record = await readable(services, caller, tableau_id)
     if not caller.owns(record):
         raise forbidden(f"tableau {tableau_id} belongs to another token; only its owner or an admin may change it")
     return record
@@ -150,40 +169,49 @@ def host_allowed(host: str, allowed: list[str]) -> bool:
     return False
 
 
+# GETs that start a solve: a page elsewhere must not make a laptop's loopback service spend its solvers.
+SOLVING_GETS = re.compile(r"/tableaux/[^/]+/(why|rehearsal)")
+
+
 class Guard:
     """The outermost middleware. Refuse (problem details) a Host the server does not answer to (400); a
-    state-changing request a browser marks as coming from another site (403): ``Sec-Fetch-Site:
-    cross-site``, or an ``Origin`` that is neither this server nor a configured CORS origin; and, when
-    tokens are required, a request without one (401) before its body is read. HEAD is answered as GET
-    (uvicorn sends no body for it)."""
+    request that changes something or starts a solve which a browser marks as coming from another site
+    (403): ``Sec-Fetch-Site: cross-site``, or an ``Origin`` that is neither this server (scheme, host and
+    port) nor a configured CORS origin; and, outside the open paths, a request without a valid token
+    (401) or over its token's request rate (429). All of that happens before the body is read: a caller
+    without a valid token costs the server no body, no buffer and no parsing. The caller found is
+    handed to the routes in the request's state (:func:`get_caller`). HEAD is answered as GET (uvicorn
+    sends no body for it)."""
 
-    def __init__(self, app: ASGIApp, hosts: list[str], origins: list[str], tokens_required: bool = False):
-        self.app, self.hosts, self.origins, self.tokens_required = app, hosts, set(origins), tokens_required
+    def __init__(self, app: ASGIApp, hosts: list[str], origins: list[str]):
+        self.app, self.hosts, self.origins = app, hosts, set(origins)
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] != "http":
             return await self.app(scope, receive, send)
         headers = {k.decode("latin-1"): v.decode("latin-1") for k, v in scope["headers"]}
-        host = headers.get("host", "")
-        problem = None
-        if not host_allowed(host, self.hosts):
-            problem = Problem(400, "invalid-host", "Host not allowed",
+        host, method, path = headers.get("host", ""), scope["method"], scope["path"]
+        try:
+            if not host_allowed(host, self.hosts):
+                raise Problem(400, "invalid-host", "Host not allowed",
                               f"this server does not answer to the host {host[:100]!r} (BOOTMAP_ALLOWED_HOSTS)")
-        elif scope["method"] not in SAFE_METHODS and self._cross_site(headers, host):
-            problem = forbidden("a request from another web site may not change anything here "
+            if ((method not in SAFE_METHODS or SOLVING_GETS.fullmatch(path))
+                    and self._cross_site(headers, scope.get("scheme", "http"), host)):
+                raise forbidden("a request from another web site may not change anything here or start a solve "
                                 "(its Origin is not allowed; see BOOTMAP_CORS_ORIGINS)")
-        elif (self.tokens_required and "authorization" not in headers and scope["method"] != "OPTIONS"
-              and scope["path"] not in OPEN_PATHS and not scope["path"].startswith(OPEN_PREFIXES)):
-            # Before the body is read: a caller without a token costs the server no parsing.
-            problem = unauthorized("this server needs an API token: send 'Authorization: Bearer <token>' "
-                                   "(an admin makes one with 'bootmap token create NAME')")
-        if problem is not None:
-            return await problem_response(problem, scope.get("path"))(scope, receive, send)
-        if scope["method"] == "HEAD":  # answered as GET; the server sends no body for HEAD
-            scope = {**scope, "method": "GET"}
+            caller = None
+            if method != "OPTIONS" and path not in OPEN_PATHS and not path.startswith(OPEN_PREFIXES):
+                caller = await authenticate(scope["app"].state.services, headers.get("authorization"))
+        except Problem as p:
+            return await problem_response(p, path)(scope, receive, send)
+        except BootmapError as e:  # over the token's request rate
+            return await problem_response(from_bootmap_error(e), path)(scope, receive, send)
+        scope = {**scope, "state": {**scope.get("state", {}), "caller": caller}}
+        if method == "HEAD":  # answered as GET; the server sends no body for HEAD
+            scope["method"] = "GET"
         await self.app(scope, receive, send)
 
-    def _cross_site(self, headers: dict[str, str], host: str) -> bool:
+    def _cross_site(self, headers: dict[str, str], scheme: str, host: str) -> bool:
         origin = headers.get("origin")
         if origin is not None and origin in self.origins:
             return False
@@ -191,4 +219,4 @@ class Guard:
             return True
         if origin is None:
             return False  # not a browser's cross-origin request (browsers send Origin on every such POST)
-        return origin.split("://", 1)[-1] != host
+        return origin.lower() != f"{scheme}://{host}".lower()

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
+import pathlib
 import re
-import threading
-from collections import OrderedDict
-from dataclasses import dataclass, field
-from typing import Annotated, Any, Callable
+from dataclasses import dataclass
+from typing import Annotated
 
+from annotated_types import Ge, Le
 from fastapi import Depends, Path, Request
 from fastapi.concurrency import run_in_threadpool
 from pydantic import BeforeValidator
@@ -17,26 +17,8 @@ from .intake import Intake, Limits, intake_workers
 from .settings import Settings
 from .store import Store
 from .theory import LoadedTheory, Theories
-from .worker import Explained, ExplainJob, Job, Rehearsed, RehearseJob, Solved, SolveGate, SolveJob, SolverPool
-
-
-class Cache:
-    """A small thread-safe LRU cache (fitted recognisers, keyed by tableau id and revision)."""
-
-    def __init__(self, size: int = 8):
-        self.size, self._items, self._lock = size, OrderedDict(), threading.Lock()
-
-    def get(self, key: Any, make: Callable[[], Any]) -> Any:
-        with self._lock:
-            if key in self._items:
-                self._items.move_to_end(key)
-                return self._items[key]
-        value = make()  # outside the lock: fitting may take a while, and a duplicate fit is harmless
-        with self._lock:
-            self._items[key] = value
-            while len(self._items) > self.size:
-                self._items.popitem(last=False)
-        return value
+from .worker import (Explained, ExplainJob, Job, Rehearsed, RehearseJob, Solved, SolveGate, SolveJob, SolverPool,
+                     StoredTableau)
 
 
 @dataclass
@@ -47,7 +29,6 @@ class Services:
     pool: SolverPool
     gate: SolveGate
     intake: Intake
-    recognisers: Cache = field(default_factory=Cache)
 
     @property
     def limits(self) -> Limits:
@@ -75,7 +56,7 @@ class Services:
         self.pool.close()
         self.store.close()
 
-    def job(self, document: dict | str, stream: int | None = None) -> tuple[SolveJob, LoadedTheory]:
+    def job(self, document: dict | str | pathlib.Path, stream: int | None = None) -> tuple[SolveJob, LoadedTheory]:
         """A solve of a tableau document with the current theory, and that theory (its id goes with the map).
         ``stream``: the stored tableau's id, when the document extends it (its map is then kept current)."""
         theory, s = self.theories.current, self.settings
@@ -97,12 +78,12 @@ class Services:
             if lease is not None:
                 await run_in_threadpool(self.store.release_solve, lease)
 
-    def explain_job(self, document: dict | str, a: str, b: str, levels: tuple[str, ...] | None) -> ExplainJob:
+    def explain_job(self, document: dict | str | StoredTableau, a: str, b: str, levels: tuple[str, ...] | None) -> ExplainJob:
         """A question about a tableau document, with the current theory."""
         theory, s = self.theories.current, self.settings
         return ExplainJob(document, str(theory.snapshot), s.solve_time_limit_s, a, b, levels, s.quantum_deg)
 
-    def rehearse_job(self, document: dict | str, max_length: int) -> RehearseJob:
+    def rehearse_job(self, document: dict | str | StoredTableau, max_length: int) -> RehearseJob:
         """What to do next for a tableau document, with the current theory."""
         theory, s = self.theories.current, self.settings
         return RehearseJob(document, str(theory.snapshot), s.solve_time_limit_s, max_length, s.quantum_deg)
@@ -127,5 +108,7 @@ def _canonical_id(value: object) -> object:
 
 
 ServicesDep = Annotated[Services, Depends(get_services)]
-TableauId = Annotated[int, BeforeValidator(_canonical_id),
-                      Path(ge=1, le=2**63 - 1, description="The id the tableau was created with.")]
+# The bounds as annotated_types (not Path(ge=, le=)): beside a BeforeValidator, FastAPI would publish
+# Path's as "ge"/"le", which no OpenAPI tool reads, instead of "minimum"/"maximum".
+TableauId = Annotated[int, Ge(1), Le(2**63 - 1), BeforeValidator(_canonical_id),
+                      Path(description="The id the tableau was created with.")]

@@ -97,7 +97,8 @@ class StepIn(BaseModel):
     action: Action = optional(description="The action to the next step; every step but the last has one.")
     image: list[SenseValue] = optional(min_length=1, description="The sense vector at this dstate "
                                                                  "(e.g. 180 laser ranges in metres), values within +-1e9.")
-    truth: Union[StrictStr, IntegerValued] = optional(description="The true dstate id, for evaluation only.")
+    truth: Union[Annotated[StrictStr, Field(max_length=200, pattern=NO_NUL)], IntegerValued] = optional(
+        description="The true dstate id, for evaluation only: an integer, or at most 200 characters, no NUL.")
     pose: list[float] = optional(min_length=3, max_length=3, description="[x, y, theta], for evaluation only.")
     odometry: list[float] = optional(min_length=3, max_length=3,
                                      description="The robot's own dead-reckoned [x, y, theta] at this dstate.")
@@ -114,7 +115,8 @@ class TableauIn(BaseModel):
 
     model_config = STRICT
     format: Literal["bootmap.tableau/1"] = Field(description=f"Always {FORMAT!r}.")
-    world: StrictStr = optional(description="Name of the world the run came from (informational).")
+    world: StrictStr = optional(max_length=200, pattern=NO_NUL,
+                                description="Name of the world the run came from (informational).")
     meta: dict[str, JsonValue] = optional(description="Free-form run information; never read by the resolver.")
     steps: list[StepIn] = Field(min_length=1)
 

@@ -27,7 +27,7 @@ from starlette.exceptions import HTTPException
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from ..errors import AxiomError, BootmapError, ExplainError, InconsistentTableau, SolveTimeout, TableauError
-from .store import Conflict, NotFound, QuotaExceeded
+from .store import Conflict, NotFound, NotOwner, QuotaExceeded
 from .worker import SolveCancelled, SolverBusy, SolverCrashed, SolverKilled, SolverOutOfMemory
 
 PROBLEM_JSON = "application/problem+json"
@@ -74,6 +74,7 @@ def invalid(field: str, reason: str, kind: str = "invalid-tableau") -> Problem:
 # Most specific first: SolverKilled is a SolveTimeout.
 _KINDS: list[tuple[type, int, str, str]] = [
     (Conflict, 409, "conflict", "Tableau changed"),
+    (NotOwner, 403, "forbidden", "Not allowed"),
     (QuotaExceeded, 429, "quota-exceeded", "Over this token's limit"),
     (SolveCancelled, 400, "client-gone", "The client went away"),
     (SolverBusy, 503, "solvers-busy", "Every solver is busy"),
@@ -119,7 +120,7 @@ def _extensions(e: BootmapError) -> dict[str, Any]:
 # ---------------------------------------------------------------------------------------------------
 
 # Pydantic puts the branch of a union in an error's location ("truth", "str"); a person wants the field.
-_BRANCHES = {"str", "int", "float", "bool", "list", "dict", "none", "nullable", "turn", "travel"}
+_BRANCHES = {"str", "constrained-str", "int", "float", "bool", "list", "dict", "none", "nullable", "turn", "travel"}
 
 
 def _is_branch(part: Any) -> bool:
@@ -210,7 +211,9 @@ def parse_json(body: bytes, max_values: int | None = None) -> Any:
                       f"the body holds about {count_values(body)} JSON values, more than this server's limit of "
                       f"{max_values} per request (BOOTMAP_MAX_JSON_VALUES)", limit_values=max_values)
     try:
-        data = json.loads(body)
+        # Decoded here, strictly: json.loads would also take UTF-16 and UTF-32, which the API does not.
+        data = json.loads(body.decode("utf-8") if isinstance(body, (bytes, bytearray)) else body,
+                          object_pairs_hook=_unique_keys)
     except json.JSONDecodeError as e:
         raise Problem(400, "malformed-json", "Malformed JSON",
                       f"not valid JSON: {e.msg} at line {e.lineno} column {e.colno}") from None
@@ -223,6 +226,16 @@ def parse_json(body: bytes, max_values: int | None = None) -> Any:
         raise Problem(400, "malformed-json", "Malformed JSON", f"not acceptable JSON: {e}") from None
     if _SURROGATE_ESCAPE.search(body):
         _check_surrogates(data, [])
+    return data
+
+
+def _unique_keys(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    """An object, refusing a key given twice (JSON parsers disagree on which one wins)."""
+    data = dict(pairs)
+    if len(data) != len(pairs):
+        seen: set[str] = set()
+        twice = next(k for k, _ in pairs if k in seen or seen.add(k))
+        raise Problem(400, "malformed-json", "Malformed JSON", f"the key {twice[:100]!r} appears twice in one object")
     return data
 
 
@@ -373,6 +386,42 @@ class BodyLimit:
         await self.app(scope, limited, send)
 
 
+class ClientStalled(BaseException):
+    """Ends a response whose client stopped reading. A BaseException, like a cancellation: no error
+    handler turns it into an error page (the response has started) or logs it as a bug."""
+
+
+class SendTimeout:
+    """Close the connection of a client that does not read its response: when one part of a response
+    cannot go out within ``timeout_s`` (the client's receive window and the server's send buffer are
+    full), the response ends there and uvicorn closes the connection. Without this, such a client
+    would hold its connection, and the response's task, for as long as it liked."""
+
+    def __init__(self, app: ASGIApp, timeout_s: float):
+        self.app, self.timeout_s = app, timeout_s
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http":
+            return await self.app(scope, receive, send)
+
+        async def timed(message: Message) -> None:
+            with anyio.move_on_after(self.timeout_s) as timer:
+                await send(message)
+            if timer.cancelled_caught:
+                log.warning("a client read nothing of its response to %s for %g s (BOOTMAP_SEND_TIMEOUT_S): "
+                            "its connection is closed", scope.get("path"), self.timeout_s)
+                raise ClientStalled()
+
+        try:
+            await self.app(scope, receive, timed)
+        except ClientStalled:
+            return  # the response is incomplete: uvicorn closes the connection
+        except BaseExceptionGroup as group:  # raised inside a response's task group
+            _, rest = group.split(ClientStalled)
+            if rest is not None:
+                raise rest
+
+
 # ---------------------------------------------------------------------------------------------------
 # Handlers
 # ---------------------------------------------------------------------------------------------------
@@ -442,5 +491,5 @@ def openapi_responses(*statuses: int) -> dict[int | str, dict]:
             for s in statuses}
 
 
-__all__ = ["BodyLimit", "JSONRoute", "Problem", "install", "openapi_responses", "parse_json",
+__all__ = ["BodyLimit", "JSONRoute", "Problem", "SendTimeout", "install", "openapi_responses", "parse_json",
            "validation_problem"]

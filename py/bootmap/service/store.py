@@ -10,6 +10,9 @@ writer and concurrent writers wait for each other instead of failing with "datab
 
 from __future__ import annotations
 
+import functools
+import itertools
+import tempfile
 from dataclasses import dataclass
 from datetime import datetime, timedelta, timezone
 from pathlib import Path
@@ -17,6 +20,7 @@ from typing import Iterator
 
 from sqlalchemy import (
     BigInteger,
+    MetaData,
     Boolean,
     DateTime,
     ForeignKey,
@@ -53,6 +57,14 @@ class Conflict(BootmapError):
     """The tableau changed (another append) between reading it and writing the new revision."""
 
 
+class NotOwner(BootmapError):
+    """The tableau exists, but the caller's token does not own it (checked in the statement that writes)."""
+
+    def __init__(self, tableau_id: int):
+        self.tableau_id = tableau_id
+        super().__init__(f"tableau {tableau_id} belongs to another token; only its owner or an admin may change it")
+
+
 class QuotaExceeded(BootmapError):
     """A token is over one of its limits (solves at once, requests per minute, stored bytes)."""
 
@@ -63,6 +75,10 @@ class QuotaExceeded(BootmapError):
 
 
 
+# ``owner`` of a write: the caller's token id, or ANY for an admin (or the local user without tokens).
+ANY = None
+
+
 class Base(DeclarativeBase):
     pass
 
@@ -71,6 +87,9 @@ class TokenRow(Base):
     """An API token: only its SHA-256 is kept (the token itself is shown once, when it is made)."""
 
     __tablename__ = "tokens"
+    # Ids are never reused (SQLite would otherwise give a deleted row's id to the next one): a token id in
+    # a lease, a count or a cache always means the same token.
+    __table_args__ = {"sqlite_autoincrement": True}
 
     id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
     name: Mapped[str] = mapped_column(String(100), unique=True)
@@ -104,6 +123,9 @@ class RequestCount(Base):
 
 class TableauRow(Base):
     __tablename__ = "tableaux"
+    # Ids are never reused: a request that read tableau N (its owner, its revision) and writes later can
+    # only ever meet that tableau, or none; a cache keyed by the id never serves a newer tableau.
+    __table_args__ = {"sqlite_autoincrement": True}
 
     id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
     owner_id: Mapped[int | None] = mapped_column(ForeignKey("tokens.id", ondelete="SET NULL"), nullable=True,
@@ -156,6 +178,12 @@ class TableauRecord:
     owner_id: int | None = None
     public: bool = False
 
+    @property
+    def key(self) -> str:
+        """What tells this tableau's revision apart from every other tableau's, for caches and ETags: the
+        id (never reused), the creation time and the revision."""
+        return f"{self.id}.{int(self.created_at.timestamp() * 1e6)}.r{self.revision}"
+
 
 @dataclass(frozen=True)
 class TableauSummary:
@@ -198,6 +226,37 @@ def make_engine(url: str) -> Engine:
     return engine
 
 
+def _never_reuse_ids(engine: Engine, table) -> None:
+    """Give an SQLite table made before its ids were AUTOINCREMENT that property: SQLite cannot alter a
+    table so, so it is rebuilt (a new table, the rows copied, the old one dropped), in one transaction
+    with foreign keys off so that the rows that reference it stay as they are."""
+    with engine.connect() as conn:
+        made = conn.exec_driver_sql("SELECT sql FROM sqlite_master WHERE type = 'table' AND name = ?",
+                                    (table.name,)).scalar() or ""
+        conn.rollback()
+        if "AUTOINCREMENT" in made.upper():
+            return
+        conn.exec_driver_sql("PRAGMA foreign_keys=OFF")  # not inside a transaction: SQLite ignores it there
+        conn.commit()
+        try:
+            with conn.begin():
+                scratch = MetaData()
+                for t in Base.metadata.sorted_tables:  # what its foreign keys name must be in the same metadata
+                    t.to_metadata(scratch)
+                new = table.to_metadata(scratch, name=f"{table.name}_rebuilt")
+                new.indexes.clear()  # made again below, under their own names, once the table has its name
+                new.create(conn)
+                columns = ", ".join(f'"{c.name}"' for c in table.columns)
+                conn.exec_driver_sql(f'INSERT INTO "{new.name}" ({columns}) SELECT {columns} FROM "{table.name}"')
+                conn.exec_driver_sql(f'DROP TABLE "{table.name}"')  # and its indexes
+                conn.exec_driver_sql(f'ALTER TABLE "{new.name}" RENAME TO "{table.name}"')
+                for index in table.indexes:
+                    index.create(conn)
+        finally:
+            conn.exec_driver_sql("PRAGMA foreign_keys=ON")
+            conn.commit()
+
+
 def _sqlite_pragmas(dbapi_connection, _record) -> None:
     cursor = dbapi_connection.cursor()
     cursor.execute("PRAGMA journal_mode=WAL")
@@ -227,6 +286,9 @@ class Store:
             for name, ddl in _NEW_COLUMNS.items():
                 if name not in have:
                     conn.execute(text(f"ALTER TABLE tableaux ADD COLUMN {name} {ddl}"))
+        if self.engine.dialect.name == "sqlite":
+            for table in (TokenRow.__table__, TableauRow.__table__):
+                _never_reuse_ids(self.engine, table)
 
     def close(self) -> None:
         self.engine.dispose()
@@ -274,42 +336,57 @@ class Store:
                 raise NotFound(tableau_id)
             return MapRecord(row.revision, row.theory, row.dstates, row.places, row.paths, row.document, row.text)
 
+    def map_head(self, tableau_id: int) -> tuple[int, str]:
+        """The revision and theory id of the tableau's stored map, without its document."""
+        with self._session() as s:
+            row = s.execute(select(MapRow.revision, MapRow.theory).where(MapRow.tableau_id == tableau_id)).first()
+        if row is None:
+            raise NotFound(tableau_id)
+        return row[0], row[1]
+
     def replace(self, tableau_id: int, document: str, n_steps: int, views_k: int | None,
-                cmap: MapRecord, max_bytes: int | None = None) -> TableauRecord:
+                cmap: MapRecord, owner: int | None = ANY, max_bytes: int | None = None) -> TableauRecord:
         """Store revision ``cmap.revision`` of the tableau and its map, unless another request stored that
-        revision first (:class:`Conflict`) or the owner would go over ``max_bytes`` (QuotaExceeded)."""
+        revision first (:class:`Conflict`), the tableau is gone (:class:`NotFound`), ``owner`` (a token
+        id; ANY for an admin) no longer owns it (:class:`NotOwner`) or the owner would go over
+        ``max_bytes`` (QuotaExceeded)."""
         now = datetime.now(timezone.utc)
         revision, expected_revision = cmap.revision, cmap.revision - 1
         size = _size(document, cmap)
         with self._session.begin() as s:
             # Write first, read nothing before: the row lock is taken by this UPDATE, so two appends
-            # cannot both pass the revision check.
+            # cannot both pass the revision check, and the owner is checked by the statement that writes.
             done = s.execute(update(TableauRow)
-                             .where(TableauRow.id == tableau_id, TableauRow.revision == expected_revision)
+                             .where(TableauRow.id == tableau_id, TableauRow.revision == expected_revision,
+                                    *_owned_by(owner))
                              .values(revision=revision, n_steps=n_steps, views_k=views_k, document=document,
                                      updated_at=now, stored_bytes=size))
             if done.rowcount != 1:
-                if s.get(TableauRow, tableau_id) is None:
-                    raise NotFound(tableau_id)
+                _why_not_written(s, tableau_id, owner)
                 raise Conflict(f"tableau {tableau_id} changed while this request was solved "
                                f"(it is no longer at revision {expected_revision}); send the request again")
-            owner = s.scalar(select(TableauRow.owner_id).where(TableauRow.id == tableau_id))
-            if owner is not None and max_bytes is not None:
-                _check_bytes(s, owner, 0, max_bytes)  # this revision is counted already
+            stored_owner = s.scalar(select(TableauRow.owner_id).where(TableauRow.id == tableau_id))
+            if stored_owner is not None and max_bytes is not None:
+                _check_bytes(s, stored_owner, 0, max_bytes)  # this revision is counted already
             s.merge(_map_row(tableau_id, cmap))
             row = s.get(TableauRow, tableau_id)
             return _record(row)
 
-    def set_public(self, tableau_id: int, public: bool) -> None:
+    def set_public(self, tableau_id: int, public: bool, owner: int | None = ANY) -> None:
+        """Make the tableau public or private, if ``owner`` (a token id; ANY for an admin) owns it."""
         with self._session.begin() as s:
-            if s.execute(update(TableauRow).where(TableauRow.id == tableau_id).values(public=public)).rowcount != 1:
-                raise NotFound(tableau_id)
+            done = s.execute(update(TableauRow).where(TableauRow.id == tableau_id, *_owned_by(owner))
+                             .values(public=public))
+            if done.rowcount != 1:
+                _why_not_written(s, tableau_id, owner)
 
-    def delete(self, tableau_id: int) -> None:
+    def delete(self, tableau_id: int, owner: int | None = ANY) -> None:
+        """Delete the tableau and its map, if ``owner`` (a token id; ANY for an admin) owns it."""
         with self._session.begin() as s:
+            done = s.execute(delete(TableauRow).where(TableauRow.id == tableau_id, *_owned_by(owner)))
+            if done.rowcount != 1:
+                _why_not_written(s, tableau_id, owner)
             s.execute(delete(MapRow).where(MapRow.tableau_id == tableau_id))
-            if s.execute(delete(TableauRow).where(TableauRow.id == tableau_id)).rowcount != 1:
-                raise NotFound(tableau_id)
 
     def list(self, limit: int, offset: int, owner_id: int | None = None,
              everyone: bool = True) -> tuple[int, list[TableauSummary]]:
@@ -394,12 +471,33 @@ class Store:
             s.execute(delete(SolveLease).where(SolveLease.id == lease_id))
 
 
+@functools.lru_cache(maxsize=4)
+def store_at(url: str) -> Store:
+    """This process's Store of the database at ``url``, opened once: the intake and solver processes
+    read and write stored tableaux themselves."""
+    return Store(url)
+
+
 _HEAD = (TableauRow.id, TableauRow.revision, TableauRow.n_steps, TableauRow.views_k, TableauRow.created_at,
          TableauRow.updated_at, TableauRow.owner_id, TableauRow.public)
 
 
 def _head_record(row) -> TableauRecord:
     return TableauRecord(row[0], row[1], row[2], row[3], "", _utc(row[4]), _utc(row[5]), row[6], bool(row[7]))
+
+
+def _owned_by(owner: int | None) -> tuple:
+    """The WHERE clause that limits a write to the owner's tableaux (none for ANY)."""
+    return () if owner is ANY else (TableauRow.owner_id == owner,)
+
+
+def _why_not_written(s, tableau_id: int, owner: int | None) -> None:
+    """After a write matched no row: NotFound if the tableau is gone, NotOwner if it is another's."""
+    stored_owner = s.execute(select(TableauRow.owner_id).where(TableauRow.id == tableau_id)).first()
+    if stored_owner is None:
+        raise NotFound(tableau_id)
+    if owner is not ANY and stored_owner[0] != owner:
+        raise NotOwner(tableau_id)
 
 
 def _size(document: str, cmap: MapRecord) -> int:
@@ -422,67 +520,73 @@ def _check_bytes(s, owner_id: int, adding: int, max_bytes: int) -> None:
 
 
 class Stream:
-    """Chunks of one stored text, from one read snapshot, on one connection held until :meth:`close`.
+    """One stored text, from one read snapshot, handed out in chunks.
 
-    SQLite reads the value with incremental blob I/O (only the chunk asked for is read); PostgreSQL with
-    ``substr`` in a REPEATABLE READ transaction."""
+    The text is copied from the database in chunks of STREAM_CHUNK (SQLite's incremental blob I/O,
+    PostgreSQL's ``substr`` in a REPEATABLE READ transaction) into a temporary file, and the database
+    connection goes back to the pool at once: a client that reads slowly, or not at all, holds a file,
+    never a connection. A small text (most maps) is kept in memory as ``whole``. Close it when done."""
 
     _COLUMNS = {"tableau": (TableauRow, "document", "id"), "map": (MapRow, "document", "tableau_id"),
                 "text": (MapRow, "text", "tableau_id")}
 
     def __init__(self, engine: Engine, tableau_id: int, what: str):
-        table, self.column, key = self._COLUMNS[what]
-        self.table, self.where = table.__table__, getattr(table, key) == tableau_id
-        self._blob = None
-        self.conn = engine.connect()
-        try:
+        self.whole: bytes | None = None
+        self._file = None
+        with engine.connect() as conn:
             if engine.dialect.name == "postgresql":
-                self.conn = self.conn.execution_options(isolation_level="REPEATABLE READ")
-            self.conn.begin()
-            self.head = _head_record_or_none(self.conn, tableau_id)
-            rowid = self.conn.scalar(select(text("rowid") if engine.dialect.name == "sqlite"
-                                            else func.length(self.table.c[self.column])).where(self.where))
-            if self.head is None or rowid is None:
-                raise NotFound(tableau_id)
-            if engine.dialect.name == "sqlite":  # the blob handle holds its own read snapshot
-                raw = self.conn.connection.dbapi_connection
-                self._blob = raw.blobopen(self.table.name, self.column, rowid, readonly=True)
-                self.length = len(self._blob)  # bytes (the map may hold UTF-8)
-            else:
-                self.length = rowid  # characters, as substr counts them
-            self.whole: bytes | None = None
-            if self.length <= STREAM_CHUNK:  # small (most maps): read at once, the connection goes back
-                self.whole = b"".join(self._chunks())
-                self.close()
-        except BaseException:
-            self.close()
-            raise
+                conn = conn.execution_options(isolation_level="REPEATABLE READ")
+            with conn.begin():
+                self.head = _head_record_or_none(conn, tableau_id)
+                if self.head is None:
+                    raise NotFound(tableau_id)
+                chunks = _chunks(conn, *self._COLUMNS[what], tableau_id)
+                first = next(chunks, b"")
+                following = next(chunks, None)
+                if following is None:  # small: read at once
+                    self.whole = first
+                    return
+                self._file = tempfile.TemporaryFile(prefix="bootmap-read-")
+                try:
+                    for chunk in itertools.chain((first, following), chunks):
+                        self._file.write(chunk)
+                    self._file.seek(0)
+                except BaseException:
+                    self.close()
+                    raise
 
     def __iter__(self) -> Iterator[bytes]:
         if self.whole is not None:
             yield self.whole
             return
         try:
-            yield from self._chunks()
+            while chunk := self._file.read(STREAM_CHUNK):
+                yield chunk
         finally:
             self.close()
 
-    def _chunks(self) -> Iterator[bytes]:
-        for start in range(0, self.length, STREAM_CHUNK):
-            if self._blob is not None:
-                yield self._blob.read(STREAM_CHUNK)
-            else:
-                chunk = self.conn.scalar(select(func.substr(self.table.c[self.column], start + 1, STREAM_CHUNK))
-                                         .where(self.where))
-                yield chunk.encode()
-
     def close(self) -> None:
-        if self._blob is not None:
-            self._blob.close()
-            self._blob = None
-        if not self.conn.closed:
-            self.conn.rollback()
-            self.conn.close()
+        if self._file is not None:
+            self._file.close()
+            self._file = None
+
+
+def _chunks(conn, table, column: str, key: str, tableau_id: int) -> Iterator[bytes]:
+    """The stored text, STREAM_CHUNK at a time, within the connection's transaction."""
+    c, where = table.__table__.c[column], getattr(table, key) == tableau_id
+    if conn.dialect.name == "sqlite":  # incremental blob I/O: only the chunk asked for is read
+        rowid = conn.scalar(select(text("rowid")).where(where))
+        if rowid is None:
+            raise NotFound(tableau_id)
+        with conn.connection.dbapi_connection.blobopen(table.__tablename__, column, rowid, readonly=True) as blob:
+            while chunk := blob.read(STREAM_CHUNK):
+                yield chunk
+        return
+    length = conn.scalar(select(func.length(c)).where(where))
+    if length is None:
+        raise NotFound(tableau_id)
+    for start in range(0, length, STREAM_CHUNK):
+        yield conn.scalar(select(func.substr(c, start + 1, STREAM_CHUNK)).where(where)).encode()
 
 
 def _head_record_or_none(conn, tableau_id: int) -> TableauRecord | None:

@@ -24,6 +24,7 @@ import threading
 import time
 import traceback
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Awaitable, Callable
 
 from ..errors import AxiomError, BootmapError, ExplainError, InconsistentTableau, SolveTimeout, TableauError
@@ -63,12 +64,21 @@ class SolveCancelled(BootmapError):
 
 
 @dataclass(frozen=True)
+class StoredTableau:
+    """A stored tableau, which the solver reads from the database itself: the server need not hold its
+    text to ask a question about it."""
+
+    url: str
+    tableau_id: int
+
+
+@dataclass(frozen=True)
 class SolveJob:
     """What a solver needs: the tableau document and the theory snapshot to solve it with. The solver
     validates the document (bootmap.tableau, against the JSON Schema): that takes longer than many solves,
     and is better spent in a solver process than under the server's GIL."""
 
-    document: dict | str  # the tableau, or its JSON text (the server need not parse it)
+    document: dict | str | Path | StoredTableau  # the tableau, its JSON text, a file of it, or where it is stored
     axioms: str
     time_limit_s: float
     quantum_deg: float | None = None
@@ -81,7 +91,7 @@ class ExplainJob:
     """A question about a stored tableau: are time points (or dstates) ``a`` and ``b`` one dstate, and
     why? Solved like a map, in a solver process under the same deadline and memory cap."""
 
-    document: dict | str
+    document: dict | str | StoredTableau
     axioms: str
     time_limit_s: float
     a: str
@@ -94,7 +104,7 @@ class ExplainJob:
 class RehearseJob:
     """What to do next when a stored tableau's minimal maps disagree (`bootmap rehearse`)."""
 
-    document: dict | str
+    document: dict | str | StoredTableau
     axioms: str
     time_limit_s: float
     max_length: int = 10
@@ -254,7 +264,13 @@ def _rehearse(job: RehearseJob, cache: dict) -> tuple:
         return "timeout", str(e), e.lower_bound, None
 
 
-def _tableau(document: dict | str) -> Tableau:
+def _tableau(document: dict | str | Path | StoredTableau) -> Tableau:
+    if isinstance(document, Path):  # a prepared document the server did not read (intake.PREPARED)
+        document = document.read_text()
+    elif isinstance(document, StoredTableau):
+        from .store import store_at
+
+        document = store_at(document.url).get(document.tableau_id).document
     return Tableau.loads(document, "tableau") if isinstance(document, str) else Tableau.from_dict(document, "tableau")
 
 

@@ -5,7 +5,6 @@ from __future__ import annotations
 from typing import Annotated
 
 from fastapi import APIRouter, Query, Request
-from fastapi.concurrency import run_in_threadpool
 
 from ...errors import AxiomError
 from ...mapping.theory import select_levels
@@ -13,6 +12,7 @@ from ..auth import CallerDep, readable
 from ..deps import ServicesDep, TableauId
 from ..models import ExplanationOut
 from ..problems import JSONRoute, invalid, openapi_responses
+from ..worker import StoredTableau
 
 router = APIRouter(prefix="/tableaux/{tableau_id}", tags=["explanations"], route_class=JSONRoute)
 
@@ -35,8 +35,8 @@ async def why(tableau_id: TableauId, a: Point, b: Point, services: ServicesDep, 
     apart. Dstate names (S4) are those of the minimal map with the chosen levels."""
     chosen = _levels(levels, services)
     await readable(services, caller, tableau_id)
-    record = await run_in_threadpool(services.store.get, tableau_id)
-    job = services.explain_job(record.document, a, b, chosen)  # the solver parses it
+    stored = StoredTableau(services.settings.database_url, tableau_id)  # the solver reads it
+    job = services.explain_job(stored, a, b, chosen)
     explained = await services.solve(job, caller.token_id, request)
     return ExplanationOut.model_validate({**explained.explanation, "text": explained.text})
 

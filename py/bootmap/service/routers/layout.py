@@ -3,20 +3,20 @@
 The layout is computed here, on the server, from the map and its tableau (:mod:`bootmap.layout`), so the
 same map is drawn the same way by every browser. The viewer polls this resource to follow appended steps:
 it sends the ETag it has (``If-None-Match``) and gets ``304 Not Modified`` until the tableau's revision
-changes, which costs the server one read of the stored map and no layout.
+changes, which costs the server two short reads (the tableau's owner, the map's revision) and no layout.
 """
 
 from __future__ import annotations
 
-import json
 from typing import Literal
 
 from fastapi import APIRouter, Request, Response
+from fastapi.concurrency import run_in_threadpool
 from pydantic import Field
 
-from ...layout import layout
-from ..auth import CallerDep, check_read
-from ..deps import Services, ServicesDep, TableauId
+from ..auth import CallerDep, readable
+from ..deps import ServicesDep, TableauId
+from ..intake import draw_stored
 from ..models import MapOut, Out
 from ..problems import JSONRoute, openapi_responses
 
@@ -62,28 +62,18 @@ class Drawing(Out):
     map: MapOut
 
 
-@router.get("/layout", response_model=Drawing, responses={**openapi_responses(401, 403, 404, 422, 429), 304: {
+@router.get("/layout", response_model=Drawing, responses={**openapi_responses(401, 404, 422, 429), 304: {
     "description": "The revision named by If-None-Match is still the current one."}},
             summary="The map laid out for drawing (the viewer's data)")
-def read_layout(tableau_id: TableauId, services: ServicesDep, caller: CallerDep, request: Request) -> Response:
+async def read_layout(tableau_id: TableauId, services: ServicesDep, caller: CallerDep, request: Request) -> Response:
     """The map and where to draw its places, dstates and paths (and the true trajectory when the steps
-    have poses). ETag: the revision and the theory; with a matching If-None-Match, 304 and no body."""
-    check_read(caller, services.store.head(tableau_id))  # as /map: its owner, an admin, or public
-    cmap = services.store.get_map(tableau_id)
-    etag = f'"r{cmap.revision}-{cmap.theory}"'
+    have poses). ETag: the tableau (which a new tableau never shares), its revision and the theory; with a
+    matching If-None-Match, 304 and no body."""
+    head = await readable(services, caller, tableau_id)  # as /map: its owner, an admin, or public
+    _, theory = await run_in_threadpool(services.store.map_head, tableau_id)
+    etag = f'"{head.key}-{theory}"'
     if etag in request.headers.get("if-none-match", ""):
         return Response(status_code=304, headers={"ETag": etag})
-    drawing = _drawing(services, tableau_id, cmap.document)
+    # Laid out in an intake process, which reads the tableau and its map itself (intake.draw_stored).
+    drawing = await services.intake.run(draw_stored, services.settings.database_url, tableau_id)
     return Response(drawing, media_type="application/json", headers={"ETag": etag, "Cache-Control": "no-cache"})
-
-
-def _drawing(services: Services, tableau_id: int, map_document: str) -> str:
-    # Read after the map: if an append lands between the two reads, the tableau has more steps than the
-    # map, and the layout reads only the map's (their first steps are the same).
-    record = services.store.get(tableau_id)
-    m = json.loads(map_document)
-    head = json.dumps({"id": tableau_id, "revision": m["revision"],
-                       "layout": layout(m, json.loads(record.document))})
-    # The map as stored (validated when it was solved): served as it is, not serialised again.
-    return head[:-1] + ', "map": ' + map_document + "}"
-

@@ -15,7 +15,7 @@ from ..problems import JSONRoute, openapi_responses
 from .tableaux import streamed
 
 router = APIRouter(prefix="/tableaux/{tableau_id}", tags=["maps"], route_class=JSONRoute)
-READ_ERRORS = openapi_responses(401, 403, 404, 422, 429)
+READ_ERRORS = openapi_responses(401, 404, 422, 429)
 
 
 @router.get("/map", response_model=MapOut, responses=READ_ERRORS, summary="The tableau's minimal map")

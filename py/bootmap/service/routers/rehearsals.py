@@ -5,12 +5,12 @@ from __future__ import annotations
 from typing import Annotated
 
 from fastapi import APIRouter, Query, Request
-from fastapi.concurrency import run_in_threadpool
 
 from ..auth import CallerDep, readable
 from ..deps import ServicesDep, TableauId
 from ..models import RehearsalOut
 from ..problems import JSONRoute, openapi_responses
+from ..worker import StoredTableau
 
 router = APIRouter(prefix="/tableaux/{tableau_id}", tags=["rehearsals"], route_class=JSONRoute)
 
@@ -24,6 +24,6 @@ async def rehearsal(tableau_id: TableauId, services: ServicesDep, caller: Caller
     minimal maps predict differently, with what each map predicts along them; kind "nothing" when the
     map is unique."""
     await readable(services, caller, tableau_id)
-    record = await run_in_threadpool(services.store.get, tableau_id)
-    rehearsed = await services.solve(services.rehearse_job(record.document, max_length), caller.token_id, request)
+    stored = StoredTableau(services.settings.database_url, tableau_id)  # the solver reads it
+    rehearsed = await services.solve(services.rehearse_job(stored, max_length), caller.token_id, request)
     return RehearsalOut.model_validate({**rehearsed.plan, "text": rehearsed.text})

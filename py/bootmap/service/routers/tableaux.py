@@ -9,6 +9,9 @@ always has a map. Appending is the same: the new revision is stored only once it
 from __future__ import annotations
 
 import json
+import tempfile
+from contextlib import asynccontextmanager
+from pathlib import Path
 from typing import Annotated
 
 from fastapi import APIRouter, Query, Request, Response
@@ -18,7 +21,7 @@ from starlette.background import BackgroundTask
 
 from ..auth import Caller, CallerDep, check_read, writable
 from ..deps import Services, ServicesDep, TableauId
-from ..intake import prepare_append, prepare_tableau
+from ..intake import PREPARED, prepare_append, prepare_tableau, store_prepared
 from ..models import MapOut, TableauCreated, TableauList, TableauListItem, TableauOut, TableauSharing
 from ..problems import JSONRoute, Problem, openapi_responses
 from ..store import MapRecord, Stream, TableauRecord
@@ -27,12 +30,12 @@ from ..worker import Solved
 
 router = APIRouter(prefix="/tableaux", tags=["tableaux"], route_class=JSONRoute)
 SOLVE_ERRORS = openapi_responses(400, 401, 403, 413, 415, 422, 429, 500, 503)
-READ_ERRORS = openapi_responses(401, 403, 404, 422, 429)
+READ_ERRORS = openapi_responses(401, 404, 422, 429)
 
 
 def streamed(stream: Stream, caller: Caller, before: str = "", after: str = "",
              media_type: str = "application/json") -> Response:
-    """A stored text streamed to a caller who may read it (else 403, and the stream is closed)."""
+    """A stored text streamed to a caller who may read it (else 404, and the stream is closed)."""
     try:
         check_read(caller, stream.head)
     except Exception:
@@ -56,19 +59,28 @@ def json_body(model: str) -> dict:
         "schema": {"$ref": f"#/components/schemas/{model}"}}}}}
 
 
-async def json_bytes(request: Request) -> bytearray:
-    """The request's body, which must be JSON (415 otherwise; 422 if there is none)."""
-    # Read into one buffer (not a list of chunks joined at the end: a large body is held once, not twice).
-    body = bytearray()
-    async for chunk in request.stream():
-        body += chunk
-    if not body:
-        raise Problem(422, "invalid-request", "Invalid request", "the request needs a JSON body")
+@asynccontextmanager
+async def body_file(request: Request):
+    """The request's body, which must be JSON (415 otherwise; 422 if there is none), written to a
+    temporary file as it arrives, for an intake process to read: the server never holds it whole. The
+    file, and the prepared document the intake writes beside it (intake.PREPARED), are removed after."""
     mime = request.headers.get("content-type", "").split(";")[0].strip().lower()
-    if not (mime == "application/json" or (mime.startswith("application/") and mime.endswith("+json"))):
-        raise Problem(415, "unsupported-media-type", "Send JSON",
-                      "the body must be a JSON object sent with Content-Type: application/json")
-    return body
+    fd, name = tempfile.mkstemp(prefix="bootmap-body-")
+    path = Path(name)
+    try:
+        with open(fd, "wb") as file:
+            async for chunk in request.stream():
+                file.write(chunk)
+            empty = not file.tell()
+        if empty:
+            raise Problem(422, "invalid-request", "Invalid request", "the request needs a JSON body")
+        if not (mime == "application/json" or (mime.startswith("application/") and mime.endswith("+json"))):
+            raise Problem(415, "unsupported-media-type", "Send JSON",
+                          "the body must be a JSON object sent with Content-Type: application/json")
+        yield path
+    finally:
+        path.unlink(missing_ok=True)
+        path.with_name(path.name + PREPARED).unlink(missing_ok=True)
 
 
 @router.post("", status_code=201, response_model=TableauCreated, responses=SOLVE_ERRORS,
@@ -82,11 +94,12 @@ async def create_tableau(services: ServicesDep, caller: CallerDep, request: Requ
     (nothing is stored then), with 503 and Retry-After when every solver is busy, and with 429 when the
     token is over its limits. The tableau belongs to the caller's token."""
     # Parsed and checked in an intake process (bootmap.service.intake): the server sees only the text.
-    prepared = await services.intake.run(prepare_tableau, await json_bytes(request), services.limits)
-    solved, theory = await _solve(services, prepared.document, caller, request)
-    cmap = await run_in_threadpool(_map_record, solved, 1, theory)
-    record = await run_in_threadpool(services.store.add, prepared.document, prepared.n_steps, solved.views_k, cmap,
-                                     caller.token_id, services.settings.token_max_stored_bytes, public)
+    async with body_file(request) as body:
+        prepared = await services.intake.run(prepare_tableau, body, services.limits)
+        solved, theory = await _solve(services, prepared.document, caller, request)
+        cmap = await run_in_threadpool(_map_record, solved, 1, theory)
+        record = await services.intake.run(store_prepared, services.settings.database_url, prepared, solved.views_k,
+                                           cmap, caller.token_id, services.settings.token_max_stored_bytes, public)
     return _with_map(record, cmap, status=201, headers={"Location": f"/tableaux/{record.id}"})
 
 
@@ -114,7 +127,7 @@ def read_tableau(tableau_id: TableauId, services: ServicesDep, caller: CallerDep
 async def delete_tableau(tableau_id: TableauId, services: ServicesDep, caller: CallerDep) -> Response:
     """Only its owner or an admin may; the bytes it took count no more against the owner's quota."""
     await writable(services, caller, tableau_id)
-    await run_in_threadpool(services.store.delete, tableau_id)
+    await run_in_threadpool(services.store.delete, tableau_id, caller.owner)
     return Response(status_code=204)
 
 
@@ -124,7 +137,7 @@ async def share_tableau(tableau_id: TableauId, body: TableauSharing, services: S
                         caller: CallerDep) -> TableauSharing:
     """A public tableau (and its maps) may be read by anyone; only its owner or an admin changes it."""
     await writable(services, caller, tableau_id)
-    await run_in_threadpool(services.store.set_public, tableau_id, body.public)
+    await run_in_threadpool(services.store.set_public, tableau_id, body.public, caller.owner)
     return body
 
 
@@ -139,15 +152,16 @@ async def append_steps(tableau_id: TableauId, services: ServicesDep, caller: Cal
     steps are like the stored ones: view labels, or images only. 409 if another append got there first;
     403 unless the caller owns the tableau."""
     await writable(services, caller, tableau_id)
-    body = await json_bytes(request)
-    record = await run_in_threadpool(services.store.get, tableau_id)
-    revision = record.revision + 1
-    prepared = await services.intake.run(prepare_append, record.document, record.n_steps, body, services.limits)
-    del record, body  # the new revision's text is all that is needed from here on
-    solved, theory = await _solve(services, prepared.document, caller, request, stream=tableau_id)
-    cmap = await run_in_threadpool(_map_record, solved, revision, theory)
-    stored = await run_in_threadpool(services.store.replace, tableau_id, prepared.document, prepared.n_steps,
-                                     solved.views_k, cmap, services.settings.token_max_stored_bytes)
+    async with body_file(request) as body:  # the intake process reads the stored tableau itself
+        prepared = await services.intake.run(prepare_append, services.settings.database_url, tableau_id, body,
+                                             services.limits)
+        solved, theory = await _solve(services, prepared.document, caller, request, stream=tableau_id)
+        cmap = await run_in_threadpool(_map_record, solved, prepared.extends + 1, theory)
+        # The owner and the revision read above are checked again by the statement that stores the new
+        # revision: if the tableau was deleted meanwhile, 404; if another append got there first, 409.
+        stored = await services.intake.run(store_prepared, services.settings.database_url, prepared, solved.views_k,
+                                           cmap, caller.owner, services.settings.token_max_stored_bytes,
+                                           tableau_id=tableau_id)
     return _with_map(stored, cmap)
 
 
