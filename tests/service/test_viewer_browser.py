@@ -157,7 +157,9 @@ def test_the_experiments_figures_are_viewable(page, viewer_server, runs_dir, pap
     run_experiment("notched_rectangle", circuits=2, seed=1, out_dir=runs_dir / "nr")  # a real run: 3-5 s
     _open(page, viewer_server, paper)
     page.locator("#runs-panel summary").first.click()
-    page.wait_for_function("document.querySelectorAll('#runs img').length >= 3 && "
+    # A function, not an expression: Playwright evaluates an expression with eval, which the page's
+    # Content-Security-Policy refuses.
+    page.wait_for_function("() => document.querySelectorAll('#runs img').length >= 3 && "
                            "[...document.querySelectorAll('#runs img')].every(i => i.complete && i.naturalWidth > 0)")
     names = page.locator("#runs figcaption").all_inner_texts()
     assert {"views_M_U.png", "learning_curves.png", "world_map.png"} <= set(names)

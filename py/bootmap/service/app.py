@@ -17,7 +17,7 @@ from fastapi.middleware.cors import CORSMiddleware
 from fastapi.openapi.utils import get_openapi
 
 from .. import __version__
-from . import problems
+from . import headers, problems
 from .auth import Guard
 from .deps import Services
 from .models import AppendIn, TableauIn
@@ -56,6 +56,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.state.settings = settings
     problems.install(app)
     # Added last = outermost: the guard sees a request first, then the send time-out, CORS, the body limit.
+    # Around all of them (and Starlette's own error handling), the security headers: on every response.
     app.add_middleware(problems.BodyLimit, max_bytes=settings.max_body_bytes, timeout_s=settings.body_timeout_s,
                        held_bytes=settings.max_held_body_bytes)
     if settings.cors_origins:
@@ -65,6 +66,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.add_middleware(Guard, hosts=settings.hosts, origins=settings.cors_origins)
     for router in ROUTERS:
         app.include_router(router)
+    headers.wrap(app)
     app.openapi = lambda: _openapi(app, settings)  # type: ignore[method-assign]
     return app
 

@@ -27,7 +27,7 @@ function fail(e) {
 async function listTableaux(selected) {
   const { data } = await getJSON("/tableaux?limit=1000");
   const select = $("tableaux");
-  select.innerHTML = data.items.length ? "" : "<option value=''>no tableaux stored yet</option>";
+  select.replaceChildren(...(data.items.length ? [] : [new Option("no tableaux stored yet", "")]));
   for (const it of data.items) {
     const o = new Option(`#${it.id}: ${it.steps} steps, ${it.dstates} dstates, ${it.places} places, ` +
                          `${it.paths} paths (rev ${it.revision})`, it.id);
@@ -102,10 +102,11 @@ function draw() {
   showPicks();
 }
 
-function hover(html, x, y) {
+// The hover box: nodes drawMap built (text, never HTML), or null to hide it.
+function hover(nodes, x, y) {
   const box = $("hover");
-  if (!html) { box.hidden = true; return; }
-  box.innerHTML = html;
+  if (!nodes) { box.hidden = true; return; }
+  box.replaceChildren(nodes);
   box.style.left = `${x + 14}px`;
   box.style.top = `${y + 14}px`;
   box.hidden = false;
@@ -135,7 +136,8 @@ async function why(a, b) {
   const asked = ++state.whyAsked;
   const started = performance.now();
   document.body.dataset.why = "asking";
-  $("why").innerHTML = "<p class='busy'>asking the solver…</p>";
+  const busy = Object.assign(document.createElement("p"), { className: "busy", textContent: "asking the solver…" });
+  $("why").replaceChildren(busy);
   // Time points, not dstate names: the map with other levels may name its dstates differently.
   const q = new URLSearchParams({ a: `t${a.t}`, b: `t${b.t}` });
   const levels = chosenLevels();
@@ -175,8 +177,10 @@ async function loadRuns() {
   for (const run of data.runs.filter((r) => r.figures.length)) {
     const details = document.createElement("details");
     details.className = "run";
-    details.innerHTML = `<summary>${run.name}${run.world ? ` — ${run.world}` : ""}` +
-                        `${run.seed !== null ? `, seed ${run.seed}` : ""} (${run.figures.length} figures)</summary>`;
+    // As text: a run's name and world are strings from files, not markup.
+    details.append(Object.assign(document.createElement("summary"), {
+      textContent: `${run.name}${run.world ? ` — ${run.world}` : ""}` +
+                   `${run.seed !== null ? `, seed ${run.seed}` : ""} (${run.figures.length} figures)` }));
     details.addEventListener("toggle", async () => {
       if (!details.open || details.dataset.loaded) return;
       details.dataset.loaded = "1";

@@ -11,6 +11,15 @@ function el(name, attrs = {}, parent = null) {
   return node;
 }
 
+// Hover text as DOM nodes, never HTML (names and views are strings users posted): the name in bold,
+// then lines of text. A fresh fragment each call: appending one empties it.
+function hoverText(name, first, ...more) {
+  const out = document.createDocumentFragment();
+  out.append(Object.assign(document.createElement("b"), { textContent: name }), `: ${first}`);
+  for (const line of more) out.append(document.createElement("br"), line);
+  return out;
+}
+
 function text(parent, x, y, content, cls) {
   const t = el("text", { x, y, class: cls }, parent);
   t.textContent = content;
@@ -35,7 +44,7 @@ function relations(m) {
   return { right, left, on };
 }
 
-// Draw the map into svg. handlers: onDstate(name), onHover(html or null, clientX, clientY).
+// Draw the map into svg. handlers: onDstate(name), onHover(nodes or null, clientX, clientY).
 export function drawMap(svg, drawing, handlers) {
   const { layout, map: m } = drawing;
   svg.replaceChildren();
@@ -59,8 +68,9 @@ export function drawMap(svg, drawing, handlers) {
     el("polyline", { class: "hit", points }, line);  // a wide, invisible stroke: easy to hover
     const mid = pts[Math.floor((pts.length - 1) / 2)], next = pts[Math.floor((pts.length - 1) / 2) + 1] || mid;
     text(paths, (mid[0] + next[0]) / 2 + 6, (mid[1] + next[1]) / 2 - 6, name, "path-label");
-    const describe = () => `<b>${name}</b>: ${p.places.join(" → ")}<br>right of it: ${(rel.right[name] || []).join(", ") || "—"}` +
-                           `<br>left of it: ${(rel.left[name] || []).join(", ") || "—"}`;
+    const describe = () => hoverText(name, p.places.join(" → "),
+                                     `right of it: ${(rel.right[name] || []).join(", ") || "—"}`,
+                                     `left of it: ${(rel.left[name] || []).join(", ") || "—"}`);
     line.addEventListener("mouseenter", (e) => {
       mark(svg, "right-of", rel.right[name] || []);
       mark(svg, "left-of", rel.left[name] || []);
@@ -101,11 +111,11 @@ export function drawMap(svg, drawing, handlers) {
     }
     const sides = [...m.right_of.filter(([p]) => p === name).map(([, pa]) => `right of ${pa}`),
                    ...m.left_of.filter(([p]) => p === name).map(([, pa]) => `left of ${pa}`)];
-    const about = `<b>${name}</b>: ${place.dstates.map((d) => `${d} (${m.dstates[d].view}` +
-      (m.dstates[d].heading_deg === null ? ")" : `, ${m.dstates[d].heading_deg}°)`)).join(", ")}` +
-      `<br>on ${(rel.on[name] || []).join(", ") || "no path"}${sides.length ? "; " + sides.join(", ") : ""}`;
+    const about = () => hoverText(name, place.dstates.map((d) => `${d} (${m.dstates[d].view}` +
+      (m.dstates[d].heading_deg === null ? ")" : `, ${m.dstates[d].heading_deg}°)`)).join(", "),
+      `on ${(rel.on[name] || []).join(", ") || "no path"}${sides.length ? "; " + sides.join(", ") : ""}`);
     hub.addEventListener("click", () => g.classList.toggle("unfolded"));
-    hub.addEventListener("mouseenter", (e) => handlers.onHover(about, e.clientX, e.clientY));
+    hub.addEventListener("mouseenter", (e) => handlers.onHover(about(), e.clientX, e.clientY));
     hub.addEventListener("mouseleave", () => handlers.onHover(null));
   }
 }
