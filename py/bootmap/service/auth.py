@@ -18,7 +18,6 @@ from __future__ import annotations
 import hashlib
 import re
 import secrets
-import time
 from dataclasses import dataclass
 from typing import Annotated
 
@@ -75,7 +74,8 @@ def _bearer(request: Request) -> str | None:
 
 
 async def get_caller(request: Request, services: ServicesDep) -> Caller:
-    """The caller of this request; a token holder's request is counted against its per-minute limit."""
+    """The caller of this request; a token holder's request is counted against its per-minute limit (in
+    memory: a request writes nothing to the database for it, service/quotas.py)."""
     token = _bearer(request)
     if token is None:
         if services.settings.tokens_required:
@@ -85,8 +85,7 @@ async def get_caller(request: Request, services: ServicesDep) -> Caller:
     record = await run_in_threadpool(services.store.token_by_digest, digest(token))
     if record is None:
         raise unauthorized("this token is not known to the server (mistyped, or made for another database)")
-    await run_in_threadpool(services.store.count_request, record.id, services.settings.token_requests_per_minute,
-                            time.time())
+    services.quotas.count_request(record.id)
     return Caller(record.id, record.name, record.admin)
 
 
