@@ -1,9 +1,12 @@
 """A server killed outright (kill -9) leaves nothing behind, against real uvicorn servers on 127.0.0.1.
 
 Its solve leases stop counting once its heartbeat is stale (3 s), so a token whose solve places it held
-gets them back on another server within seconds. Bounds are generous (5 s for what takes about 3 s).
+gets them back on another server within seconds; its solver and intake processes notice that their
+parent is gone and end, and multiprocessing's resource tracker with them. Bounds are generous (5 s for
+what takes about 3 s) and nothing depends on how busy the machine is but how long things take.
 """
 
+import json
 import os
 import signal
 import time
@@ -104,6 +107,40 @@ def test_a_killed_servers_solve_places_free_on_another_server_within_seconds(tmp
         for s in servers:
             s.stop()
         _kill_survivors(left_behind)
+
+
+def test_a_killed_servers_processes_all_end_within_seconds(tmp_path):
+    """Its solvers (one of them busy with a hard solve that would run 30 s), its intake processes and
+    multiprocessing's resource tracker. Before, the intake processes and the tracker ran on for good."""
+    server = Server(tmp_path, require_tokens=True, max_concurrent_solves=2, solve_time_limit_s=30,
+                    solve_kill_grace_s=2).start()
+    token = make_token("alice", data_dir=server.data_dir)
+    hard = None
+    found: dict[int, str] = {}
+    try:
+        with server.client() as c:
+            hard = hang_up_later(server, token)
+            wait_for(lambda: solves(c) == (1, 0))
+            time.sleep(0.5)  # well into the solve
+            found = descendants(server.process.pid)
+            names = {pid: cmdline(pid) for pid in found}
+            print(json.dumps(names, indent=1))
+            # Two solvers, the intake processes (one or two) and the resource tracker, at least.
+            assert len(found) >= 4 and any("resource_tracker" in n for n in names.values()), names
+            os.kill(server.process.pid, signal.SIGKILL)
+            killed = time.monotonic()
+            server.process.wait(5)
+            while any(alive(pid, start) for pid, start in found.items()) and time.monotonic() - killed < 5:
+                time.sleep(0.05)
+            left = {pid: names[pid] for pid, start in found.items() if alive(pid, start)}
+            print(f"{len(found) - len(left)} of {len(found)} processes ended within "
+                  f"{time.monotonic() - killed:.2f} s of the kill")
+            assert not left, f"still running 5 s after the server was killed: {left}"
+    finally:
+        if hard is not None:
+            hard.close()
+        _kill_survivors(found)
+        server.stop()
 
 
 def _kill_survivors(processes: dict[int, str]) -> None:
