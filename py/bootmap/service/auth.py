@@ -18,7 +18,6 @@ from __future__ import annotations
 import hashlib
 import re
 import secrets
-import time
 from dataclasses import dataclass
 from typing import Annotated
 
@@ -85,7 +84,8 @@ NEEDS_TOKEN = ("this server needs an API token: send 'Authorization: Bearer <tok
 
 async def authenticate(services: Services, authorization: str | None) -> Caller:
     """Who sends this Authorization header (401 if nobody the server knows); a token holder's request is
-    counted against its per-minute limit (429 beyond). Called by :class:`Guard`, before any body is read."""
+    counted against its per-minute limit (429 beyond; in memory: a request writes nothing to the database
+    for it, service/quotas.py). Called by :class:`Guard`, before any body is read."""
     token = _bearer(authorization)
     if token is None:
         if services.settings.tokens_required:
@@ -94,8 +94,7 @@ async def authenticate(services: Services, authorization: str | None) -> Caller:
     record = await run_in_threadpool(services.store.token_by_digest, digest(token))
     if record is None:
         raise unauthorized("this token is not known to the server (mistyped, or made for another database)")
-    await run_in_threadpool(services.store.count_request, record.id, services.settings.token_requests_per_minute,
-                            time.time())
+    services.quotas.count_request(record.id)
     return Caller(record.id, record.name, record.admin)
 
 

@@ -14,6 +14,7 @@ from pydantic import BeforeValidator
 
 from ..tableau import FORMAT
 from .intake import Intake, Limits, intake_workers
+from .quotas import Quotas
 from .settings import Settings
 from .store import Store
 from .theory import LoadedTheory, Theories
@@ -29,6 +30,7 @@ class Services:
     pool: SolverPool
     gate: SolveGate
     intake: Intake
+    quotas: Quotas
 
     @property
     def limits(self) -> Limits:
@@ -37,21 +39,26 @@ class Services:
 
     @classmethod
     def start(cls, settings: Settings) -> "Services":
-        """Open the store, snapshot the theory, start and warm the solvers (blocking: a second or two)."""
+        """Open the store, start this server's heartbeat (:class:`Quotas`), snapshot the theory, start and
+        warm the solvers (blocking: a second or two)."""
         settings.data_dir.mkdir(parents=True, exist_ok=True)
         store = Store(settings.database_url)
+        quotas = Quotas(store, settings.token_requests_per_minute, settings.token_max_solves,
+                        settings.solve_time_limit_s + settings.solve_kill_grace_s)
+        quotas.start()
         theories = Theories(settings.axioms, settings.data_dir)
         pool = SolverPool(settings.max_concurrent_solves, settings.solver_memory_mb, settings.solve_kill_grace_s)
         gate = SolveGate(pool, settings.max_concurrent_solves, settings.max_queued_solves, settings.retry_after_s,
                          settings.token_max_running)
         intake = Intake(intake_workers(), settings.intake_memory_mb)
-        services = cls(settings, store, theories, pool, gate, intake)
+        services = cls(settings, store, theories, pool, gate, intake, quotas)
         intake.warm()
         pool.warm(services.job({"format": FORMAT, "steps": [
             {"view": "a", "action": {"type": "travel", "distance_m": 1.0}}, {"view": "b"}]})[0])
         return services
 
     def close(self) -> None:
+        self.quotas.close()  # first: this server's solve places free at once for the other servers
         self.intake.close()
         self.pool.close()
         self.store.close()
@@ -69,14 +76,12 @@ class Services:
         database) meanwhile; stopped if the client goes away."""
         lease = None
         if token_id is not None:
-            s = self.settings
-            lease = await run_in_threadpool(self.store.lease_solve, token_id, s.token_max_solves,
-                                            s.solve_time_limit_s + s.solve_kill_grace_s + 60)
+            lease = await run_in_threadpool(self.quotas.lease_solve, token_id)
         try:
             return await self.gate.solve(job, lambda: client_gone(request), token_id)
         finally:
             if lease is not None:
-                await run_in_threadpool(self.store.release_solve, lease)
+                await run_in_threadpool(self.quotas.release_solve, lease)
 
     def explain_job(self, document: dict | str | StoredTableau, a: str, b: str, levels: tuple[str, ...] | None) -> ExplainJob:
         """A question about a tableau document, with the current theory."""

@@ -66,9 +66,13 @@ PREPARED = ".prepared"  # suffix of the prepared document's file, beside the bod
 # In the intake process
 # ---------------------------------------------------------------------------------------------------
 
-def _start(memory_mb: int) -> None:
+def _start(memory_mb: int, parent_pid: int) -> None:
+    """An intake process starts: it ends with the server (``parent_pid``), its address space is capped."""
     import resource
 
+    from .worker import exit_with_parent
+
+    exit_with_parent(parent_pid)
     limit = memory_mb * 2**20
     resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
 
@@ -293,7 +297,7 @@ class Intake:
 
     def _new_pool(self) -> ProcessPoolExecutor:
         return ProcessPoolExecutor(self.workers, mp_context=multiprocessing.get_context("spawn"),
-                                   initializer=_start, initargs=(self.memory_mb,))
+                                   initializer=_start, initargs=(self.memory_mb, os.getpid()))
 
     def warm(self) -> None:
         """Start every intake process and import the models, so the first request pays no start-up."""

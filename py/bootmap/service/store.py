@@ -96,29 +96,44 @@ class TokenRow(Base):
     digest: Mapped[str] = mapped_column(String(64), unique=True)
     admin: Mapped[bool] = mapped_column(Boolean, default=False)
     created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True))
-    # Written by every quota check: the row lock that makes "count, then add" one step for this token,
-    # across every server on the database.
+    # Written by every solve lease and stored-bytes check: the row lock that makes "count, then add" one
+    # step for this token, across every server on the database.
     touched_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True), nullable=True)
 
 
+class ServerRow(Base):
+    """A running server and its last heartbeat, written every second or so (service/quotas.py). Another
+    server's solve leases and request counts count only while its heartbeat is fresh."""
+
+    __tablename__ = "servers"
+
+    id: Mapped[str] = mapped_column(String(32), primary_key=True)  # random at each start: never reused
+    name: Mapped[str] = mapped_column(String(200))  # host and process id, for whoever reads the table
+    started_at: Mapped[datetime] = mapped_column(DateTime(timezone=True))
+    heartbeat_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), index=True)
+
+
 class SolveLease(Base):
-    """A solve a token has running or waiting on some server; it expires if that server dies."""
+    """A solve a token has running or waiting on a server; it counts while that server's heartbeat is fresh.
+    (No foreign key to ``servers``: a server forgotten while it stalled writes its row again.)"""
 
     __tablename__ = "solve_leases"
 
     id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
     token_id: Mapped[int] = mapped_column(ForeignKey("tokens.id", ondelete="CASCADE"), index=True)
-    expires_at: Mapped[datetime] = mapped_column(DateTime(timezone=True))
+    server_id: Mapped[str] = mapped_column(String(32), index=True)
+    started_at: Mapped[datetime] = mapped_column(DateTime(timezone=True))
 
 
 class RequestCount(Base):
-    """Requests of a token in one minute (a fixed window)."""
+    """One server's recent requests of one token, as that server last wrote them: ``counts`` is its own
+    text (service/quotas.py: how many requests in each second of the last minute)."""
 
     __tablename__ = "request_counts"
 
+    server_id: Mapped[str] = mapped_column(String(32), primary_key=True)
     token_id: Mapped[int] = mapped_column(ForeignKey("tokens.id", ondelete="CASCADE"), primary_key=True)
-    minute: Mapped[int] = mapped_column(BigInteger, primary_key=True)
-    count: Mapped[int] = mapped_column(Integer)
+    counts: Mapped[str] = mapped_column(Text)
 
 
 class TableauRow(Base):
@@ -203,6 +218,23 @@ class TokenRecord:
     admin: bool
 
 
+@dataclass(frozen=True)
+class HeldLease:
+    """A solve place a token holds: when it was taken, and the last heartbeat of the server holding it
+    (None when it is the asking server's own)."""
+
+    started_at: datetime
+    heartbeat_at: datetime | None
+
+
+class SolvePlacesTaken(BootmapError):
+    """Every solve place of a token is held (:meth:`Store.lease_solve`); ``held`` says by what."""
+
+    def __init__(self, held: list[HeldLease]):
+        self.held = held
+        super().__init__(f"the token holds {len(held)} solve places")
+
+
 def _utc(t: datetime) -> datetime:
     # SQLite returns naive datetimes; every one stored here is UTC.
     return t if t.tzinfo else t.replace(tzinfo=timezone.utc)
@@ -276,6 +308,7 @@ class Store:
 
     def __init__(self, url: str):
         self.engine = make_engine(url)
+        self._renew_server_tables()
         Base.metadata.create_all(self.engine)
         self._upgrade()
         self._session = sessionmaker(self.engine, expire_on_commit=False)
@@ -289,6 +322,15 @@ class Store:
         if self.engine.dialect.name == "sqlite":
             for table in (TokenRow.__table__, TableauRow.__table__):
                 _never_reuse_ids(self.engine, table)
+
+    def _renew_server_tables(self) -> None:
+        """An older database's ``solve_leases`` and ``request_counts`` (before servers had heartbeats) are
+        dropped, to be made afresh: they only ever hold what running servers are doing."""
+        tables = inspect(self.engine).get_table_names()
+        with self.engine.begin() as conn:
+            for table in (SolveLease.__tablename__, RequestCount.__tablename__):
+                if table in tables and "server_id" not in {c["name"] for c in inspect(conn).get_columns(table)}:
+                    conn.execute(text(f"DROP TABLE {table}"))
 
     def close(self) -> None:
         self.engine.dispose()
@@ -432,36 +474,61 @@ class Store:
             row = s.execute(select(TokenRow.id, TokenRow.name, TokenRow.admin).where(TokenRow.digest == digest)).first()
         return None if row is None else TokenRecord(row[0], row[1], bool(row[2]))
 
-    def count_request(self, token_id: int, limit: int, now: float) -> None:
-        """Count a request of the token in this minute; over ``limit``, QuotaExceeded until the next one."""
-        minute = int(now // 60)
-        with self._session.begin() as s:
-            _lock_token(s, token_id)
-            done = s.execute(update(RequestCount).where(RequestCount.token_id == token_id,
-                                                        RequestCount.minute == minute)
-                             .values(count=RequestCount.count + 1))
-            if done.rowcount == 0:
-                s.execute(delete(RequestCount).where(RequestCount.token_id == token_id))
-                s.add(RequestCount(token_id=token_id, minute=minute, count=1))
-                return
-            count = s.scalar(select(RequestCount.count).where(RequestCount.token_id == token_id,
-                                                              RequestCount.minute == minute))
-        if count > limit:
-            wait = max(1, int(60 - now % 60 + 0.999))
-            raise QuotaExceeded(f"this token made more than {limit} requests this minute "
-                                f"(BOOTMAP_TOKEN_REQUESTS_PER_MINUTE); retry in {wait} s", wait)
+    # --- Servers: heartbeats, request counts, solve leases ---------------------------------------------
 
-    def lease_solve(self, token_id: int, limit: int, ttl_s: float) -> int:
-        """Take one of the token's ``limit`` solve places (on any server); QuotaExceeded if none is free."""
+    def heartbeat(self, server_id: str, name: str, counts: dict[int, str | None], stale_s: float,
+                  forget_s: float) -> dict[int, list[str]]:
+        """Write this server's heartbeat and its request counts that changed (token id -> text, None when
+        the token has none left); forget the servers silent for ``forget_s``, with their leases and counts;
+        return the counts of the other servers heard from within ``stale_s`` (token id -> their texts)."""
+        now = datetime.now(timezone.utc)
+        with self._session.begin() as s:
+            # A write first: SQLite takes its write lock here (waiting for it), not halfway through.
+            if s.execute(update(ServerRow).where(ServerRow.id == server_id)
+                         .values(heartbeat_at=now)).rowcount == 0:
+                s.add(ServerRow(id=server_id, name=name[:200], started_at=now, heartbeat_at=now))
+            if counts:
+                s.execute(delete(RequestCount).where(RequestCount.server_id == server_id,
+                                                     RequestCount.token_id.in_(counts)))
+                kept = [t for t, c in counts.items() if c is not None]
+                known = set(s.scalars(select(TokenRow.id).where(TokenRow.id.in_(kept)))) if kept else set()
+                s.add_all(RequestCount(server_id=server_id, token_id=t, counts=counts[t]) for t in kept if t in known)
+            silent = now - timedelta(seconds=forget_s)
+            gone = list(s.scalars(select(ServerRow.id).where(ServerRow.heartbeat_at < silent,
+                                                            ServerRow.id != server_id)))
+            if gone:
+                _remove_servers(s, gone)
+            rows = s.execute(select(RequestCount.token_id, RequestCount.counts)
+                             .join(ServerRow, ServerRow.id == RequestCount.server_id)
+                             .where(RequestCount.server_id != server_id,
+                                    ServerRow.heartbeat_at >= now - timedelta(seconds=stale_s))).all()
+        elsewhere: dict[int, list[str]] = {}
+        for token_id, text_ in rows:
+            elsewhere.setdefault(token_id, []).append(text_)
+        return elsewhere
+
+    def remove_server(self, server_id: str) -> None:
+        """A server that stops: its row, its solve leases and its request counts go."""
+        with self._session.begin() as s:
+            _remove_servers(s, [server_id])
+
+    def lease_solve(self, token_id: int, limit: int, server_id: str, stale_s: float) -> int:
+        """Take one of the token's ``limit`` solve places (on any server) for this server. Another server's
+        lease counts only while that server's heartbeat is under ``stale_s`` old: a dead server's places
+        free by themselves. None free: :class:`SolvePlacesTaken`."""
         now = datetime.now(timezone.utc)
         with self._session.begin() as s:
             _lock_token(s, token_id)
-            s.execute(delete(SolveLease).where(SolveLease.token_id == token_id, SolveLease.expires_at < now))
-            held = s.scalar(select(func.count()).select_from(SolveLease).where(SolveLease.token_id == token_id))
-            if held >= limit:
-                raise QuotaExceeded(f"this token has {held} solves running or waiting, its limit "
-                                    "(BOOTMAP_TOKEN_MAX_SOLVES); retry when one has ended", 2)
-            lease = SolveLease(token_id=token_id, expires_at=now + timedelta(seconds=ttl_s))
+            rows = s.execute(select(SolveLease.started_at, SolveLease.server_id, ServerRow.heartbeat_at)
+                             .join(ServerRow, ServerRow.id == SolveLease.server_id, isouter=True)
+                             .where(SolveLease.token_id == token_id)).all()
+            fresh = now - timedelta(seconds=stale_s)
+            held = [HeldLease(_utc(started), None if server == server_id else _utc(beat))
+                    for started, server, beat in rows
+                    if server == server_id or (beat is not None and _utc(beat) >= fresh)]
+            if len(held) >= limit:
+                raise SolvePlacesTaken(held)
+            lease = SolveLease(token_id=token_id, server_id=server_id, started_at=now)
             s.add(lease)
             s.flush()
             return lease.id
@@ -508,6 +575,12 @@ def _lock_token(s, token_id: int) -> None:
     """Take the token's row lock (a write: SQLite's write lock, PostgreSQL's row lock) so that what
     follows in the transaction is one step for this token on every server."""
     s.execute(update(TokenRow).where(TokenRow.id == token_id).values(touched_at=datetime.now(timezone.utc)))
+
+
+def _remove_servers(s, server_ids: list[str]) -> None:
+    s.execute(delete(SolveLease).where(SolveLease.server_id.in_(server_ids)))
+    s.execute(delete(RequestCount).where(RequestCount.server_id.in_(server_ids)))
+    s.execute(delete(ServerRow).where(ServerRow.id.in_(server_ids)))
 
 
 def _check_bytes(s, owner_id: int, adding: int, max_bytes: int) -> None:

@@ -33,6 +33,7 @@ from ..tableau import Tableau
 log = logging.getLogger("bootmap.service")
 READY_TIMEOUT_S = 60.0
 CANCEL_POLL_S = 0.1  # how often a waiting solve looks whether its client went away  # a fresh solver imports clingo and scikit-learn; generous for a loaded machine
+PARENT_POLL_S = 0.5  # how often a solver or intake process looks whether the server is still there
 
 
 class SolverBusy(BootmapError):
@@ -137,8 +138,42 @@ class Solved:
 # Inside the solver process
 # ---------------------------------------------------------------------------------------------------
 
-def _serve(conn, memory_mb: int) -> None:
-    """The solver process: cap memory, import the solver, then answer jobs until told to stop."""
+def exit_with_parent(parent_pid: int) -> None:
+    """End this process as soon as ``parent_pid`` (the server that started it) is no longer its parent.
+
+    A server killed outright (SIGKILL, the OOM killer) closes nothing: its solver and intake processes
+    would live on, each with its memory, and keep multiprocessing's resource tracker alive too (it ends
+    once no process holds its pipe). A daemon thread polls ``os.getppid()``, which changes when the
+    parent dies and the process is handed to init. (Not prctl's PR_SET_PDEATHSIG: that fires when the
+    *thread* that spawned the process ends, and solvers are replaced from short-lived pool threads.)
+    ``parent_pid`` is the server's pid as it spawned the process, so a server that died before this
+    runs is noticed too.
+
+    The process's address space is capped (RLIMIT_AS), and glibc would give the thread a malloc arena of
+    its own, 64 MiB of address space it never uses: glibc is told to keep every thread of this process
+    in one arena (M_ARENA_MAX), and the thread gets a small stack."""
+    def watch() -> None:
+        while os.getppid() == parent_pid:
+            time.sleep(PARENT_POLL_S)
+        os._exit(1)
+
+    try:
+        import ctypes
+
+        ctypes.CDLL(None).mallopt(-8, 1)  # M_ARENA_MAX = 1 (glibc's malloc.h)
+    except (OSError, AttributeError):  # not glibc: its malloc has no such arenas
+        pass
+    previous = threading.stack_size(256 * 1024)
+    try:
+        threading.Thread(target=watch, name="bootmap-parent-watch", daemon=True).start()
+    finally:
+        threading.stack_size(previous)
+
+
+def _serve(conn, memory_mb: int, parent_pid: int) -> None:
+    """The solver process: end with the server, cap memory, import the solver, then answer jobs until
+    told to stop."""
+    exit_with_parent(parent_pid)
     limit = memory_mb * 2**20
     import resource
 
@@ -307,7 +342,8 @@ class _Worker:
 
     def __init__(self, ctx, memory_mb: int):
         self.conn, child = ctx.Pipe()
-        self.process = ctx.Process(target=_serve, args=(child, memory_mb), name="bootmap-solver", daemon=True)
+        self.process = ctx.Process(target=_serve, args=(child, memory_mb, os.getpid()), name="bootmap-solver",
+                                   daemon=True)
         self.process.start()
         child.close()
         self.ready = False
