@@ -73,7 +73,7 @@ def invalid(field: str, reason: str, kind: str = "invalid-tableau") -> Problem:
 
 # Most specific first: SolverKilled is a SolveTimeout.
 _KINDS: list[tuple[type, int, str, str]] = [
-    (Conflict, 409, "conflict", "Tableau changed"),
+    (Conflict, 409, "conflict", "Conflict"),
     (NotOwner, 403, "forbidden", "Not allowed"),
     (QuotaExceeded, 429, "quota-exceeded", "Over this token's limit"),
     (SolveCancelled, 400, "client-gone", "The client went away"),
