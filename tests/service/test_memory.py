@@ -39,7 +39,7 @@ MB = 2**20
 @pytest.fixture(scope="module")
 def memory_server(tmp_path_factory):
     s = Server(tmp_path_factory.mktemp("memory_server"), solve_time_limit_s=60, body_timeout_s=2,
-               send_timeout_s=3).start()
+               send_timeout_s=3, header_timeout_s=2).start()
     yield s
     s.stop()
 
@@ -231,6 +231,33 @@ def test_valid_16_mb_posts_layouts_recognitions_and_reads_keep_the_server_under_
     print(f"server peak {peak:.0f} MiB; /health max {max(took):.3f} s, median {statistics.median(took):.3f} s")
     assert peak < BOUND_MB, f"the server's resident set peaked at {peak:.0f} MiB"
     assert statistics.median(took) < 0.1, took
+
+
+def test_connections_that_trickle_their_headers_or_send_nothing_are_closed_at_the_header_time_out(memory_server):
+    """Slow-loris: forty connections send their request line and headers a byte at a time, ten send
+    nothing at all. Each is closed at the header time-out (2 s here); others are served meanwhile."""
+    url = urlsplit(memory_server.url)
+    head = b"GET /health HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Slow: " + b"x" * 100
+    trickling = [socket.create_connection((url.hostname, url.port), timeout=15) for _ in range(40)]
+    silent = [socket.create_connection((url.hostname, url.port), timeout=15) for _ in range(10)]
+    t0 = time.monotonic()
+    closed: set[int] = set()
+    for i in range(len(head)):  # a byte every 0.1 s: the headers would take 10 s
+        for n, sock in enumerate(trickling):
+            if n not in closed:
+                try:
+                    sock.sendall(head[i:i + 1])
+                except OSError:  # closed by the server
+                    closed.add(n)
+        if len(closed) == len(trickling) or time.monotonic() - t0 > 8:
+            break
+        time.sleep(0.1)
+    with memory_server.client() as c:
+        assert c.get("/health").status_code == 200
+    for sock in trickling + silent:
+        assert sock.recv(65536) == b""  # closed, no answer: the request never was one
+        sock.close()
+    assert time.monotonic() - t0 < 2 + 5
 
 
 def test_idle_readers_hold_no_database_connection_and_are_closed_at_the_send_time_out(memory_server):

@@ -19,6 +19,7 @@ from fastapi.openapi.utils import get_openapi
 from .. import __version__
 from . import headers, problems
 from .auth import Guard
+from .connections import SendTimeout
 from .deps import Services
 from .models import AppendIn, TableauIn
 from .models import Problem as ProblemModel
@@ -62,7 +63,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     if settings.cors_origins:
         app.add_middleware(CORSMiddleware, allow_origins=settings.cors_origins, allow_methods=["*"],
                            allow_headers=["Authorization", "Content-Type"], expose_headers=["Location", "Retry-After"])
-    app.add_middleware(problems.SendTimeout, timeout_s=settings.send_timeout_s)
+    app.add_middleware(SendTimeout, timeout_s=settings.send_timeout_s)
     app.add_middleware(Guard, hosts=settings.hosts, origins=settings.cors_origins)
     for router in ROUTERS:
         app.include_router(router)

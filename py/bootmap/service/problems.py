@@ -386,42 +386,6 @@ class BodyLimit:
         await self.app(scope, limited, send)
 
 
-class ClientStalled(BaseException):
-    """Ends a response whose client stopped reading. A BaseException, like a cancellation: no error
-    handler turns it into an error page (the response has started) or logs it as a bug."""
-
-
-class SendTimeout:
-    """Close the connection of a client that does not read its response: when one part of a response
-    cannot go out within ``timeout_s`` (the client's receive window and the server's send buffer are
-    full), the response ends there and uvicorn closes the connection. Without this, such a client
-    would hold its connection, and the response's task, for as long as it liked."""
-
-    def __init__(self, app: ASGIApp, timeout_s: float):
-        self.app, self.timeout_s = app, timeout_s
-
-    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
-        if scope["type"] != "http":
-            return await self.app(scope, receive, send)
-
-        async def timed(message: Message) -> None:
-            with anyio.move_on_after(self.timeout_s) as timer:
-                await send(message)
-            if timer.cancelled_caught:
-                log.warning("a client read nothing of its response to %s for %g s (BOOTMAP_SEND_TIMEOUT_S): "
-                            "its connection is closed", scope.get("path"), self.timeout_s)
-                raise ClientStalled()
-
-        try:
-            await self.app(scope, receive, timed)
-        except ClientStalled:
-            return  # the response is incomplete: uvicorn closes the connection
-        except BaseExceptionGroup as group:  # raised inside a response's task group
-            _, rest = group.split(ClientStalled)
-            if rest is not None:
-                raise rest
-
-
 # ---------------------------------------------------------------------------------------------------
 # Handlers
 # ---------------------------------------------------------------------------------------------------
@@ -491,5 +455,5 @@ def openapi_responses(*statuses: int) -> dict[int | str, dict]:
             for s in statuses}
 
 
-__all__ = ["BodyLimit", "JSONRoute", "Problem", "SendTimeout", "install", "openapi_responses", "parse_json",
+__all__ = ["BodyLimit", "JSONRoute", "Problem", "install", "openapi_responses", "parse_json",
            "validation_problem"]

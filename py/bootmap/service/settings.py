@@ -73,6 +73,8 @@ class Settings(BaseSettings):
     # Bounded memory in the server process.
     body_timeout_s: float = Field(20.0, gt=0, description="A request body not received within this many "
                                                           "seconds of its headers is refused (408).")
+    header_timeout_s: float = Field(10.0, gt=0, description="A request whose line and headers are not in within "
+                                                             "this many seconds of its first byte: connection closed.")
     send_timeout_s: float = Field(30.0, gt=0, description="A response the client does not read for this many "
                                                            "seconds is ended and its connection closed.")
     max_meta_bytes: int = Field(64 * 2**10, ge=2, description="Largest 'meta' of a tableau, bytes of JSON.")
