@@ -10,7 +10,7 @@ import shutil
 from pathlib import Path
 
 import pytest
-from service_helpers import REPO, SESSION_SETTINGS, Server
+from service_helpers import CHROMIUM, REPO, SESSION_SETTINGS, Server
 
 from bootmap import examples
 
@@ -46,3 +46,13 @@ def paper_id(client, paper_doc) -> int:
     r = client.post("/tableaux", json=paper_doc)
     assert r.status_code == 201, r.text
     return r.json()["id"]
+
+
+@pytest.fixture(scope="module")
+def browser():
+    """Headless chromium, one per test module (as root it needs --no-sandbox)."""
+    sync_api = pytest.importorskip("playwright.sync_api", reason="playwright not installed: pip install -e '.[dev]'")
+    with sync_api.sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"], headless=True)
+        yield b
+        b.close()

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import re
+import shutil
 import signal
 import subprocess
 import sys
@@ -13,6 +14,9 @@ from pathlib import Path
 import httpx
 
 REPO = Path(__file__).resolve().parents[2]
+# Debian's chromium, which the viewer's browser tests drive through Playwright by path (never `playwright
+# install`); the tests that need it skip without it.
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 SESSION_SETTINGS = {"solve_time_limit_s": 3, "solve_kill_grace_s": 1, "max_concurrent_solves": 1,
                     "max_queued_solves": 1, "max_body_bytes": 4 * 2**20, "max_steps": 10_000,
                     "max_image_len": 512, "retry_after_s": 3}

@@ -10,19 +10,17 @@ With ``BOOTMAP_SCREENSHOTS=1`` the tests write the README's screenshots to docs/
 from __future__ import annotations
 
 import os
-import shutil
 from pathlib import Path
 
 import numpy as np
 import pytest
-from service_helpers import REPO, SESSION_SETTINGS, Server, bearer, make_token
+from service_helpers import CHROMIUM, REPO, SESSION_SETTINGS, Server, bearer, make_token
 
 from bootmap import examples
 from bootmap.testing.gridworld import random_world, walk
 
-sync_api = pytest.importorskip("playwright.sync_api", reason="playwright not installed: pip install -e '.[dev]'")
+pytest.importorskip("playwright.sync_api", reason="playwright not installed: pip install -e '.[dev]'")
 
-CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 SHOTS = REPO / "docs" / "viewer" if os.environ.get("BOOTMAP_SCREENSHOTS") == "1" else None
 pytestmark = pytest.mark.skipif(CHROMIUM is None, reason="chromium not installed: apt-get install chromium")
 
@@ -46,14 +44,6 @@ def paper(viewer_server) -> int:
         r = c.post("/tableaux", json=examples.notched_rectangle(circuits=50).to_dict())
         assert r.status_code == 201, r.text
         return r.json()["id"]
-
-
-@pytest.fixture(scope="module")
-def browser():
-    with sync_api.sync_playwright() as p:
-        b = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"], headless=True)
-        yield b
-        b.close()
 
 
 @pytest.fixture

@@ -18,13 +18,12 @@ import re
 import shutil
 
 import pytest
-from service_helpers import REPO, SESSION_SETTINGS, Server, bearer, make_token
+from service_helpers import CHROMIUM, REPO, SESSION_SETTINGS, Server, bearer, make_token
 
 from bootmap import examples
 
-sync_api = pytest.importorskip("playwright.sync_api", reason="playwright not installed: pip install -e '.[dev]'")
+pytest.importorskip("playwright.sync_api", reason="playwright not installed: pip install -e '.[dev]'")
 
-CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 pytestmark = pytest.mark.skipif(CHROMIUM is None, reason="chromium not installed: apt-get install chromium")
 
 # Each view label of the paper's world becomes markup that runs script if the page ever parses it as
@@ -67,14 +66,6 @@ def hostile_server(tmp_path_factory):
         s.hostile_id = r.json()["id"]
     yield s
     s.stop()
-
-
-@pytest.fixture(scope="module")
-def browser():
-    with sync_api.sync_playwright() as p:
-        b = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"], headless=True)
-        yield b
-        b.close()
 
 
 @pytest.fixture
