@@ -61,7 +61,7 @@ def measure(url: str, tableau_id: int, repeats: int, chromium: str) -> tuple[lis
             names = page.locator("#map .dstate").evaluate_all("ns => ns.map(n => n.dataset.dstate)")
             page.locator(f'#map .dstate[data-dstate="{names[0]}"] circle').click(force=True)
             page.locator(f'#map .dstate[data-dstate="{names[1 + i]}"] circle').click(force=True)
-            page.wait_for_function("['different', 'same', 'undecided', 'failed'].includes(document.body.dataset.why)",
+            page.wait_for_function("() => ['different', 'same', 'undecided', 'failed'].includes(document.body.dataset.why)",
                                    timeout=60_000)
             verdict = page.evaluate("document.body.dataset.why")
             if verdict == "failed":
