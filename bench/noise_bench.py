@@ -1,13 +1,13 @@
 """Odometry noise against the map: learned action types beside a fixed 15-degree quantum and RPNI.
 
 600-step explorations of random 20-place grid worlds (5 x 4, landmarks on 40% of the places), read with
-turn noise of sd 0-12 degrees and travel drift of sd 0-4 degrees (bootmap.testing.noise); for each level,
+turn noise of sd 0-12 degrees and travel drift of sd 0-4 degrees (support.noise); for each level,
 3 seeds. Ours (action types learned, the default), ours with ``--quantum 15`` (the rounding used before),
 and AALpy's RPNI with views + dead-reckoned heading (rounded to 15 degrees, as bench/resolve_bench.py
 feeds it), all against the truth: dstates found, time points on their true dstate (best one-to-one
 renaming), seconds.
 
-Then misclustered views (0-5% of the time points given another view, bootmap.testing.noise.with_misreads)
+Then misclustered views (0-5% of the time points given another view, support.noise.with_misreads)
 on explorations of other worlds (seeds 50-52) at turn sd 3: ours (misreads abduced), ours reading every view as seen
 (--no-misreads) and RPNI, with the misread steps the map names and those it names wrongly.
 
@@ -27,9 +27,10 @@ import numpy as np
 from bootmap.errors import SolveTimeout
 from bootmap.mapping.resolver import Resolver
 from bootmap.metrics import dstate_accuracy
-from bootmap.testing.check import true_partition
-from bootmap.testing.gridworld import random_world, walk
-from bootmap.testing.noise import with_misreads, with_odometry_noise
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # tests/support: grid worlds, the checker
+from support.check import true_partition
+from support.gridworld import random_world, walk
+from support.noise import with_misreads, with_odometry_noise
 from resolve_bench import rpni
 from targets import Targets
 
@@ -99,7 +100,7 @@ def main() -> int:
 
 
 def misread_sweep(targets: Targets) -> None:
-    """Misclustered views (bootmap.testing.noise.with_misreads) on the same explorations, turn sd 3:
+    """Misclustered views (support.noise.with_misreads) on the same explorations, turn sd 3:
     ours (misreads abduced, the default), ours reading every view as seen, RPNI; and how many of the
     misread steps the map names, and how many it names wrongly."""
     robust, as_seen = Resolver(time_limit=30), Resolver(time_limit=10, misreads=False, diagnose=False)

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 import time
 
 import numpy as np
@@ -26,8 +27,9 @@ from bootmap.mapping.motion import quantise
 from bootmap.metrics import dstate_accuracy
 from bootmap.mapping.resolver import Resolver
 from bootmap.tableau import Tableau, Turn
-from bootmap.testing.check import tableau_headings
-from bootmap.testing.gridworld import random_world, walk
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # tests/support: grid worlds, the checker
+from support.check import tableau_headings
+from support.gridworld import random_world, walk
 from targets import Targets
 
 

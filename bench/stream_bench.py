@@ -9,6 +9,9 @@ stand). A full resolve of the same prefix is timed on every ``--resolve-every``-
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path
+
 import argparse
 import time
 
@@ -18,7 +21,8 @@ from tqdm import tqdm
 from bootmap.errors import SolveTimeout
 from bootmap.mapping import Resolver
 from bootmap.mapping.stream import MapStream
-from bootmap.testing.gridworld import random_world, walk
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # tests/support: grid worlds, the checker
+from support.gridworld import random_world, walk
 
 
 def main(argv=None) -> None:

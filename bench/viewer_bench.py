@@ -1,7 +1,7 @@
 """The map viewer in a headless browser: how soon a big map is drawn, how soon a proof shows (a benchmark).
 
 Starts ``bootmap serve`` (or uses --url), posts a 2,000-step exploration of a random 5x6 grid world (104
-dstates, 30 places; ``bootmap.testing.gridworld``, seed 4), then in Debian's chromium (Playwright,
+dstates, 30 places; ``support.gridworld``, seed 4), then in Debian's chromium (Playwright,
 ``--no-sandbox``):
 
 1. opens the page on it ``--repeats`` times, each in a fresh tab: the time from the page's request to
@@ -30,7 +30,8 @@ import httpx
 import numpy as np
 from playwright.sync_api import sync_playwright
 
-from bootmap.testing.gridworld import random_world, walk
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # tests/support: grid worlds, the checker
+from support.gridworld import random_world, walk
 from service_bench import start_server
 from targets import Targets
 

@@ -11,7 +11,7 @@ from bootmap.layout import layout
 from bootmap.mapping import Deadline, Resolver
 from bootmap.metrics import dstate_accuracy
 from bootmap.tableau import Step, Tableau, Travel, Turn
-from bootmap.testing.gridworld import random_world, walk
+from support.gridworld import random_world, walk
 
 
 def _drawn(tableau: Tableau, levels=None) -> dict:

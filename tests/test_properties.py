@@ -3,7 +3,7 @@
 A grid world is geometric, so its true map (one dstate per node and heading) satisfies every axiom.
 The resolver returns a *minimal* map that satisfies them, so for every tableau:
 
-* the map passes the independent re-check :func:`bootmap.testing.check.check_map`;
+* the map passes the independent re-check :func:`support.check.check_map`;
 * it has at least one dstate per distinct view (one view per dstate), and with the metrical level at
   least one per distinct (view, heading) pair (one heading per dstate);
 * it has no more dstates than the true dstates the walk visited (the truth is a map; the minimal map is
@@ -24,8 +24,8 @@ from hypothesis import strategies as st
 
 from bootmap.errors import SolveTimeout
 from bootmap.mapping.resolver import Resolver
-from bootmap.testing.check import check_map, tableau_headings, true_partition
-from bootmap.testing.gridworld import random_world, walk
+from support.check import check_map, tableau_headings, true_partition
+from support.gridworld import random_world, walk
 
 LEVEL_SETS = {
     "all": ("causal", "topological", "metrical"),

@@ -3,7 +3,7 @@
 Every explanation that says "different" is re-checked here twice: the solver, given the evidence
 alone, finds no map in which a and b are one dstate (and finds one as soon as any other step is
 dropped: the evidence is subset-minimal); and, where the evidence is one run of steps, the independent
-Python checker (bootmap.testing.check) rejects every partition of it that puts a and b together.
+Python checker (support.check) rejects every partition of it that puts a and b together.
 """
 
 import itertools
@@ -22,8 +22,8 @@ from bootmap.examples import corridor, notched_rectangle, square_room
 from bootmap.mapping.explain import Explainer
 from bootmap.mapping.resolver import Resolver
 from bootmap.tableau import Tableau
-from bootmap.testing.check import check_map
-from bootmap.testing.gridworld import random_world, walk
+from support.check import check_map
+from support.gridworld import random_world, walk
 
 TOPO = ["causal", "topological"]
 
@@ -49,7 +49,7 @@ def view_partitions(views: list[str]):
 
 def recheck(explainer: Explainer, tableau: Tableau, e, levels) -> None:
     """The evidence alone forces a and b apart, and is subset-minimal (by the solver); and, by brute force
-    with the independent Python checker (bootmap.testing.check), every partition of the evidence's time
+    with the independent Python checker (support.check), every partition of the evidence's time
     points that puts a and b together breaks an axiom - contiguous evidence or not."""
     assert e.verdict == "different" and e.evidence
     assert not explainer.can_be_same(tableau, e.a, e.b, e.evidence)

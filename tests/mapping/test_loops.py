@@ -20,9 +20,9 @@ from bootmap.sim.simulation import simulate
 from bootmap.sim.world import load_world
 from bootmap.mapping.facts import typed_actions
 from bootmap.tableau import Tableau, Travel, Turn
-from bootmap.testing.check import check_map, true_partition
-from bootmap.testing.gridworld import random_world, walk
-from bootmap.testing.noise import with_odometry_noise
+from support.check import check_map, true_partition
+from support.gridworld import random_world, walk
+from support.noise import with_odometry_noise
 
 FORMAT = "bootmap.tableau/1"
 

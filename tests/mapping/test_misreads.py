@@ -13,9 +13,9 @@ from bootmap.mapping.explain import Explainer, _Question
 from bootmap.mapping.grounding import Deadline
 from bootmap.mapping.misreads import RARE_VIEW_COST, find_suspects, rare_views
 from bootmap.metrics import dstate_accuracy
-from bootmap.testing.check import check_map, true_partition
-from bootmap.testing.gridworld import random_world, walk
-from bootmap.testing.noise import with_misreads, with_odometry_noise
+from support.check import check_map, true_partition
+from support.gridworld import random_world, walk
+from support.noise import with_misreads, with_odometry_noise
 
 
 def exploration(seed: int, turn_sd: float = 3.0):

@@ -10,9 +10,9 @@ from bootmap.mapping.motion import MotionPrimitives, type_suspects
 from bootmap.mapping.resolver import MISTYPE_COST
 from bootmap.metrics import dstate_accuracy
 from bootmap.tableau import Turn
-from bootmap.testing.check import check_map, true_partition
-from bootmap.testing.gridworld import random_world, walk
-from bootmap.testing.noise import with_mistyped_action, with_odometry_noise
+from support.check import check_map, true_partition
+from support.gridworld import random_world, walk
+from support.noise import with_mistyped_action, with_odometry_noise
 
 
 def exploration(seed: int, turn_sd: float = 3.0, steps: int = 600):

@@ -13,9 +13,9 @@ from bootmap.mapping import Resolver
 from bootmap.mapping.motion import MotionPrimitives
 from bootmap.metrics import dstate_accuracy
 from bootmap.tableau import Step, Tableau, Travel, Turn
-from bootmap.testing.check import true_partition
-from bootmap.testing.gridworld import random_world, walk
-from bootmap.testing.noise import with_odometry_noise
+from support.check import true_partition
+from support.gridworld import random_world, walk
+from support.noise import with_odometry_noise
 
 
 @settings(max_examples=60, deadline=None)

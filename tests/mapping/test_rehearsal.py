@@ -12,7 +12,7 @@ from bootmap.examples import notched_rectangle
 from bootmap.mapping import Resolver
 from bootmap.mapping.rehearsal import Rehearsal
 from bootmap.tableau import Tableau, Turn
-from bootmap.testing.gridworld import random_world, scripted, walk
+from support.gridworld import random_world, scripted, walk
 
 # The plan's actions as the grid world names them.
 WORLD_ACTION = {"turn -90": "right", "turn +90": "left", "turn +180": "around", "travel": "travel"}

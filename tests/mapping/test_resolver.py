@@ -6,7 +6,7 @@ from bootmap import examples
 from bootmap.errors import AxiomError, InconsistentTableau, SolveTimeout
 from bootmap.mapping.resolver import Resolver
 from bootmap.tableau import Step, Tableau, Travel, Turn
-from bootmap.testing.check import LEVELS, check_map
+from support.check import LEVELS, check_map
 
 ALL = None
 NO_METRICAL = ["causal", "topological"]
@@ -219,7 +219,7 @@ def test_several_minimal_maps_are_counted_and_listed():
 # --- Hand-made grid worlds (views from local geometry; truth = node and heading) -----------------------
 
 def _script(ascii_world, start, actions, frames=None):
-    from bootmap.testing.gridworld import GridWorld, scripted
+    from support.gridworld import GridWorld, scripted
 
     return scripted(GridWorld.from_ascii(ascii_world).with_frames(frames or {}), start, actions)
 

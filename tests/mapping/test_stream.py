@@ -9,7 +9,7 @@ from bootmap.tableau import Tableau
 from bootmap.examples import notched_rectangle
 from bootmap.mapping import Resolver
 from bootmap.mapping.stream import MapStream
-from bootmap.testing.gridworld import random_world, walk
+from support.gridworld import random_world, walk
 
 
 def same_map(a, b) -> bool:
@@ -96,7 +96,7 @@ def test_a_theory_a_user_extended_is_checked_by_clingo_and_still_streams_exactly
 
 
 def _walk(seed: int, steps: int, misread: float = 0.0, size=(4, 3), landmarks: float = 0.4):
-    from bootmap.testing.noise import with_misreads
+    from support.noise import with_misreads
     rng = np.random.default_rng(seed)
     world = random_world(rng, *size, extra_edges=2, landmarks=landmarks)
     tableau = walk(world, steps, rng, policy="explore")
@@ -174,7 +174,7 @@ def _prepass_and_replay(tableau, resolver, metrical):
 
 def test_streaming_equals_batch_where_views_are_misread():
     # Misreads make some views suspect: the stream must keep the map only where the resolver would.
-    from bootmap.testing.noise import with_misreads
+    from support.noise import with_misreads
     tableau, misread = with_misreads(notched_rectangle(3), 0.01, np.random.default_rng(5))
     stream = streamed_equals_batch(tableau, every=10)
     assert misread and stream.extended_ > 0

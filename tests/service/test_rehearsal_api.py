@@ -4,7 +4,7 @@ import numpy as np
 
 from bootmap.mapping.rehearsal import Rehearsal
 from bootmap.tableau import Tableau
-from bootmap.testing.gridworld import random_world, walk
+from support.gridworld import random_world, walk
 
 
 def ambiguous_walk_doc() -> dict:

@@ -17,7 +17,7 @@ import pytest
 from service_helpers import CHROMIUM, REPO, SESSION_SETTINGS, Server, bearer, make_token
 
 from bootmap import examples
-from bootmap.testing.gridworld import random_world, walk
+from support.gridworld import random_world, walk
 
 pytest.importorskip("playwright.sync_api", reason="playwright not installed: pip install -e '.[dev]'")
 

@@ -27,7 +27,7 @@ from typing import Iterable, Iterator, Sequence
 import clingo
 from clingo import Function, Number, String, Symbol, ast
 
-#: A fixed quantum in degrees (`--quantum 15`), the independent checker's rounding (bootmap.testing.check); the
+#: A fixed quantum in degrees (`--quantum 15`), the independent checker's rounding (tests/support/check.py); the
 #: resolver learns the robot's action types instead unless it is given one (see motion.py, motion.quantise).
 QUANTUM_DEG = 15.0
 #: How many actions ahead the causal level compares what time points saw (``#const future_depth``).

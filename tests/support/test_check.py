@@ -17,8 +17,8 @@ from bootmap import examples
 from bootmap.mapping.theory import load_theory
 from bootmap.mapping.facts import add_facts, tableau_facts
 from bootmap.tableau import Tableau
-from bootmap.testing.check import LEVELS, check_map, true_partition
-from bootmap.testing.gridworld import GridWorld, random_world, scripted, walk
+from support.check import LEVELS, check_map, true_partition
+from support.gridworld import GridWorld, random_world, scripted, walk
 
 ALL = LEVELS
 CAUSAL = ("causal",)
@@ -228,6 +228,6 @@ def test_agrees_with_clingo_where_a_fold_is_refuted_by_bends_alone():
 def test_docstring_examples():
     import doctest
 
-    import bootmap.testing.check
+    import support.check
 
-    assert doctest.testmod(bootmap.testing.check).failed == 0
+    assert doctest.testmod(support.check).failed == 0

@@ -6,7 +6,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..tableau import Tableau, Travel, Turn
+from bootmap.tableau import Tableau, Travel, Turn
 
 
 def with_odometry_noise(tableau: Tableau, turn_sd: float, drift_sd: float, rng: np.random.Generator) -> Tableau:

@@ -23,10 +23,10 @@ from collections import defaultdict
 from dataclasses import dataclass, field
 from typing import Hashable, Iterable, Sequence
 
-from ..mapping.facts import passes_through
-from ..mapping.motion import quantise
-from ..mapping.vocabulary import QUANTUM_DEG
-from ..tableau import Tableau, Travel, Turn
+from bootmap.mapping.facts import passes_through
+from bootmap.mapping.motion import quantise
+from bootmap.mapping.vocabulary import QUANTUM_DEG
+from bootmap.tableau import Tableau, Travel, Turn
 
 LEVELS = ("causal", "topological", "metrical")
 TRAVEL = "travel"

@@ -8,8 +8,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from bootmap.tableau import Tableau, Travel, Turn
-from bootmap.testing.check import check_map, true_partition
-from bootmap.testing.gridworld import (TRAVEL, TURN_AROUND, GridWorld, neighbour, random_world,
+from support.check import check_map, true_partition
+from support.gridworld import (TRAVEL, TURN_AROUND, GridWorld, neighbour, random_world,
                                        truth_id, walk)
 
 T_JUNCTION = """
@@ -205,6 +205,6 @@ def test_true_map_satisfies_every_axiom(seed, width, height, extra, landmarks, k
 def test_docstring_examples():
     import doctest
 
-    import bootmap.testing.gridworld
+    import support.gridworld
 
-    assert doctest.testmod(bootmap.testing.gridworld).failed == 0
+    assert doctest.testmod(support.gridworld).failed == 0

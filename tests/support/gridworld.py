@@ -47,7 +47,7 @@ from typing import Iterable, Mapping, Sequence
 
 import numpy as np
 
-from ..tableau import FORMAT, Tableau
+from bootmap.tableau import FORMAT, Tableau
 
 Node = tuple[int, int]
 State = tuple[Node, int]                    # (node, heading in degrees)
@@ -519,7 +519,7 @@ def _tableau(world: GridWorld, states: list[State], actions: list[str], policy: 
         if t < len(actions):
             step["action"] = _action_dict(actions[t], world.cell_m, world.bend(state))
         steps.append(step)
-    doc = {"format": FORMAT, "world": world.name, "meta": {"policy": policy, "generator": "bootmap.testing.gridworld"},
+    doc = {"format": FORMAT, "world": world.name, "meta": {"policy": policy, "generator": "support.gridworld"},
            "steps": steps}
     return Tableau.from_dict(doc, "gridworld walk")
 
