@@ -4,7 +4,7 @@ and a random walk.
 For every hallway world in worlds/*.toml (the worlds explored, not circled: the notched rectangle is a
 room the paper's robot circles, where a hallway explorer's travels stop at no place) and every seed, each policy drives the simulated robot:
 
-* ``active`` (``bootmap.sim.active.Active``): explores and rehearses until its own map is unique and
+* ``active`` (``bootmap.agent.active.Active``): explores and rehearses until its own map is unique and
   complete, and stops;
 * ``explore`` (``bootmap.sim.policies.Explore``): the fixed systematic explorer, wandering on at random
   once everything is explored (so it can go on to ``--max-steps``);
@@ -37,7 +37,7 @@ from bootmap.mapping.resolver import Resolver  # noqa: E402
 from bootmap.mapping.stream import MapStream  # noqa: E402
 from bootmap.metrics import dstate_accuracy  # noqa: E402
 from bootmap.sim import Explore, RandomWalk, Simulation, SimulationError  # noqa: E402
-from bootmap.sim.active import QUANTUM_DEG, Active  # noqa: E402
+from bootmap.agent.active import QUANTUM_DEG, Active  # noqa: E402
 from bootmap.sim.world import load_world, worlds_dir  # noqa: E402
 from bootmap.tableau import Step, Tableau  # noqa: E402
 from bootmap.views import OnlineViews  # noqa: E402

@@ -30,7 +30,7 @@ from .mapping.resolver import Resolver
 from .metrics import dstate_accuracy
 from .recognise import default_learners, learning_curve_cv, online_curve, online_hits
 from .sim import simulate
-from .sim.simulation import POLICIES
+from .agent import POLICIES, make_policy
 from .sim.world import World, load_world
 from .views import ViewClusterer, view_labels, view_table
 
@@ -111,8 +111,8 @@ def _run(world, circuits, steps, seed, out_dir, k_max, progress, time_limit, lev
         steps = PAPER_EXPLORE_STEPS
     lap = Laps()
     timings = lap.timings
-    tableau = simulate(world, policy=policy, circuits=circuits or PAPER_CIRCUITS, steps=steps, seed=seed,
-                       progress=progress)
+    tableau = simulate(world, policy=make_policy(policy, world, steps), circuits=circuits or PAPER_CIRCUITS,
+                       steps=steps, seed=seed, progress=progress)
     lap("simulate_s")
     images = np.array([s.image for s in tableau.steps], dtype=float)
     truth = [str(s.truth) for s in tableau.steps]

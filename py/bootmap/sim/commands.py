@@ -49,6 +49,7 @@ def register(subparsers) -> None:
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
+    from ..agent import make_policy
     from .simulation import SimulationError, run
     from .world import load_world
 
@@ -58,7 +59,8 @@ def cmd_simulate(args: argparse.Namespace) -> int:
             raise WorldError("--circuits and --steps must be at least 1")
         if args.policy == "random" and args.steps is None:
             raise WorldError("--policy random never stops by itself: give --steps N")
-        result = run(world, policy=args.policy or world.policy, circuits=args.circuits, steps=args.steps,
+        policy = make_policy(args.policy or world.policy, world, args.steps, args.direction)
+        result = run(world, policy=policy, circuits=args.circuits, steps=args.steps,
                      seed=args.seed, progress=not args.no_progress, direction=args.direction)
     except SimulationError as e:
         print(f"bootmap simulate: {e}", file=sys.stderr)

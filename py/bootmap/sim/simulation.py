@@ -270,17 +270,12 @@ def _progress_bar(enabled: bool, total: int | None):
     return tqdm(total=total, unit="dstate", file=sys.stderr, dynamic_ncols=True)
 
 
-POLICIES = ("circuits", "explore", "active", "random")
-ACTIVE_MAX_STEPS = 400  # the active policy's cap when no --steps is given
+POLICIES = ("circuits", "explore", "random")  # the simulator's own; bootmap.agent adds the active one
 
 
-def make_policy(policy: str | object, direction: str = "cw", wander: bool = False, steps: int | None = None,
-                max_range: float | None = None):
-    """A policy object from its name (:data:`POLICIES`), or the object itself.
-
-    ``steps`` caps the ``active`` policy (default :data:`ACTIVE_MAX_STEPS`); ``max_range`` is the laser's,
-    for the active policy's view labels.
-    """
+def make_policy(policy: str | object, direction: str = "cw", wander: bool = False):
+    """A policy object from its name (:data:`POLICIES`), or the object itself (any policy, e.g. the
+    active one of :mod:`bootmap.agent`, which names it)."""
     if not isinstance(policy, str):
         return policy
     if policy == "circuits":
@@ -289,11 +284,7 @@ def make_policy(policy: str | object, direction: str = "cw", wander: bool = Fals
         return Explore(wander=wander)
     if policy == "random":
         return RandomWalk()
-    if policy == "active":
-        from .active import Active  # imports the mapping stack (clingo): only when asked for
-
-        return Active(max_steps=steps or ACTIVE_MAX_STEPS, max_range=max_range)
-    raise ValueError(f"unknown policy {policy!r} (expected one of: {', '.join(POLICIES)})")
+    raise ValueError(f"unknown policy {policy!r} (expected one of: {', '.join(POLICIES)}, or a policy object)")
 
 
 def run(world: World | str | os.PathLike, policy: str | object = "circuits", circuits: int = 50,
@@ -303,8 +294,7 @@ def run(world: World | str | os.PathLike, policy: str | object = "circuits", cir
     ``start`` (x, y, heading in degrees) overrides the world's start pose."""
     if not isinstance(world, World):
         world = load_world(world)
-    pol = make_policy(policy, direction=direction, wander=steps is not None, steps=steps,
-                      max_range=world.laser.range_max)
+    pol = make_policy(policy, direction=direction, wander=steps is not None)
     if steps is None and isinstance(pol, RandomWalk):
         raise ValueError("a random walk never stops by itself: give it a number of steps")
     if steps is None and isinstance(pol, Circuits):
@@ -321,12 +311,12 @@ def simulate(world: World | str | os.PathLike, policy: str | object = "circuits"
     Parameters
     ----------
     world : World, or a path, or the name of a file in ``worlds/``
-    policy : {"circuits", "explore", "active", "random"} or a policy object
+    policy : {"circuits", "explore", "random"} or a policy object
         ``circuits`` runs the paper's circuits of a room (8 dstates each); ``explore`` explores a
         hallway systematically and stops when every path direction is explored, or, given ``steps``,
-        goes on at random until it has that many dstates; ``active`` keeps its map current and rehearses
-        until the map is unique and complete (``steps`` caps it; :mod:`bootmap.sim.active`); ``random``
-        walks at random (give ``steps``).
+        goes on at random until it has that many dstates; ``random`` walks at random (give ``steps``).
+        A policy object runs as given, e.g. ``bootmap.agent.make_policy("active", world)``, which keeps
+        its map current and rehearses until the map is unique and complete (``steps`` caps it).
     circuits : int
         Number of circuits (``circuits`` policy, unless ``steps`` is given).
     steps : int, optional

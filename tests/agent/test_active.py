@@ -12,7 +12,7 @@ from bootmap.mapping.rehearsal import Rehearsal
 from bootmap.mapping.resolver import Resolver
 from bootmap.metrics import dstate_accuracy
 from bootmap.sim import Explore, RandomWalk, Simulation
-from bootmap.sim.active import Active, decision_of
+from bootmap.agent.active import Active, decision_of
 from bootmap.sim.world import load_world
 from bootmap.tableau import Step, Tableau
 from bootmap.views import OnlineViews

@@ -47,7 +47,7 @@ from ..mapping.resolver import Resolver
 from ..mapping.stream import MapStream
 from ..tableau import Step, Tableau
 from ..views import OnlineViews
-from .policies import TRAVEL, Decision, Explore, Observation
+from ..sim.policies import TRAVEL, Decision, Explore, Observation
 
 __all__ = ["Active", "decision_of"]
 
@@ -147,7 +147,7 @@ class Active(Explore):
             self._steps[-1] = replace(self._steps[-1], action=obs.action)
         self._steps.append(Step(view=view))
         self._where.append((self._here, self._heading))
-        self.tableau_ = Tableau(tuple(self._steps), meta={"generator": "bootmap.sim.active"})
+        self.tableau_ = Tableau(tuple(self._steps), meta={"generator": "bootmap.agent.active"})
         self.map_ = self.stream_.update(self.tableau_)
 
     # ------------------------------------------------------------------ rehearsal
