@@ -11,14 +11,14 @@ import time
 from pathlib import Path
 
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
-
 from bootmap.errors import SweepError
 from bootmap.experiment import run_experiment
+from bootmap.proc import in_child
 from bootmap.sim.world import load_world
 from bootmap.sweep import TIMING_COLUMNS, DaskCluster, load_spec, loads_spec, run_sweep
-from bootmap.sweep.cells import experiment_row, in_child
+from bootmap.sweep.cells import experiment_row
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 # Tiny cells: 3 circuits of the notched rectangle (24 images), about a second each.
 TINY = """
@@ -189,9 +189,8 @@ def test_without_dask_the_scheduler_option_says_what_to_install(monkeypatch):
 
 
 def test_an_experiment_runs_with_one_blas_thread_and_gives_the_threads_back(monkeypatch):
-    from threadpoolctl import threadpool_info
-
     import bootmap.experiment as experiment
+    from threadpoolctl import threadpool_info
 
     seen = []
     monkeypatch.setattr(experiment, "_run", lambda *a: seen.append([p["num_threads"] for p in threadpool_info()]))

@@ -1,6 +1,5 @@
 """The committed Killian excerpt, read once."""
 
-from pathlib import Path
 
 import pytest
 

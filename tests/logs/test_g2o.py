@@ -10,7 +10,6 @@ from bootmap.errors import BadInput, LogError
 from bootmap.logs.g2o import read_g2o, read_g2o_text
 from bootmap.logs.scans import compose
 
-from log_data import EXCERPT
 
 
 def test_excerpt_has_one_scan_per_vertex_with_the_sick_layout(excerpt_scans):

@@ -20,7 +20,7 @@ from __future__ import annotations
 import io
 import zipfile
 from pathlib import Path
-from typing import Iterable, Iterator
+from typing import Iterable
 
 from ..errors import LogError
 from .carmen import _count, _numbers, records, robotlaser

@@ -3,18 +3,18 @@ runs over.
 
 The resolver keeps its own time limit between groundings and during solving, but clingo cannot interrupt
 a grounding, and a hostile or simply large tableau can ground for longer than the limit. So the command
-line resolves in a forked child and kills it ``grace_s`` after the limit, as the service kills its solver
-processes. The child's answer (a map, or the resolver's own time-out or inconsistency) comes back through
-a pipe as plain data.
+line resolves in a forked child (:mod:`bootmap.proc`) and kills it ``grace_s`` after the limit, as the
+service kills its solver processes. The child's answer (a map, or the resolver's own time-out or
+inconsistency) comes back as plain data.
 """
 
 from __future__ import annotations
 
-import multiprocessing
 import traceback
 from typing import Callable, TypeVar
 
 from ..errors import BootmapError, InconsistentTableau, SolveTimeout
+from ..proc import in_child
 from ..tableau import Tableau
 from .cogmap import CognitiveMap
 
@@ -31,48 +31,35 @@ def resolve_within(resolver, tableau: Tableau, grace_s: float = GRACE_S) -> Cogn
 
 def run_within(work: Callable[[], T], limit: float | None, grace_s: float = GRACE_S,
                stated_s: float | None = None) -> T:
-    """``work()`` (a resolution, an explanation) in a forked child, stopped ``grace_s`` after ``limit``.
-    ``stated_s``: the limit as the user stated it, for the message (``limit`` may be what is left of it)."""
-    if limit is None or "fork" not in multiprocessing.get_all_start_methods():
+    """``work()`` (a resolution, an explanation) in a forked child (:func:`bootmap.proc.in_child`), stopped
+    ``grace_s`` after ``limit``. ``stated_s``: the limit as the user stated it, for the message (``limit``
+    may be what is left of it)."""
+    if limit is None:
         return work()
-    ctx = multiprocessing.get_context("fork")  # the work is inherited, not pickled
-    receive, send = ctx.Pipe(duplex=False)
-    child = ctx.Process(target=_child, args=(send, work), name="bootmap-solve", daemon=True)
-    child.start()
-    send.close()
-    try:
-        if not receive.poll(limit + grace_s):
-            child.kill()
-            stated = limit if stated_s is None else stated_s
-            raise SolveTimeout(f"time limit of {stated:g} s reached while grounding (clingo cannot interrupt a "
-                               f"grounding; stopped at {stated + grace_s:g} s); no answer found",
-                               time_limit_s=stated, stage="grounding")
-        try:
-            reply = receive.recv()
-        except EOFError:
-            raise BootmapError(f"the solver process died (exit code {child.exitcode})") from None
-    finally:
-        # Once it has answered, the child has nothing left to do but free its groundings, which can take
-        # seconds after a large one: it is stopped rather than waited for.
-        child.kill()
-        child.join(5)
-        receive.close()
+    kind, reply = in_child(lambda: _tagged(work), limit + grace_s)
+    if kind == "timeout":
+        stated = limit if stated_s is None else stated_s
+        raise SolveTimeout(f"time limit of {stated:g} s reached while grounding (clingo cannot interrupt a "
+                           f"grounding; stopped at {stated + grace_s:g} s); no answer found",
+                           time_limit_s=stated, stage="grounding")
+    if kind == "failed":
+        raise BootmapError(f"the solver process failed: {reply}")
     return _outcome(reply)
 
 
-def _child(send, work) -> None:
+def _tagged(work) -> tuple:
+    """The work's answer, or what it raised as plain data (bootmap's exceptions with custom fields do not
+    pickle)."""
     try:
-        send.send(("ok", work()))
+        return "ok", work()
     except SolveTimeout as e:
-        send.send(("timeout", str(e), e.lower_bound, e.best_map, e.time_limit_s, e.stage))
+        return "timeout", str(e), e.lower_bound, e.best_map, e.time_limit_s, e.stage
     except InconsistentTableau as e:
-        send.send(("inconsistent", str(e), e.levels, tuple(e.failing_levels), e.diagnosed))
+        return "inconsistent", str(e), e.levels, tuple(e.failing_levels), e.diagnosed
     except BootmapError as e:
-        send.send(("error", str(e), e.exit_code))
-    except BaseException:  # a bug: its traceback goes to the parent, which raises it
-        send.send(("crash", traceback.format_exc()))
-    finally:
-        send.close()
+        return "error", str(e), e.exit_code
+    except Exception:  # a bug: its traceback goes to the parent, which raises it
+        return "crash", traceback.format_exc()
 
 
 def _outcome(reply: tuple):

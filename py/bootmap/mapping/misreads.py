@@ -42,7 +42,7 @@ import numpy as np
 from clingo import Symbol
 
 from ..tableau import Tableau
-from .vocabulary import DSTATE_COST, action_word
+from .vocabulary import action_word
 
 
 #: What calling a suspect view a misread costs when nothing else is known: 2.5 dstates.

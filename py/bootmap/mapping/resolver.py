@@ -50,8 +50,8 @@ from .facts import action_symbols, tableau_facts, typed_actions
 from .motion import TypeSuspect, action_types, type_suspects
 from .grounding import Classes, Deadline, Grounding, PartialFeatures, key_with_view, prepass
 from .theory import Theory, load_theory
-from .misreads import DSTATE_COST, GHOST, context_views, MIN_VISITS, MISREAD_COST, RARE_VIEW, Suspect, find_suspects, has_images, rare_clustered_views
-from .vocabulary import FUTURE_DEPTH, MAY_BE, MINIMISE_DSTATES, ONE_PER_CLASS, SLOTS, SUSPECT
+from .misreads import GHOST, context_views, MIN_VISITS, MISREAD_COST, RARE_VIEW, Suspect, find_suspects, has_images, rare_clustered_views
+from .vocabulary import DSTATE_COST, FUTURE_DEPTH, MAY_BE, MINIMISE_DSTATES, ONE_PER_CLASS, SLOTS, SUSPECT
 
 
 #: The share of the time left (and at most so many seconds) spent checking that reading every view as

@@ -11,14 +11,10 @@ Everything clingo builds is built inside the child: a Control does not pickle an
 from __future__ import annotations
 
 import os
-import pickle
-import select
-import signal
 import socket
 import time
-import traceback
-from typing import Callable
 
+from ..proc import in_child
 from .spec import Cell
 
 #: The columns of the results table, in order. ``TIMING_COLUMNS`` vary from run to run (and machine to
@@ -43,7 +39,7 @@ def run_cell(cell: Cell) -> dict:
     if kind == "ok":
         row = payload
     else:
-        row = failed_row(cell, kind, payload)
+        row = failed_row(cell, kind, f"cell timeout: {payload}" if kind == "timeout" else payload)
     row["seconds"] = round(time.perf_counter() - start, 3)
     row["worker"] = f"{socket.gethostname()}:{os.getpid()}"
     return row
@@ -141,65 +137,3 @@ def _log_row(cell: Cell) -> dict:
 
 def _round(x: float | None) -> float | None:
     return None if x is None else round(float(x), 6)
-
-
-# ---------------------------------------------------------------------------------------------------
-# A forked child with a time limit
-# ---------------------------------------------------------------------------------------------------
-
-def in_child(work: Callable[[], object], timeout: float) -> tuple:
-    """``work()`` in a forked child, killed ``timeout`` seconds on -> ``("ok", value)``, ``("failed",
-    error)`` or ``("timeout", message)``. Where the platform cannot fork, ``work()`` runs here, unbounded.
-
-    ``os.fork`` rather than ``multiprocessing``: Dask's worker processes are daemons, which
-    ``multiprocessing`` forbids to have children; and the work is inherited, so nothing is pickled on
-    the way in."""
-    if not hasattr(os, "fork"):
-        try:
-            return "ok", work()
-        except Exception as e:
-            return "failed", f"{type(e).__name__}: {e}"
-    read_fd, write_fd = os.pipe()
-    pid = os.fork()
-    if pid == 0:  # the child: do the work, send the outcome, leave without running the parent's exit code
-        os.close(read_fd)
-        _child(work, write_fd)
-    os.close(write_fd)
-    finished = False
-    try:
-        data, finished = _read_until(read_fd, time.monotonic() + timeout)
-    finally:
-        os.close(read_fd)
-        if not finished:  # over its time (or we are interrupted): stop it
-            os.kill(pid, signal.SIGKILL)
-        os.waitpid(pid, 0)  # a child that closed its pipe is exiting
-    if not finished:
-        return "timeout", f"cell timeout: no result within {timeout:g} s; stopped"
-    if not data:
-        return "failed", "the cell's process died without a result (killed for memory, or a crash in C code)"
-    return pickle.loads(data)
-
-
-def _child(work: Callable[[], object], write_fd: int) -> None:
-    try:
-        try:
-            payload = pickle.dumps(("ok", work()))
-        except BaseException as e:  # noqa: BLE001  (anything, a bug included, is the cell's result)
-            payload = pickle.dumps(("failed", f"{type(e).__name__}: {e}\n{traceback.format_exc(limit=6)}"))
-        with os.fdopen(write_fd, "wb") as pipe:
-            pipe.write(payload)
-    finally:
-        os._exit(0)
-
-
-def _read_until(fd: int, deadline: float) -> tuple[bytes, bool]:
-    """Everything written to ``fd`` until the writer closes it (-> finished) or the deadline passes."""
-    chunks = []
-    while True:
-        left = deadline - time.monotonic()
-        if left <= 0 or not select.select([fd], [], [], left)[0]:
-            return b"".join(chunks), False
-        chunk = os.read(fd, 1 << 16)
-        if not chunk:
-            return b"".join(chunks), True
-        chunks.append(chunk)
