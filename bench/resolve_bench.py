@@ -4,7 +4,7 @@ For each tableau: our resolve time (ground, solve, total), dstates found and acc
 (best one-to-one renaming); then AALpy's RPNI (generalised state merging, Moore machine) learning from
 the same steps with outputs = views, and outputs = views + heading: its states, accuracy and time.
 
-Targets (README, Benchmarks): the paper's 401-step tableau resolved in under 0.1 s; 10,000 steps in under
+Targets (docs/results/benchmarks.md): the paper's 401-step tableau resolved in under 0.1 s; 10,000 steps in under
 10 s; our map always the true one (100% of time points on their true dstate, proved minimal, on every
 tableau); no time-out (10 s) on the aliased 30-step walks; within 10 times RPNI's time where both are
 right. Each is printed beside the measured figure; the exit status is 1 if any is missed.

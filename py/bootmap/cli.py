@@ -184,7 +184,7 @@ def cmd_experiment(args: argparse.Namespace) -> int:
 
 def _log_experiment(args: argparse.Namespace) -> int:
     """``bootmap experiment --log LOG``: the experiment on a robot's log (:mod:`bootmap.logs.experiment`).
-    Exit 0 when a map was found and the report written (the issue's targets are reported, met or not),
+    Exit 0 when a map was found and the report written (the targets are reported, met or not),
     1 when no map was found in the time limit, 2 on bad input."""
     from .logs.experiment import headline, run_log_experiment
 

@@ -11,8 +11,8 @@ never saw them.
   shuffled true dstates: views that help say more about the dstate than chance does.
 - :func:`dead_reckoned_dstates`: a baseline that uses no image at all, only the robot's own odometry:
   the rule that makes true dstates from true poses, applied to the dead-reckoned poses. It tests the
-  issue's "local metrical consistency": odometry drifts over the whole log, but not between visits
-  close in time.
+  odometry's "local metrical consistency": it drifts over the whole log, but not between visits close
+  in time.
 - :func:`nn_on_revisits`: nearest-neighbour recognition of true dstates, leave one out, with raw scans
   or a shift-tolerant distance (:func:`shift_tolerant_distances`), on the visits whose true dstate is
   seen more than once; a visit to a dstate seen once has nothing to be recognised by (the ceiling).

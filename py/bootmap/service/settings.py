@@ -1,7 +1,7 @@
 """Settings of the HTTP service: command-line options, else ``BOOTMAP_*`` environment variables, else defaults.
 
 Every limit the service enforces is here, so an operator can size it to the machine. The table in
-README.md ("Service") and docs/service.md lists them.
+docs/service.md ("Settings") lists them.
 """
 
 from __future__ import annotations
