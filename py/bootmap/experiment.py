@@ -242,7 +242,7 @@ def _views_section(clusterer, images, views, truth) -> dict:
             "M": [float(x) for x in clusterer.internal_],
             "U": None if getattr(clusterer, "uncertainty_", None) is None else [float(x) for x in clusterer.uncertainty_],
             "largest_k_with_U_1": clusterer.largest_k_with_u1_,
-            "table": _jsonable(view_table(images, views)), "labels": views,
+            "table": jsonable(view_table(images, views)), "labels": views,
             "truth": list(truth)}  # the true dstate of every image (evaluation only)
 
 
@@ -261,11 +261,13 @@ def _map_section(cmap, truth, world) -> dict:
             "solve_s": cmap.stats.total_s}
 
 
-def _jsonable(x):
+def jsonable(x):
+    """``x`` with numpy arrays and scalars as lists and numbers, and keys as strings: what ``json`` writes
+    (an experiment's results.json, a log experiment's too)."""
     if isinstance(x, dict):
-        return {str(k): _jsonable(v) for k, v in x.items()}
+        return {str(k): jsonable(v) for k, v in x.items()}
     if isinstance(x, (list, tuple)):
-        return [_jsonable(v) for v in x]
+        return [jsonable(v) for v in x]
     if isinstance(x, np.ndarray):
         return x.tolist()
     if isinstance(x, np.generic):

@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import BadInput, LogError, SolveTimeout
-from ..experiment import Laps, _jsonable, curves_figure, recognition_section, views_figure
+from ..experiment import Laps, jsonable, curves_figure, recognition_section, views_figure
 from ..mapping.loops import MAPPERS, mapper_for
 from ..mapping.resolver import Resolver
 from ..metrics import dstate_accuracy
@@ -80,7 +80,7 @@ def _run(log, out_dir, seed, k_max, time_limit, quantum_deg, view_criterion, det
     truth = [str(s.truth) for s in tableau.steps]
     clusterer, views_section = _views(images, truth, k_max, seed, max_range, view_criterion)
     views = view_labels(clusterer.labels_per_k_[views_section["k"]])
-    views_section.update(table=_jsonable(view_table(images, views)), labels=views)
+    views_section.update(table=jsonable(view_table(images, views)), labels=views)
     lap("views_s")
     mapped = tableau.with_views(views)
     resolver = mapper_for(mapped, Resolver(time_limit=time_limit, quantum_deg=quantum_deg), mapper)
@@ -179,7 +179,7 @@ def write_log_report(results: dict, out: Path, tableau, cmap) -> None:
     from .figures import topological_figure, trajectory_figure
 
     out.mkdir(parents=True, exist_ok=True)
-    (out / "results.json").write_text(json.dumps(_jsonable(results), indent=1))
+    (out / "results.json").write_text(json.dumps(jsonable(results), indent=1))
     views_figure(results, out / "views_M_U.png")
     trajectory_figure(results, tableau, cmap, out / "trajectory.png")
     if cmap is not None:
