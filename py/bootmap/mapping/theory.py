@@ -73,21 +73,27 @@ class Theory:
         return out
 
 
+def axiom_files(directory: Path) -> tuple[dict[str, Path], tuple[Path, ...]]:
+    """The files of an axiom directory: its levels (the top-level ``.lp`` files, by name, sorted) and its
+    core (``core/*.lp``, sorted). The one place that says which files a theory is made of."""
+    if not directory.is_dir():
+        raise AxiomError(f"axiom directory not found: {directory}")
+    return {p.stem: p for p in sorted(directory.glob("*.lp"))}, tuple(sorted((directory / "core").glob("*.lp")))
+
+
 def available_levels(directory: str | Path | None = None) -> list[str]:
     d = Path(directory) if directory else default_axioms_dir()
-    return sorted(p.stem for p in d.glob("*.lp"))
+    return sorted(axiom_files(d)[0]) if d.is_dir() else []
 
 
 def load_theory(directory: str | Path | None = None, levels: Sequence[str] | None = None) -> Theory:
     """Find, select and check the axiom files. Raises :class:`AxiomError` with clingo's message."""
     d = Path(directory) if directory else default_axioms_dir()
-    if not d.is_dir():
-        raise AxiomError(f"axiom directory not found: {d}")
-    found = {p.stem: p for p in sorted(d.glob("*.lp"))}
+    found, core = axiom_files(d)
     if MANDATORY not in found:
         raise AxiomError(f"{d} has no {MANDATORY}.lp: the causal level defines the dstates")
     chosen = list(found) if levels is None else select_levels(levels, list(found), str(d))
-    theory = Theory(d, {name: found[name] for name in chosen}, tuple(sorted((d / "core").glob("*.lp"))))
+    theory = Theory(d, {name: found[name] for name in chosen}, core)
     check_syntax(theory.files)
     return theory
 

@@ -19,7 +19,7 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 from ..errors import AxiomError
-from ..mapping.theory import Theory, default_axioms_dir, load_theory
+from ..mapping.theory import Theory, axiom_files, default_axioms_dir, load_theory
 
 
 @dataclass(frozen=True)
@@ -44,10 +44,9 @@ class LoadedTheory:
 
 
 def _axiom_files(source: Path) -> dict[str, bytes]:
-    """What ``load_theory`` reads: the top-level .lp files (levels) and core/*.lp, by relative path."""
-    if not source.is_dir():
-        raise AxiomError(f"axiom directory not found: {source}")
-    paths = sorted(source.glob("*.lp")) + sorted((source / "core").glob("*.lp"))
+    """What ``load_theory`` reads (``axiom_files``): the levels and the core, by relative path."""
+    levels, core = axiom_files(source)
+    paths = list(levels.values()) + list(core)
     try:
         return {str(p.relative_to(source)): p.read_bytes() for p in paths}
     except OSError as e:
