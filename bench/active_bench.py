@@ -11,7 +11,7 @@ room the paper's robot circles, where a hallway explorer's travels stop at no pl
 * ``random`` (``bootmap.sim.policies.RandomWalk``): a seeded random walk.
 
 Every run is scored the same way: its images are labelled with views in order (``OnlineViews``, as the
-active robot labels them), and the map of every prefix (``MapStream``, actions read in quarter turns) is
+active robot labels them), and the map of every prefix (``Mapper.stream``, actions read in quarter turns) is
 compared with the world's truth. The figure is the number of actions after which the map is first
 unique, proved minimal, with the true numbers of dstates, places and paths, and every time point on its
 true dstate (up to renaming); "-" when that never happens within ``--max-steps`` dstates.
@@ -33,8 +33,7 @@ from targets import Targets  # noqa: E402
 
 from bootmap import arguments  # noqa: E402
 from bootmap.errors import SolveTimeout  # noqa: E402
-from bootmap.mapping.resolver import Resolver  # noqa: E402
-from bootmap.mapping.stream import MapStream  # noqa: E402
+from bootmap.mapping.api import Mapper  # noqa: E402
 from bootmap.metrics import dstate_accuracy  # noqa: E402
 from bootmap.sim import Explore, RandomWalk, Simulation, SimulationError  # noqa: E402
 from bootmap.agent.active import QUANTUM_DEG, Active  # noqa: E402
@@ -59,12 +58,13 @@ def actions_until_true(tableau: Tableau, world) -> int | None:
     labelled = Tableau(tuple(Step(v, s.action) for v, s in zip(views, tableau.steps)))
     truth = [s.truth for s in tableau.steps]
     want = (world.truth_dstates, len(world.places), len(world.paths))
-    stream = MapStream(Resolver(quantum_deg=QUANTUM_DEG))
+    mapper = Mapper(quantum_deg=QUANTUM_DEG, how="fewest")
+    stream = mapper.stream()
     for n in range(2, len(labelled) + 1):
         if len(set(truth[:n])) < world.truth_dstates:
             continue  # not every true dstate seen yet: the map cannot be true (and need not be found)
         try:
-            m = stream.update(labelled.prefix(n))
+            m = mapper.map(labelled.prefix(n), stream=stream)
         except SolveTimeout:
             continue  # no map proved minimal for this prefix: not (yet) the true one
         if m.unique and m.minimal and (m.n_dstates, m.n_places, m.n_paths) == want \

@@ -29,22 +29,19 @@ def _add_theory_options(p: argparse.ArgumentParser) -> None:
 
 
 def cmd_map(args: argparse.Namespace) -> int:
+    from .mapping.api import Mapper
     from .mapping.bounded import run_within
     from .mapping.grounding import Deadline
-    from .mapping.resolver import Resolver
     from .tableau import load
 
     tableau = _with_views(load(args.tableau))
-    resolver = Resolver(axioms=args.axioms, levels=args.levels, quantum_deg=args.quantum,
-                        time_limit=args.time_limit, max_models=args.max_models, misreads=args.misreads)
-    from .mapping.loops import mapper_for
-
-    resolver = mapper_for(tableau, resolver, args.map)
+    mapper = Mapper(axioms=args.axioms, levels=args.levels, quantum_deg=args.quantum, time_limit=args.time_limit,
+                    max_models=args.max_models, misreads=args.misreads, how=args.map)
     left = _time_left(args)
     deadline = Deadline.after(None) if left is None else Deadline(time.perf_counter() + left, args.time_limit)
     try:
         # Stopped for sure a little after --time-limit, counted from the command's start.
-        cmap = run_within(lambda: resolver.resolve(tableau, deadline), left, stated_s=args.time_limit)
+        cmap = run_within(lambda: mapper.map(tableau, deadline), left, stated_s=args.time_limit)
     except SolveTimeout as e:
         if e.best_map is None:
             raise
@@ -98,44 +95,27 @@ def cmd_axioms(args: argparse.Namespace) -> int:
 
 
 def cmd_why(args: argparse.Namespace) -> int:
+    from .mapping.api import Mapper
     from .mapping.bounded import run_within
-    from .mapping.explain import Explainer
     from .tableau import load
 
     tableau = _with_views(load(args.tableau))
-    from .mapping.loops import LoopCloser, closes_loops
-
-    if closes_loops(tableau, args.map):
-        if args.b is None:
-            raise BadInput("a loop-closed map lists its misreads (bootmap map); ask why about two time points "
-                           "or dstates")
-        from .mapping.resolver import Resolver
-
-        closer = LoopCloser(Resolver(axioms=args.axioms, levels=args.levels, quantum_deg=args.quantum,
-                                     time_limit=args.time_limit))
-        explanation = run_within(lambda: closer.explain(tableau, args.a, args.b), args.time_limit)
-        print(json.dumps(explanation.to_dict(), indent=1) if args.format == "json" else explanation.to_text())
-        return EXIT_OK
-    explainer = Explainer(axioms=args.axioms, levels=args.levels, quantum_deg=args.quantum,
-                          time_limit=args.time_limit)
-    if args.b is None:  # one time point: is its view read as seen, or as a misread?
-        explanation = run_within(lambda: explainer.explain_step(tableau, args.a), args.time_limit)
-    else:
-        explanation = run_within(lambda: explainer.explain(tableau, args.a, args.b), args.time_limit)
+    mapper = Mapper(axioms=args.axioms, levels=args.levels, quantum_deg=args.quantum, time_limit=args.time_limit,
+                    how=args.map)
+    # One time point (b None): is its view read as seen, or as a misread?
+    explanation = run_within(lambda: mapper.explain(tableau, args.a, args.b), args.time_limit)
     print(json.dumps(explanation.to_dict(), indent=1) if args.format == "json" else explanation.to_text())
     return EXIT_OK
 
 
 def cmd_rehearse(args: argparse.Namespace) -> int:
+    from .mapping.api import Mapper
     from .mapping.bounded import run_within
-    from .mapping.rehearsal import Rehearsal
-    from .mapping.resolver import Resolver
     from .tableau import load
 
     tableau = _with_views(load(args.tableau))
-    resolver = Resolver(axioms=args.axioms, levels=args.levels, quantum_deg=args.quantum,
-                        time_limit=args.time_limit)
-    plan = run_within(lambda: Rehearsal(resolver, args.max_length).plan(tableau), args.time_limit)
+    mapper = Mapper(axioms=args.axioms, levels=args.levels, quantum_deg=args.quantum, time_limit=args.time_limit)
+    plan = run_within(lambda: mapper.rehearse(tableau, args.max_length), args.time_limit)
     print(json.dumps(plan.to_dict(), indent=1) if args.format == "json" else plan.to_text())
     return EXIT_OK
 

@@ -7,9 +7,9 @@ produce the relevant experience" (feedback path (a)); and the map is built as th
 
 1. labels the image it sees with a view (:class:`bootmap.views.OnlineViews`, see below) and appends the
    step to its own tableau;
-2. brings its map up to date (:class:`bootmap.mapping.stream.MapStream`: the last map extended by
+2. brings its map up to date (:meth:`bootmap.mapping.api.Mapper.stream`: the last map extended by
    determinism where it still stands, else resolved);
-3. if the map is not unique, carries out the rehearsal plan (:class:`bootmap.mapping.rehearsal.Rehearsal`:
+3. if the map is not unique, carries out the rehearsal plan (:meth:`bootmap.mapping.api.Mapper.rehearse`:
    the shortest actions whose outcome the minimal maps predict differently), replanning when it is done
    or the map becomes unique;
 4. else explores as :class:`~bootmap.sim.policies.Explore` does (every exit of every place, headings at a
@@ -41,10 +41,8 @@ from dataclasses import replace
 
 import numpy as np
 
+from ..mapping.api import Mapper
 from ..mapping.cogmap import CognitiveMap
-from ..mapping.rehearsal import Rehearsal
-from ..mapping.resolver import Resolver
-from ..mapping.stream import MapStream
 from ..tableau import Step, Tableau
 from ..views import OnlineViews
 from ..sim.policies import TRAVEL, Decision, Explore, Observation
@@ -81,8 +79,9 @@ class Active(Explore):
         The laser's maximum range (drop-outs read it); the simulation sets it from the world.
     place_tolerance : float
         Metres within which dead reckoning says two dstates are at the same place (navigation only).
-    resolver : Resolver, optional
-        Finds the maps (default ``Resolver(quantum_deg=90)``: the robot turns in quarter turns).
+    mapper : Mapper, optional
+        Finds the maps and plans the rehearsals (default ``Mapper(quantum_deg=90, how="fewest")``: the
+        robot turns in quarter turns, and stops at its dstates).
     max_plan : int
         Longest rehearsal plan searched for.
 
@@ -103,19 +102,20 @@ class Active(Explore):
     """
 
     def __init__(self, max_steps: int = 400, view_threshold: float = VIEW_THRESHOLD, max_range: float | None = None,
-                 place_tolerance: float = 2.5, resolver: Resolver | None = None, max_plan: int = 10):
+                 place_tolerance: float = 2.5, mapper: Mapper | None = None, max_plan: int = 10):
         if not (isinstance(max_steps, int) and max_steps >= 2):
             raise ValueError(f"max_steps must be an integer >= 2, got {max_steps!r}")
         if not view_threshold > 0:
             raise ValueError(f"view_threshold must be > 0 metres, got {view_threshold!r}")
         super().__init__(wander=False, place_tolerance=place_tolerance)
         self.max_steps, self.view_threshold, self.max_range = max_steps, view_threshold, max_range
-        self.resolver, self.max_plan = resolver, max_plan
+        self.mapper, self.max_plan = mapper, max_plan
 
     def reset(self, rng: np.random.Generator) -> None:
         super().reset(rng)
         self.views_ = OnlineViews(self.view_threshold, self.max_range)
-        self.stream_ = MapStream(self.resolver or Resolver(quantum_deg=QUANTUM_DEG))
+        self._mapper = self.mapper or Mapper(quantum_deg=QUANTUM_DEG, how="fewest")
+        self.stream_ = self._mapper.stream()
         self.tableau_: Tableau | None = None
         self.map_: CognitiveMap | None = None
         self.complete_ = False
@@ -148,7 +148,7 @@ class Active(Explore):
         self._steps.append(Step(view=view))
         self._where.append((self._here, self._heading))
         self.tableau_ = Tableau(tuple(self._steps), meta={"generator": "bootmap.agent.active"})
-        self.map_ = self.stream_.update(self.tableau_)
+        self.map_ = self._mapper.map(self.tableau_, stream=self.stream_)
 
     # ------------------------------------------------------------------ rehearsal
     def _rehearse(self, obs: Observation) -> Decision | None:
@@ -157,7 +157,7 @@ class Active(Explore):
             self._plan.clear()  # what the plan was to tell apart is told apart
             return None
         if not self._plan:
-            plan = Rehearsal(self.stream_.resolver, self.max_plan).plan(self.tableau_, cmap=self.map_)
+            plan = self._mapper.rehearse(self.tableau_, self.max_plan, cmap=self.map_)
             self._plan = deque(decision_of(a) for a in plan.actions)
             if not self._plan:
                 return None

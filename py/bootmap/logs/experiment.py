@@ -28,8 +28,8 @@ import numpy as np
 
 from ..errors import BadInput, LogError, SolveTimeout
 from ..experiment import Laps, jsonable, curves_figure, recognition_section, views_figure
-from ..mapping.loops import MAPPERS, mapper_for
-from ..mapping.resolver import Resolver
+from ..mapping.api import Mapper
+from ..mapping.loops import MAPPERS
 from ..metrics import dstate_accuracy
 from ..views import ViewClusterer, davies_bouldin_k, view_labels, view_table
 from .dstates import JunctionDetector, TurnDetector
@@ -83,9 +83,8 @@ def _run(log, out_dir, seed, k_max, time_limit, quantum_deg, view_criterion, det
     views_section.update(table=jsonable(view_table(images, views)), labels=views)
     lap("views_s")
     mapped = tableau.with_views(views)
-    resolver = mapper_for(mapped, Resolver(time_limit=time_limit, quantum_deg=quantum_deg), mapper)
     try:
-        cmap, map_note = resolver.resolve(mapped), None
+        cmap, map_note = Mapper(time_limit=time_limit, quantum_deg=quantum_deg, how=mapper).map(mapped), None
     except SolveTimeout as e:
         cmap, map_note = e.best_map, str(e)
     lap("map_s")

@@ -1,7 +1,9 @@
 """The map: the tableau resolved into dstates, places and paths by the axioms in ``asp/``, and why.
 
-This package is the boundary between Python and the answer set programs. Reading order:
+This package is the boundary between Python and the answer set programs. Everything outside it maps
+through :class:`~.api.Mapper` (``bootmap.mapping.Mapper``), which chooses the search once. Reading order:
 
+* :mod:`.api` - the one door: a map, an explanation, a stream, a rehearsal;
 * :mod:`.vocabulary` - every predicate that crosses the boundary, with how it reads to a person;
 * :mod:`.theory` - the .lp files of the axiom directory, grouped into levels, with their named rules;
 * :mod:`.motion` - the robot's action types, learned from the angles it measured;
@@ -17,7 +19,7 @@ from importlib import import_module
 
 # Imported on first use (PEP 562): the vocabulary's constants should not cost every command clingo's and
 # the whole package's import.
-_HOMES = {"CognitiveMap": "cogmap", "SolveStats": "cogmap", "Explainer": "explain", "Explanation": "explain",
+_HOMES = {"Mapper": "api", "CognitiveMap": "cogmap", "SolveStats": "cogmap", "Explainer": "explain", "Explanation": "explain",
           "Deadline": "grounding", "Resolver": "resolver", "Theory": "theory", "load_theory": "theory"}
 
 __all__ = sorted(_HOMES)

@@ -66,7 +66,7 @@ from .resolver import Resolver
 from .trace import RuleRef
 from .vocabulary import FIXED, VIEW, Predicate, action_word
 
-__all__ = ["LoopCloser", "LoopExplanation", "MAPPERS", "closes_loops", "dead_reckoning", "mapper_for"]
+__all__ = ["LoopCloser", "LoopExplanation", "MAPPERS", "closes_loops", "dead_reckoning"]
 
 #: How a map is found: ``auto`` (loop closing where the robot drove through dstates, as a log's tableau
 #: says, else the fewest dstates), ``loops`` or ``fewest`` (the paper's, :class:`~.resolver.Resolver`).
@@ -129,12 +129,6 @@ def closes_loops(tableau: Tableau, how: str = "auto") -> bool:
     if how not in MAPPERS:
         raise ValueError(f"unknown mapper {how!r}; known: {', '.join(MAPPERS)}")
     return how == "loops" or (how == "auto" and passes_through(tableau))
-
-
-def mapper_for(tableau: Tableau, resolver: Resolver, how: str = "auto") -> "Resolver | LoopCloser":
-    """What finds the map of ``tableau``: a :class:`LoopCloser` around ``resolver`` where
-    :func:`closes_loops`, else ``resolver`` itself (the fewest dstates)."""
-    return LoopCloser(resolver) if closes_loops(tableau, how) else resolver
 
 
 def dead_reckoning(tableau: Tableau, angles: Sequence[int] | None = None) -> tuple[np.ndarray, np.ndarray]:

@@ -220,24 +220,19 @@ def _run(job: Job, cache: dict) -> tuple:
 
 def _solve(job: SolveJob, cache: dict) -> tuple:
     from ..mapping import Deadline
-    from ..mapping.loops import LoopCloser, closes_loops
 
     start = time.perf_counter()
     deadline = Deadline.after(job.time_limit_s)  # validation and clustering count against it too
     try:
         tableau, k = _views(_tableau(job.document))
-        resolver = _cached(cache, ("map", job.axioms, job.quantum_deg, job.max_models), lambda: _resolver(job))
-        if closes_loops(tableau):  # a log: its views cannot carry the fewest dstates (mapping/loops.py)
-            cmap = LoopCloser(resolver).resolve(tableau, deadline)
-        elif job.stream is None:
-            cmap = resolver.resolve(tableau, deadline)
-        else:  # the same map as a resolve, sooner when the steps repeat what this solver saw last time
-            from ..mapping.stream import MapStream
-
-            stream = _cached(cache, ("stream", job.axioms, job.quantum_deg, job.max_models, job.stream),
-                             lambda: MapStream(resolver))
-            cmap = stream.update(tableau, deadline)
-        _remember(cache, job, tableau, cmap)
+        mapper = _mapper(cache, job.axioms, None, job.quantum_deg, job.max_models)
+        # A stored tableau's stream: the same map as a fresh one, sooner when the steps repeat what this
+        # solver saw last time (bootmap.mapping.stream).
+        stream = None if job.stream is None else _cached(
+            cache, ("stream", job.axioms, job.quantum_deg, job.max_models, job.stream), mapper.stream)
+        cmap = mapper.map(tableau, deadline, stream)
+        # Questions about this tableau (the viewer's first click) need not resolve it again in this solver.
+        mapper.remember(tableau, cmap)
         return "ok", Solved(cmap.to_dict(), cmap.to_text(), k, time.perf_counter() - start)
     except InconsistentTableau as e:  # the resolver names the failing levels within the same deadline
         return "inconsistent", str(e), e.failing_levels, e.diagnosed
@@ -245,34 +240,14 @@ def _solve(job: SolveJob, cache: dict) -> tuple:
         return "timeout", str(e), e.lower_bound, e.best_map
 
 
-def _remember(cache: dict, job: SolveJob, tableau: Tableau, cmap) -> None:
-    """Questions about this tableau on all levels (the viewer's first click) need not resolve it again in
-    this solver: its explainer, made with the same settings, takes the map just found."""
-    if job.max_models != 10:  # the explainer's resolver enumerates the default 10 minimal maps
-        return
-    from ..mapping import Explainer
-
-    _cached(cache, ("explain", job.axioms, None, job.quantum_deg),
-            lambda: Explainer(axioms=job.axioms, quantum_deg=job.quantum_deg)).remember(tableau, cmap)
-
-
 def _explain(job: ExplainJob, cache: dict) -> tuple:
-    from ..mapping import Deadline, Explainer, Resolver
-    from ..mapping.loops import LoopCloser, closes_loops
+    from ..mapping import Deadline
 
     start = time.perf_counter()
     deadline = Deadline.after(job.time_limit_s)
     try:
         tableau, _ = _views(_tableau(job.document))
-        if closes_loops(tableau):  # a log's map is loop-closed (_solve): explain that map
-            closer = _cached(cache, ("loops", job.axioms, job.levels, job.quantum_deg),
-                             lambda: LoopCloser(Resolver(axioms=job.axioms, levels=job.levels,
-                                                         quantum_deg=job.quantum_deg)))
-            e = closer.explain(tableau, job.a, job.b, deadline)
-            return "ok", Explained(e.to_dict(), e.to_text(), time.perf_counter() - start)
-        explainer = _cached(cache, ("explain", job.axioms, job.levels, job.quantum_deg),
-                            lambda: Explainer(axioms=job.axioms, levels=job.levels, quantum_deg=job.quantum_deg))
-        e = explainer.explain(tableau, job.a, job.b, deadline)
+        e = _mapper(cache, job.axioms, job.levels, job.quantum_deg).explain(tableau, job.a, job.b, deadline)
         return "ok", Explained(e.to_dict(), e.to_text(), time.perf_counter() - start)
     except ExplainError as e:
         return "question", str(e)
@@ -284,19 +259,27 @@ def _explain(job: ExplainJob, cache: dict) -> tuple:
 
 def _rehearse(job: RehearseJob, cache: dict) -> tuple:
     from ..mapping import Deadline
-    from ..mapping.rehearsal import Rehearsal
 
     start = time.perf_counter()
     deadline = Deadline.after(job.time_limit_s)
     try:
         tableau, _ = _views(_tableau(job.document))
-        resolver = _cached(cache, ("map", job.axioms, job.quantum_deg, 10), lambda: _resolver(job))
-        plan = Rehearsal(resolver, job.max_length).plan(tableau, deadline=deadline)
+        plan = _mapper(cache, job.axioms, None, job.quantum_deg).rehearse(tableau, job.max_length, deadline=deadline)
         return "ok", Rehearsed(plan.to_dict(), plan.to_text(), time.perf_counter() - start)
     except InconsistentTableau as e:
         return "inconsistent", str(e), e.failing_levels, e.diagnosed
     except SolveTimeout as e:
         return "timeout", str(e), e.lower_bound, None
+
+
+def _mapper(cache: dict, axioms: str, levels: tuple[str, ...] | None, quantum_deg: float | None,
+            max_models: int = 10):
+    """This solver's :class:`~bootmap.mapping.api.Mapper` for a theory and settings, kept: loading a theory
+    parses every file, and its explainer keeps the maps it was told of. Each job passes its own deadline."""
+    from ..mapping.api import Mapper
+
+    return _cached(cache, ("mapper", axioms, levels, quantum_deg, max_models),
+                   lambda: Mapper(axioms=axioms, levels=levels, quantum_deg=quantum_deg, max_models=max_models))
 
 
 def _tableau(document: dict | str | Path | StoredTableau) -> Tableau:
@@ -317,15 +300,8 @@ def _views(tableau: Tableau) -> tuple[Tableau, int | None]:
     return tableau_with_views(tableau)
 
 
-def _resolver(job: SolveJob):
-    from ..mapping import Resolver
-
-    return Resolver(axioms=job.axioms, quantum_deg=job.quantum_deg, max_models=getattr(job, "max_models", 10))
-
-
 def _cached(cache: dict, key: tuple, make):
-    """A resolver, loop closer or explainer for the job's theory, kept: loading a theory parses every file.
-    All are immutable, and each job passes its own deadline."""
+    """A mapper (or a stored tableau's stream) for the job's theory, kept."""
     if key not in cache:
         if len(cache) > 16:
             cache.clear()
