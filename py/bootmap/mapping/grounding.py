@@ -262,6 +262,17 @@ class PartialFeatures:
         return only is not None, only or set()
 
 
+def check_fixed(theory: Theory, facts: Sequence[Symbol], future_depth: int,
+                deadline: Deadline) -> tuple[list[list[Symbol]] | None, Grounding]:
+    """Whether a partition fixed among ``facts`` (``fixed/2``) satisfies the theory: one model's shown
+    symbols (empty: the axioms reject it), or None when the deadline came first; and the grounding, for
+    its times. The check of loop closing's partitions and of a streamed map extended by determinism."""
+    grounding = Grounding(theory, facts, future_depth, ["1"]).ground()
+    models: list[list[Symbol]] = []
+    result = grounding.solve(deadline, lambda m: models.append(m.symbols(shown=True)))
+    return (None if result is None else models), grounding
+
+
 def prepass(theory: Theory, facts: Sequence[Symbol], future_depth: int) -> Grounding:
     """The theory grounded with the facts alone: what it derives for certain, before any search."""
     return Grounding(theory, facts, future_depth).ground()

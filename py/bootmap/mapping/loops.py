@@ -52,19 +52,19 @@ from functools import cached_property, partial
 from typing import Callable, Sequence
 
 import numpy as np
-from clingo import Function, Number, Symbol
+from clingo import Symbol
 
 from ..errors import InconsistentTableau, SolveTimeout
 from ..tableau import Tableau, Travel, Turn
 from .cogmap import CognitiveMap, SolveStats, Try, build_map
 from .explain import time_points
 from .facts import action_symbols, passes_through, tableau_facts, travel_lengths, typed_actions
-from .grounding import Deadline, Grounding
+from .grounding import Deadline, Grounding, check_fixed
 from .motion import measured_angle
 from .proof import rule_dict
 from .resolver import Resolver
 from .trace import RuleRef
-from .vocabulary import FIXED, VIEW, Predicate, action_word
+from .vocabulary import FIXED, VIEW, Predicate, action_word, fixed_dstate
 
 __all__ = ["LoopCloser", "LoopExplanation", "MAPPERS", "closes_loops", "dead_reckoning"]
 
@@ -339,7 +339,7 @@ class _Closing:
         facts, and every symbol made is a call into clingo."""
         key = (predicate.name, t, value)
         if key not in self.made:
-            self.made[key] = predicate(t, value if predicate is VIEW else Function("s", [Number(value)]))
+            self.made[key] = predicate(t, value if predicate is VIEW else fixed_dstate(value))
         return self.made[key]
 
     def _checked(self, dstate_of: list[int]) -> CognitiveMap | None:
@@ -350,12 +350,10 @@ class _Closing:
         facts, shown = self._facts(dstate_of)
         groups = set(dstate_of)
         views = self.views
-        grounding = Grounding(resolver.theory, facts, resolver.future_depth, ["1"]).ground()
-        models: list[list[Symbol]] = []
-        result = grounding.solve(self.deadline, lambda m: models.append(m.symbols(shown=True)))
+        models, grounding = check_fixed(resolver.theory, facts, resolver.future_depth, self.deadline)
         self.tries.append(Try(f"{len(groups)} dstates (loop closing)", "sat" if models else
-                              ("timeout" if result is None else "unsat"), grounding.ground_s + grounding.solve_s))
-        if result is None:
+                              ("timeout" if models is None else "unsat"), grounding.ground_s + grounding.solve_s))
+        if models is None:
             raise self._timed_out()  # not a rejection: the axioms did not answer in time
         if not models:
             return None

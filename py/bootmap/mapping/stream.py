@@ -41,17 +41,17 @@ from __future__ import annotations
 import time
 from dataclasses import replace
 
-from clingo import Function, Number, Symbol
+from clingo import Symbol
 
 from ..tableau import Tableau
 from .cogmap import CognitiveMap, SolveStats, Try, build_map, step_row
 from .facts import action_symbol, action_symbols, passes_through, tableau_facts, travel_lengths, typed_actions
-from .grounding import Deadline, Grounding, prepass
+from .grounding import Deadline, check_fixed, prepass
 from .misreads import MIN_VISITS, find_suspects, has_images, rare_clustered_views
 from .motion import ActionType, type_suspects
 from .replay import Replay, covers, length_labels
 from .resolver import Resolver
-from .vocabulary import FIXED
+from .vocabulary import FIXED, fixed_dstate
 
 __all__ = ["MapStream"]
 
@@ -174,11 +174,10 @@ class MapStream:
     def _checked(self, tableau: Tableau, facts: list[Symbol], types, dstate_of: list[str],
                  deadline: Deadline, start: float) -> CognitiveMap | None:
         """The map of this partition if it satisfies every axiom (clingo, the partition fixed)."""
-        fixed = [FIXED(t, Function("s", [Number(int(d[1:]))])) for t, d in enumerate(dstate_of)]
-        grounding = Grounding(self.resolver.theory, facts + fixed, self.resolver.future_depth, ["1"]).ground()
-        models: list[list[Symbol]] = []
-        result = grounding.solve(deadline, lambda m: models.append(m.symbols(shown=True)))
-        if result is None or not models:
+        group = {d: n for n, d in enumerate(dict.fromkeys(dstate_of))}
+        fixed = [FIXED(t, fixed_dstate(group[d])) for t, d in enumerate(dstate_of)]
+        models, grounding = check_fixed(self.resolver.theory, facts + fixed, self.resolver.future_depth, deadline)
+        if not models:
             return None
         n_dstates = len(set(dstate_of))
         stats = SolveStats(classes=self.map_.stats.classes, lower_bound=n_dstates, ground_s=grounding.ground_s,

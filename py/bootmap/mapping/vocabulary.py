@@ -183,6 +183,12 @@ def predicate(symbol: Symbol) -> Predicate | None:
 # Actions, as the causal level names them
 # --------------------------------------------------------------------------------------------------
 
+def fixed_dstate(n: int) -> Symbol:
+    """``s(N)``: the dstate a partition being checked puts a time point at (``fixed(T, s(N))``): any
+    numbering of the partition's groups will do."""
+    return Function("s", [Number(n)])
+
+
 def action_term(kind: str, angle: int, length: int | None = None) -> Symbol:
     """The term causal.lp makes of an action (``turn_action``, ``travel_action``): a turn by its
     quantised angle, ``turn(A)``, or ``travel`` whatever its length and bend; where the robot drove
