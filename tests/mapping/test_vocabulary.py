@@ -72,3 +72,13 @@ def test_every_phrase_names_only_arguments_the_predicate_has():
         if p.phrase:
             used = {int(m) for m in re.findall(r"\{P?(\d)\}", p.phrase)}
             assert used <= set(range(p.arity)), p
+
+
+def test_the_predicate_dictionary_in_docs_asp_md_names_every_predicate_of_the_vocabulary():
+    from pathlib import Path
+
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "asp.md").read_text()
+    predicates = [x for x in vars(vocab).values() if isinstance(x, vocab.Predicate)]
+    assert len(predicates) > 30
+    missing = [f"{p.name}/{p.arity}" for p in predicates if not re.search(r"`" + re.escape(p.name) + r"(\(|`)", doc)]
+    assert not missing, f"docs/asp.md has no entry for {missing}"
