@@ -58,7 +58,8 @@ def test_answers_come_back_from_the_child_as_they_are():
     assert e.value.failing_levels == ["topological"] and e.value.diagnosed
     with pytest.raises(SolveTimeout) as t:
         resolve_within(Resolver(levels=["causal", "topological"], time_limit=0.0), notched_rectangle(50))
-    assert t.value.lower_bound >= 4 and t.value.stage
+    # Stopped in the first try (one dstate per view): its four views are proved; once that failed, five.
+    assert (t.value.stage, t.value.lower_bound) in {("one dstate per class", 4), ("the lower bounds", 5)}
 
 
 def test_any_work_is_stopped_the_same_way_and_bootmap_why_uses_it(tmp_path, capsys):

@@ -136,7 +136,10 @@ def test_inconsistent_tableau_is_reported():
 def test_time_limit_is_reported_with_the_bound_proved(paper_tableau):
     with pytest.raises(SolveTimeout, match="time limit") as e:
         Resolver(levels=NO_METRICAL, time_limit=0.0).resolve(paper_tableau)
-    assert e.value.lower_bound >= 4
+    # Out of time in the first try (one dstate per view), the views, which no dstate mixes, are proved; once
+    # it failed, one dstate more. Where the clock stops depends on the machine; what that proves does not.
+    views = len(set(paper_tableau.views))
+    assert (e.value.stage, e.value.lower_bound) in {("one dstate per class", views), ("the lower bounds", views + 1)}
 
 
 def test_unknown_level_and_missing_causal_level_are_refused():

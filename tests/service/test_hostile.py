@@ -108,6 +108,20 @@ def test_more_steps_than_the_limit_are_refused_by_count(client):
     assert problem["field"] == "steps" and "10001 steps" in problem["detail"] and "10000" in problem["detail"]
 
 
+def test_an_append_that_takes_a_tableau_past_the_step_limit_is_refused_by_its_total(client):
+    created = client.post("/tableaux", json=tableau({"view": "A", "action": TURN}, {"view": "B"}))
+    assert created.status_code == 201, created.text
+    tid = created.json()["id"]
+    try:
+        # 9,999 new steps are within the limit of 10,000; with the 2 stored, the tableau would have 10,001.
+        problem = refused(client, 422, "POST", f"/tableaux/{tid}/steps",
+                          json={"action": TURN, "steps": [{"view": "A", "action": TURN}] * 9_998 + [{"view": "A"}]})
+        assert problem["field"] == "steps" and "10001 steps" in problem["detail"] and "10000" in problem["detail"]
+        assert client.get(f"/tableaux/{tid}").json()["revision"] == 1
+    finally:
+        assert client.delete(f"/tableaux/{tid}").status_code == 204
+
+
 def test_an_image_longer_than_the_limit_is_refused(client):
     problem = refused(client, 422, "POST", "/tableaux", json=tableau({"image": [1.0] * 513}))
     assert problem["field"] == "steps[0].image" and "512" in problem["detail"]

@@ -236,3 +236,102 @@ def test_an_https_origin_is_not_this_http_server(client, server):
     host = urlsplit(server.url).netloc
     problem(client.post("/axioms/reload", headers={"Origin": f"https://{host}"}), 403)
     assert client.post("/axioms/reload", headers={"Origin": f"http://{host}"}).status_code == 200
+
+
+# --- Every route, classified: who may call it --------------------------------------------------------
+
+OPEN, TOKEN, READ, WRITE, ADMIN = "open", "needs a token", "owner, admin or public", "owner or admin", "admin only"
+#: (method, path) -> (class, how to call it: the path filled in, and the request's other arguments). A
+#: request is valid, so that it reaches the check (a body or query FastAPI refuses is refused first).
+ROUTES = {
+    ("GET", "/openapi.json"): (OPEN, {}), ("GET", "/docs"): (OPEN, {}), ("GET", "/redoc"): (OPEN, {}),
+    ("GET", "/docs/oauth2-redirect"): (OPEN, {}), ("GET", "/health"): (OPEN, {}), ("GET", "/"): (OPEN, {}),
+    ("GET", "/schemas/tableau-1.schema.json"): (OPEN, {}), ("GET", "/axioms"): (OPEN, {}),
+    ("GET", "/viewer/{name}"): (OPEN, {"path": "/viewer/app.js"}),
+    ("POST", "/tableaux"): (TOKEN, {"json": {}}),  # refused as invalid (422) once the token is accepted
+    ("GET", "/tableaux"): (TOKEN, {}), ("GET", "/runs"): (TOKEN, {}),
+    ("GET", "/runs/figure"): (TOKEN, {"params": {"run": "none", "name": "none.png"}}),
+    ("GET", "/tableaux/{tableau_id}"): (READ, {}), ("GET", "/tableaux/{tableau_id}/map"): (READ, {}),
+    ("GET", "/tableaux/{tableau_id}/map/text"): (READ, {}), ("GET", "/tableaux/{tableau_id}/maps"): (READ, {}),
+    ("GET", "/tableaux/{tableau_id}/layout"): (READ, {}),
+    ("GET", "/tableaux/{tableau_id}/why"): (READ, {"params": {"a": "S0", "b": "S4"}}),
+    ("GET", "/tableaux/{tableau_id}/rehearsal"): (READ, {"params": {"max_length": 2}}),
+    ("POST", "/tableaux/{tableau_id}/recognise"): (READ, {"json": {"image": [0.0]}}),
+    ("DELETE", "/tableaux/{tableau_id}"): (WRITE, {}),
+    ("PUT", "/tableaux/{tableau_id}/sharing"): (WRITE, {"json": {"public": False}}),
+    ("POST", "/tableaux/{tableau_id}/steps"): (WRITE, {"json": MORE}),
+    ("POST", "/axioms/reload"): (ADMIN, {}), ("POST", "/tokens"): (ADMIN, {"json": {"name": "mallory"}}),
+    ("DELETE", "/tokens/{name}"): (ADMIN, {"path": "/tokens/bob"}),
+}
+
+
+def app_routes() -> set[tuple[str, str]]:
+    from bootmap.service.app import create_app
+
+    def flat(routes):
+        for r in routes:
+            if hasattr(r, "original_router"):  # an included router
+                yield from flat(r.original_router.routes)
+            else:
+                yield r
+    return {(m, r.path) for r in flat(create_app(Settings()).routes) for m in r.methods - {"HEAD"}}
+
+
+def call(c, method: str, path: str, how: dict, tableau_id: int | None = None, token: str | None = None):
+    how = dict(how)
+    url = how.pop("path", path).replace("{tableau_id}", str(tableau_id))
+    return c.request(method, url, headers=bearer(token) if token else {}, **how)
+
+
+@pytest.fixture(scope="module")
+def alices_public(tokens_server):
+    with tokens_server.client() as c:
+        r = c.post("/tableaux", params={"public": "true"}, json=SMALL, headers=bearer(tokens_server.tokens["alice"]))
+        assert r.status_code == 201, r.text
+        return r.json()["id"]
+
+
+def test_every_route_of_the_service_is_classified():
+    assert app_routes() == set(ROUTES), "a route without a class (or a class for no route): classify it in ROUTES"
+
+
+def test_without_a_token_only_the_open_routes_answer(tokens_server, alices):
+    with tokens_server.client() as c:
+        for (method, path), (kind, how) in ROUTES.items():
+            r = call(c, method, path, how, alices)
+            if kind == OPEN:
+                assert r.status_code == 200, (method, path, r.status_code)
+            else:
+                assert problem(r, 401)["status"] == 401, (method, path)
+
+
+def test_another_tokens_private_tableau_is_missing_on_every_tableau_route(tokens_server, alices):
+    bob = tokens_server.tokens["bob"]
+    with tokens_server.client() as c:
+        for (method, path), (kind, how) in ROUTES.items():
+            if kind in (READ, WRITE):
+                assert problem(call(c, method, path, how, alices, bob), 404)["status"] == 404, (method, path)
+        assert c.get(f"/tableaux/{alices}", headers=bearer(tokens_server.tokens["alice"])).status_code == 200
+
+
+def test_a_public_tableau_is_readable_by_any_token_and_writable_only_by_its_owner(tokens_server, alices_public):
+    bob = tokens_server.tokens["bob"]
+    with tokens_server.client() as c:
+        for (method, path), (kind, how) in ROUTES.items():
+            r = call(c, method, path, how, alices_public, bob)
+            if kind == READ:
+                assert r.status_code not in (401, 403, 404), (method, path, r.text)
+            elif kind == WRITE:
+                assert problem(r, 403)["status"] == 403, (method, path)
+        assert c.get(f"/tableaux/{alices_public}", headers=bearer(bob)).json()["revision"] == 1
+
+
+def test_admin_routes_refuse_a_user_token_and_token_routes_accept_one(tokens_server):
+    alice = tokens_server.tokens["alice"]
+    with tokens_server.client() as c:
+        for (method, path), (kind, how) in ROUTES.items():
+            r = call(c, method, path, how, token=alice)
+            if kind == ADMIN:
+                assert problem(r, 403)["status"] == 403, (method, path)
+            elif kind == TOKEN:
+                assert r.status_code not in (401, 403), (method, path, r.text)

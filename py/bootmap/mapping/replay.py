@@ -43,7 +43,7 @@ from .theory import Theory
 #: The axiom files the replay's argument is about (path in the axiom directory -> sha256). When one
 #: changes, check the argument above against it, then update its digest (tests/mapping/test_stream.py).
 STOCK_DIGESTS = {
-    "causal.lp": "d31631ab88fd074de0449d4665ff6d998a6208609873db2c0a2a38fbec9e9591",
+    "causal.lp": "b7171fb13596ce9381d81b6bf339896d062d412614eb91c298d0a1d252cbd153",
     "metrical.lp": "4628513194f19408c98f56c8d15750bd6f1cb69f46904f76d5521ada01d6dbb5",
     "topological.lp": "df80192cb9c27380cf518bbc4e1f298006fdaf1d07d5fded8971fa6a25c41512",
     "core/ask.lp": "2e8adf403568adf1bc5e166b19bde32ba2fdaac7f873adef0930bb9071c939ca",

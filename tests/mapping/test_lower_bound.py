@@ -1,0 +1,85 @@
+"""The dstates the resolver proves necessary agree with brute force over every partition of tiny tableaux.
+
+The brute force is independent of clingo: it tries every partition of the time points into dstates (within
+views, which one dstate never mixes) and checks each with the Python re-statement of the axioms
+(:func:`bootmap.testing.check.check_map`). The fewest dstates any valid partition has is what a proof of
+a lower bound may claim and no more; the valid partitions with that many are the minimal maps.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections import defaultdict
+
+import pytest
+
+from bootmap.errors import SolveTimeout
+from bootmap.mapping import Resolver
+from bootmap.testing.check import check_map
+
+from test_axiom_rules import grid_walk
+
+CT = ("causal", "topological")
+
+
+def set_partitions(items: list[int]):
+    """Every partition of ``items`` as a block index per item (restricted growth strings)."""
+    def grow(i: int, labels: list[int], blocks: int):
+        if i == len(items):
+            yield list(labels)
+            return
+        for b in range(blocks + 1):
+            labels.append(b)
+            yield from grow(i + 1, labels, max(blocks, b + 1))
+            labels.pop()
+    yield from grow(0, [], 0)
+
+
+def brute_force_minimal_maps(tableau, levels) -> tuple[int, int]:
+    """(fewest dstates of any partition the axioms accept, how many partitions have that few)."""
+    by_view = defaultdict(list)
+    for t, v in enumerate(tableau.views):
+        by_view[v].append(t)
+    classes = list(by_view.values())
+    best, count = None, 0
+    for choice in itertools.product(*(list(set_partitions(c)) for c in classes)):
+        dstate_of = [None] * len(tableau)
+        for k, (members, labels) in enumerate(zip(classes, choice)):
+            for t, b in zip(members, labels):
+                dstate_of[t] = f"{k}.{b}"
+        n = len(set(dstate_of))
+        if best is not None and n > best:
+            continue
+        if check_map(tableau, dstate_of, levels):
+            continue
+        if best is None or n < best:
+            best, count = n, 1
+        else:
+            count += 1
+    return best, count
+
+
+# Walks whose classes' lower bound (what the views seen later tell apart) falls short of the truth: the
+# resolver refutes the bounds below the minimum one by one (their tries say "at most N dstates: unsat").
+@pytest.mark.parametrize("seed", [42, 51])
+def test_the_proved_lower_bound_is_the_brute_force_minimum_where_bounds_are_refuted(seed):
+    tableau = grid_walk(seed)
+    fewest, n_minimal = brute_force_minimal_maps(tableau, CT)
+    m = Resolver(levels=CT, time_limit=60).resolve(tableau)
+    refuted = [int(b.dstates.split()[2]) for b in m.stats.bounds
+               if b.dstates.startswith("at most") and b.result == "unsat"]
+    assert refuted and max(refuted) == fewest - 1  # the case this test is about
+    assert m.n_dstates == fewest and m.n_models == n_minimal and m.minimal
+    assert m.stats.lower_bound == fewest  # proving "not fewest - 1" proves fewest
+
+
+def test_a_time_out_reports_what_its_stage_proved_and_no_more_than_brute_force_needs():
+    tableau = grid_walk(51)
+    fewest, _ = brute_force_minimal_maps(tableau, CT)
+    with pytest.raises(SolveTimeout) as e:
+        Resolver(levels=CT, time_limit=0.0).resolve(tableau)
+    # Out of time in the first try (one dstate per view), the views, which no dstate mixes, are proved; once
+    # it failed, one dstate more. Where the clock stops depends on the machine; what that proves does not.
+    views = len(set(tableau.views))
+    assert (e.value.stage, e.value.lower_bound) in {("one dstate per class", views), ("the lower bounds", views + 1)}
+    assert e.value.lower_bound < fewest
