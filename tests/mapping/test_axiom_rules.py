@@ -23,8 +23,8 @@ from bootmap.mapping import Explainer, Resolver, load_theory
 from bootmap.mapping.loops import LoopCloser
 from bootmap.mapping.theory import default_axioms_dir, rule_lines
 from bootmap.tableau import Step, Tableau, Travel, Turn
-from bootmap.testing.gridworld import random_world, walk
-from bootmap.testing.noise import with_misreads
+from support.gridworld import random_world, walk
+from support.noise import with_misreads
 
 SHIPPED = default_axioms_dir()
 RULES = {r.name: r for r in load_theory(SHIPPED).rules()}

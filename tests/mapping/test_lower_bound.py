@@ -2,7 +2,7 @@
 
 The brute force is independent of clingo: it tries every partition of the time points into dstates (within
 views, which one dstate never mixes) and checks each with the Python re-statement of the axioms
-(:func:`bootmap.testing.check.check_map`). The fewest dstates any valid partition has is what a proof of
+(:func:`support.check.check_map`). The fewest dstates any valid partition has is what a proof of
 a lower bound may claim and no more; the valid partitions with that many are the minimal maps.
 """
 
@@ -15,7 +15,7 @@ import pytest
 
 from bootmap.errors import SolveTimeout
 from bootmap.mapping import Resolver
-from bootmap.testing.check import check_map
+from support.check import check_map
 
 from test_axiom_rules import grid_walk
 

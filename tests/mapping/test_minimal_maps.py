@@ -4,7 +4,7 @@ import pytest
 
 from bootmap.mapping import Resolver
 from bootmap.mapping.motion import length_types
-from bootmap.testing.check import check_map
+from support.check import check_map
 
 from test_axiom_rules import CT, place_on_both_sides, two_lengths
 from test_lower_bound import brute_force_minimal_maps
