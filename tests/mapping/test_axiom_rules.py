@@ -10,7 +10,6 @@ proved), an explanation's verdict, or a loop-closed map. The answers must differ
 from __future__ import annotations
 
 import shutil
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 

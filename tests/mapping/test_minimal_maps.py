@@ -1,6 +1,5 @@
 """How many minimal maps, and which: counted against brute force; travel lengths as odometry reads them."""
 
-import pytest
 
 from bootmap.mapping import Resolver
 from bootmap.mapping.motion import length_types
