@@ -12,7 +12,7 @@ import sys
 import time
 import warnings
 
-from bootmap.experiment import CHECKS, run_experiment
+from bootmap.experiments.world import CHECKS, run_experiment
 from targets import Targets
 
 MAX_S = {"notched_rectangle": 10.0, "taylor_hall": 20.0}  # the whole experiment

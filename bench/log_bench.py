@@ -14,7 +14,7 @@ import argparse
 import sys
 import time
 
-from bootmap.logs.experiment import headline, run_log_experiment
+from bootmap.experiments.log import headline, run_log_experiment
 from targets import Targets
 
 # The paper's Taylor Hall run, for comparison (Kuipers & Beeson 2002): 100 images of 20 dstates seen

@@ -33,7 +33,7 @@ import numpy as np
 
 from bootmap.arguments import seeds as parse_seeds
 from bootmap.errors import BootmapError
-from bootmap.experiment import PAPER_FIGURES, run_experiment
+from bootmap.experiments.world import PAPER_FIGURES, run_experiment
 from bootmap.mapping.motion import MotionPrimitives
 from bootmap.mapping.resolver import Resolver
 from bootmap.sim import simulate
@@ -129,7 +129,7 @@ def _runs(idx: np.ndarray) -> list[int]:
 
 
 def _tableau(world: World, seed: int) -> Tableau:
-    from bootmap.experiment import PAPER_CIRCUITS, PAPER_EXPLORE_STEPS
+    from bootmap.experiments.world import PAPER_CIRCUITS, PAPER_EXPLORE_STEPS
 
     if world.policy == "explore":
         return simulate(world, policy="explore", steps=PAPER_EXPLORE_STEPS, seed=seed)

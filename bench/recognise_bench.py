@@ -20,7 +20,7 @@ import time
 import numpy as np
 
 from bootmap.recognise import compare_clusterers, compare_learners, learning_curve_cv, online_curve
-from bootmap.experiment import NN_TARGET
+from bootmap.experiments.world import NN_TARGET
 from bootmap.sim import simulate
 from targets import Targets
 

@@ -28,9 +28,9 @@ import time
 import warnings
 
 from bootmap.arguments import seeds as parse_seeds
-from bootmap.experiment import run_experiment
-from bootmap.sweep import TIMING_COLUMNS, loads_spec, run_sweep
-from bootmap.sweep.cells import experiment_row
+from bootmap.experiments.world import run_experiment
+from bootmap.experiments.sweep import TIMING_COLUMNS, loads_spec, run_sweep
+from bootmap.experiments.sweep.cells import experiment_row
 from targets import Targets
 
 SPEEDUP_TARGET = 1.8

@@ -6,7 +6,7 @@ import sys
 
 import pytest
 
-from bootmap.experiment import CHECKS, NN_TARGET, checks, run_experiment
+from bootmap.experiments.world import CHECKS, NN_TARGET, checks, run_experiment
 
 PAPER_VIEWS = {(0.5, 0.5, 4.5), (0.5, 4.5, 2.5), (0.5, 0.5, 2.5), (0.5, 2.5, 4.5)}  # left, front, right
 
@@ -60,7 +60,7 @@ def test_true_dstates_the_map_merges_or_splits_are_named_not_claimed_a_success()
     # and took P1:E for two: the results and the report say so, and the checks fail.
     from types import SimpleNamespace
 
-    from bootmap.experiment import _map_section, _report_text, checks
+    from bootmap.experiments.world import _map_section, _report_text, checks
     from bootmap.mapping import SolveStats
     from bootmap.sim.world import load_world
 
@@ -248,7 +248,7 @@ def test_circuits_on_an_explored_world_are_refused(capsys, tmp_path):
 def test_one_failing_seed_is_named_and_the_others_still_run(monkeypatch, tmp_path):
     # A seed whose simulation fails (the robot stuck, say) is recorded with its error; the sweep goes on,
     # the summary is written, and no check holds for that seed.
-    from bootmap import experiment
+    from bootmap.experiments import world as experiment
     from bootmap.errors import BootmapError
 
     real = experiment.run_experiment

@@ -27,8 +27,7 @@ STAGES: list[tuple[str, tuple[str, ...]]] = [
     ("map", ("bootmap.mapping", "bootmap.layout")),
     ("recognition", ("bootmap.recognise",)),
     ("agent", ("bootmap.agent",)),
-    ("experiments", ("bootmap.experiment", "bootmap.logs.evaluate", "bootmap.logs.experiment", "bootmap.logs.figures",
-                     "bootmap.sweep")),
+    ("experiments", ("bootmap.experiments",)),
     ("service", ("bootmap.service",)),
     ("command line", ("bootmap.cli", "*.commands")),
 ]

@@ -12,11 +12,11 @@ from pathlib import Path
 
 import pytest
 from bootmap.errors import SweepError
-from bootmap.experiment import run_experiment
+from bootmap.experiments.world import run_experiment
 from bootmap.proc import in_child
 from bootmap.sim.world import load_world
-from bootmap.sweep import TIMING_COLUMNS, DaskCluster, load_spec, loads_spec, run_sweep
-from bootmap.sweep.cells import experiment_row
+from bootmap.experiments.sweep import TIMING_COLUMNS, DaskCluster, load_spec, loads_spec, run_sweep
+from bootmap.experiments.sweep.cells import experiment_row
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -189,7 +189,7 @@ def test_without_dask_the_scheduler_option_says_what_to_install(monkeypatch):
 
 
 def test_an_experiment_runs_with_one_blas_thread_and_gives_the_threads_back(monkeypatch):
-    import bootmap.experiment as experiment
+    import bootmap.experiments.world as experiment
     from threadpoolctl import threadpool_info
 
     seen = []

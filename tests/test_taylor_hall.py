@@ -8,7 +8,7 @@ from collections import defaultdict
 
 import pytest
 
-from bootmap.experiment import CHECKS, run_experiment, run_seeds
+from bootmap.experiments.world import CHECKS, run_experiment, run_seeds
 
 # The 8 views the hallway's shapes make at 8 m (worlds/taylor_hall.toml): which true dstates share one.
 VIEWS = [

@@ -128,7 +128,7 @@ def cmd_schema(args: argparse.Namespace) -> int:
 
 
 def cmd_experiment(args: argparse.Namespace) -> int:
-    from .experiment import failed_checks, run_experiment, run_seeds
+    from .experiments.world import failed_checks, run_experiment, run_seeds
 
     if args.log is None and args.world == "killian":
         args.log, args.world = "killian", None  # the short form: no world is called killian
@@ -163,10 +163,10 @@ def cmd_experiment(args: argparse.Namespace) -> int:
 
 
 def _log_experiment(args: argparse.Namespace) -> int:
-    """``bootmap experiment --log LOG``: the experiment on a robot's log (:mod:`bootmap.logs.experiment`).
+    """``bootmap experiment --log LOG``: the experiment on a robot's log (:mod:`bootmap.experiments.log`).
     Exit 0 when a map was found and the report written (the targets are reported, met or not),
     1 when no map was found in the time limit, 2 on bad input."""
-    from .logs.experiment import headline, run_log_experiment
+    from .experiments.log import headline, run_log_experiment
 
     if args.world is not None:
         raise BadInput(f"give a world or --log, not both (world {args.world!r}, log {args.log!r})")
@@ -186,7 +186,7 @@ def _log_experiment(args: argparse.Namespace) -> int:
 
 
 def _print_summary(r: dict) -> None:
-    from .experiment import CHECK_TEXT
+    from .experiments.world import CHECK_TEXT
 
     if r.get("error"):
         print(f"{r['world']} (seed {r['seed']}): FAILED: {r['error']}")
@@ -213,7 +213,7 @@ def _print_summary(r: dict) -> None:
 
 def cmd_demo(args: argparse.Namespace) -> int:
     from . import examples
-    from .experiment import run_experiment
+    from .experiments.world import run_experiment
     from .mapping.resolver import Resolver
 
     runs = [("notched_rectangle", "notched rectangle, 50 clockwise circuits (the paper's Figure 2)", {"circuits": 50}),
@@ -383,7 +383,7 @@ def _register_optional(sub) -> None:
     import importlib
 
     for module in ("bootmap.sim.commands", "bootmap.service.commands", "bootmap.logs.commands",
-                   "bootmap.sweep.commands"):
+                   "bootmap.experiments.sweep.commands"):
         try:
             register = importlib.import_module(module).register
         except ModuleNotFoundError as e:

@@ -5,7 +5,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from bootmap.logs.evaluate import dead_reckoned_dstates, nn_on_revisits, shift_tolerant_distances, shuffled_uncertainty
+from bootmap.experiments.evaluate import dead_reckoned_dstates, nn_on_revisits, shift_tolerant_distances, shuffled_uncertainty
 from bootmap.views import ViewClusterer, davies_bouldin_k
 
 from synthetic import pattern

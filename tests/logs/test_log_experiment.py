@@ -6,7 +6,7 @@ import pytest
 
 from bootmap.cli import main
 from bootmap.errors import BadInput, LogError
-from bootmap.logs.experiment import run_log_experiment
+from bootmap.experiments.log import run_log_experiment
 
 from log_data import EXCERPT
 from synthetic import write_square_log

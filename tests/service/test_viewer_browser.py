@@ -146,7 +146,7 @@ def test_appended_steps_show_up_without_a_reload_beside_the_true_trajectory(page
 
 
 def test_the_experiments_figures_are_viewable(page, viewer_server, runs_dir, paper):
-    from bootmap.experiment import run_experiment
+    from bootmap.experiments.world import run_experiment
 
     run_experiment("notched_rectangle", circuits=2, seed=1, out_dir=runs_dir / "nr")  # a real run: 3-5 s
     _open(page, viewer_server, paper)

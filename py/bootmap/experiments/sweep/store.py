@@ -13,7 +13,7 @@ import json
 import os
 from pathlib import Path
 
-from ..errors import SweepError
+from ...errors import SweepError
 from .cells import COLUMNS
 from .spec import SweepSpec
 

@@ -25,14 +25,14 @@ from typing import Callable
 
 import numpy as np
 
-from .errors import BadInput, BootmapError, SolveTimeout
-from .mapping.resolver import Resolver
-from .metrics import dstate_accuracy
-from .recognise import default_learners, learning_curve_cv, online_curve, online_hits
-from .sim import simulate
-from .agent import POLICIES, make_policy
-from .sim.world import World, load_world
-from .views import ViewClusterer, view_labels, view_table
+from ..errors import BadInput, BootmapError, SolveTimeout
+from ..mapping.resolver import Resolver
+from ..metrics import dstate_accuracy
+from ..recognise import default_learners, learning_curve_cv, online_curve, online_hits
+from ..sim import simulate
+from ..agent import POLICIES, make_policy
+from ..sim.world import World, load_world
+from ..views import ViewClusterer, view_labels, view_table
 
 CURVE_SIZES = (10, 20, 30, 40, 50, 60, 70, 80, 90)
 PAPER_CIRCUITS = 50  # the paper's notched-rectangle run: 50 circuits, 400 images
@@ -89,8 +89,8 @@ def run_experiment(world: str | World, circuits: int | None = None, steps: int |
 
 
 def _check_choices(clusterer: str, learner: str) -> None:
-    from .recognise import default_learners
-    from .views import CLUSTERERS
+    from ..recognise import default_learners
+    from ..views import CLUSTERERS
 
     if clusterer not in CLUSTERERS:
         raise BadInput(f"unknown view clusterer {clusterer!r}; known: {', '.join(CLUSTERERS)}")
@@ -284,7 +284,7 @@ def write_report(results: dict, out: Path, world, tableau, cmap) -> None:
 
 
 def _figures(results: dict, out: Path, world, tableau) -> None:
-    from .sim.render import render
+    from ..sim.render import render
 
     render(world, tableau, path=out / "world_map.png", title=f"{results['world']}: run and true dstates")
     views_figure(results, out / "views_M_U.png")

@@ -14,7 +14,7 @@ import os
 import socket
 import time
 
-from ..proc import in_child
+from ...proc import in_child
 from .spec import Cell
 
 #: The columns of the results table, in order. ``TIMING_COLUMNS`` vary from run to run (and machine to
@@ -67,9 +67,9 @@ def _axes(cell: Cell) -> dict:
 
 def _experiment_row(cell: Cell) -> dict:
     """The experiment itself (in the child) and its row; the learning curves ride along for the figures."""
-    from ..errors import BootmapError
-    from ..experiment import run_experiment
-    from ..sim.world import loads_world
+    from ...errors import BootmapError
+    from ..world import run_experiment
+    from ...sim.world import loads_world
 
     if cell.log is not None:
         return _log_row(cell)
@@ -112,8 +112,8 @@ def _log_row(cell: Cell) -> dict:
     """The experiment on a robot's log (``bootmap experiment --log``) and its row: the map against the
     log's poses, nearest neighbour on revisited dstates, the dead-reckoning baseline. The paper's checks,
     made for the simulator's worlds, are not taken (False)."""
-    from ..errors import BootmapError
-    from ..logs.experiment import run_log_experiment
+    from ...errors import BootmapError
+    from ..log import run_log_experiment
 
     try:
         r = run_log_experiment(cell.log, seed=cell.seed, k_max=cell.k_max, time_limit=cell.time_limit,

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import argparse
 
-from .. import arguments
-from ..errors import EXIT_FAILURE, EXIT_OK
+from ... import arguments
+from ...errors import EXIT_FAILURE, EXIT_OK
 
 
 def register(subparsers) -> None:
@@ -23,7 +23,7 @@ def register(subparsers) -> None:
                     "on a Dask distributed cluster. Writes DIR/results.jsonl as cells finish (so --resume can "
                     "go on after an interruption), then DIR/results.csv, DIR/summary.md and figures. A cell "
                     "that fails or times out is recorded with its error and the sweep goes on. Sweep files: "
-                    "sweeps/*.toml; the format is in bootmap.sweep.spec.")
+                    "sweeps/*.toml; the format is in bootmap.experiments.sweep.spec.")
     p.add_argument("spec", help="sweep file (TOML)")
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="output directory")
     p.add_argument("--workers", type=arguments.count("workers"), metavar="N",

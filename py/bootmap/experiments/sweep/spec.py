@@ -1,7 +1,7 @@
 """Sweep files: the grid of experiments a sweep runs, read from TOML and checked key by key.
 
 A sweep file names the axes of a grid; every combination is one *cell*, one run of
-:func:`bootmap.experiment.run_experiment`::
+:func:`bootmap.experiments.world.run_experiment`::
 
     [grid]
     worlds = ["notched_rectangle", "taylor_hall"]   # names in worlds/ or paths (relative to this file)
@@ -40,8 +40,8 @@ from itertools import product
 from pathlib import Path
 from typing import Any
 
-from .. import arguments
-from ..errors import BootmapError, SweepError
+from ... import arguments
+from ...errors import BootmapError, SweepError
 
 AXES = ("worlds", "logs", "seeds", "clusterers", "learners", "levels", "quantum")
 #: The noise axis of a log's cells: the log is what it is.
@@ -59,7 +59,7 @@ class Noise:
 
 @dataclass(frozen=True)
 class Cell:
-    """One experiment of the grid: everything :func:`~bootmap.sweep.cells.run_cell` needs, as plain data
+    """One experiment of the grid: everything :func:`~bootmap.experiments.sweep.cells.run_cell` needs, as plain data
     (it travels to worker processes and Dask workers by pickle)."""
 
     world: str                        # as the sweep file names it (shown in tables)
@@ -216,7 +216,7 @@ def _run_options(run: dict, at: _Where) -> dict:
 
 def _worlds(values: list, at: _Where, base: Path | None) -> list[tuple[str, str]]:
     """(name as written, file) per world; a path is read relative to the sweep file first."""
-    from ..sim.world import resolve_world_path
+    from ...sim.world import resolve_world_path
 
     out = []
     for i, w in enumerate(values):
@@ -293,7 +293,7 @@ def _noises(value, at: _Where) -> list[Noise]:
 def _check_worlds(worlds: list[tuple[str, str]], noises: list[Noise], at: _Where) -> dict[str, str]:
     """Load every world under every noise level now, so a bad field fails before any cell runs; returns
     each world's policy."""
-    from ..sim.world import load_world
+    from ...sim.world import load_world
 
     policies = {}
     for (w, path), (i, n) in product(worlds, enumerate(noises)):
@@ -315,13 +315,13 @@ def _choices(grid: dict, key: str, default: list[str], known: list[str], at: _Wh
 
 
 def _known_clusterers() -> list[str]:
-    from ..views import CLUSTERERS
+    from ...views import CLUSTERERS
 
     return list(CLUSTERERS)
 
 
 def _known_learners() -> list[str]:
-    from ..recognise import default_learners
+    from ...recognise import default_learners
 
     return list(default_learners())
 
@@ -331,7 +331,7 @@ def _levels(value, key: str, at: _Where) -> tuple[str, ...] | None:
         raise SweepError(f'expected "all" or levels like "causal,topological", got {value!r}', at(key))
     if value.strip() == "all":
         return None
-    from ..mapping.theory import available_levels, select_levels
+    from ...mapping.theory import available_levels, select_levels
 
     try:
         return tuple(select_levels(arguments.levels(value), available_levels(), "the shipped axioms"))

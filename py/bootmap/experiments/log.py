@@ -12,7 +12,7 @@
    to tell apart.
 4. A baseline without images: dstates from dead-reckoned poses alone (local metrical consistency).
 5. Recognition as the paper's (images labelled by the map), and nearest neighbour on the true dstates
-   seen more than once, with raw scans and with a shift-tolerant distance (:mod:`bootmap.logs.evaluate`).
+   seen more than once, with raw scans and with a shift-tolerant distance (:mod:`bootmap.experiments.evaluate`).
 
 Results use the simulated experiment's keys where the meaning is the same (``views``, ``map``,
 ``recognition``, ``timings``), and add ``truth`` (corner recall), ``nn_revisited`` and ``targets``
@@ -27,14 +27,14 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import BadInput, LogError, SolveTimeout
-from ..experiment import Laps, jsonable, curves_figure, recognition_section, views_figure
+from .world import Laps, curves_figure, jsonable, recognition_section, views_figure
 from ..mapping.api import Mapper
 from ..mapping.loops import MAPPERS
 from ..metrics import dstate_accuracy
 from ..views import ViewClusterer, davies_bouldin_k, view_labels, view_table
-from .dstates import JunctionDetector, TurnDetector
+from ..logs.dstates import JunctionDetector, TurnDetector
 from .evaluate import DESCRIPTORS, dead_reckoned_dstates, map_against_truth, nn_on_revisits, views_against_truth
-from .ingest import log_tableau, read_log, travel_ends, turn_ends
+from ..logs.ingest import log_tableau, read_log, travel_ends, turn_ends
 
 #: How k is chosen for the map's views: "auto" takes M's k unless M degenerates (k <= 2), then
 #: Davies-Bouldin's.

@@ -39,8 +39,8 @@ from scipy.spatial.distance import cdist
 
 from ..metrics import dstate_accuracy
 from ..views import uncertainty_coefficient
-from .scans import Pose
-from .truth import main_axis, true_dstates
+from ..logs.scans import Pose
+from ..logs.truth import main_axis, true_dstates
 
 #: Descriptors :func:`nn_on_revisits` compares scans with.
 DESCRIPTORS = ("raw", "shift")

@@ -14,7 +14,7 @@ import os
 from collections.abc import Iterable, Iterator
 from concurrent.futures import ProcessPoolExecutor, as_completed
 
-from ..errors import BootmapError, SweepError
+from ...errors import BootmapError, SweepError
 from .cells import failed_row, run_cell
 from .spec import Cell
 
@@ -29,7 +29,7 @@ def one_thread_per_worker() -> None:
     forked child, rather than paid again in each (about 0.2 s a cell)."""
     for var in THREAD_VARIABLES:
         os.environ[var] = "1"
-    from ..experiment import run_experiment
+    from ..world import run_experiment
 
     run_experiment("notched_rectangle", circuits=2, seed=0, time_limit=10.0)
 

@@ -1,7 +1,7 @@
 """Sweeps: many experiments at once (``bootmap sweep SPEC.toml -o DIR``), on this machine or a Dask cluster.
 
 A sweep file (:mod:`.spec`) names a grid - worlds, seeds, noise levels, view clusterers, learners,
-resolver options; each cell is one run of :func:`bootmap.experiment.run_experiment` (:mod:`.cells`). The
+resolver options; each cell is one run of :func:`bootmap.experiments.world.run_experiment` (:mod:`.cells`). The
 cells run on a local process pool or a Dask distributed cluster (:mod:`.engines`); each row is written to
 ``DIR/results.jsonl`` as its cell finishes (:mod:`.store`), so ``resume=True`` picks up an interrupted
 sweep; at the end come ``results.csv``, ``summary.md`` and figures (:mod:`.report`).
