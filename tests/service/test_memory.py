@@ -44,6 +44,18 @@ def memory_server(tmp_path_factory):
     s.stop()
 
 
+@pytest.fixture(scope="module")
+def stored(memory_server) -> dict[str, int]:
+    """Two tableaux stored once for the module: ``small`` (2.5 MB) and ``large`` (15 MB, images)."""
+    with memory_server.client(timeout=120) as c:
+        ids = {}
+        for name, doc in (("small", big_tableau()), ("large", valid_16_mb_tableau(9))):
+            r = c.post("/tableaux", json=doc)
+            assert r.status_code == 201, r.text[:500]
+            ids[name] = r.json()["id"]
+    return ids
+
+
 def vm(pid: int, field: str) -> float:
     """VmRSS or VmHWM (peak) of a process, MiB."""
     for line in open(f"/proc/{pid}/status"):
@@ -181,7 +193,7 @@ def test_connections_stalled_mid_body_are_closed_at_the_body_time_out(memory_ser
 
 
 @pytest.mark.slow
-def test_valid_16_mb_posts_layouts_recognitions_and_reads_keep_the_server_under_its_bound(memory_server):
+def test_valid_16_mb_posts_layouts_recognitions_and_reads_keep_the_server_under_its_bound(memory_server, stored):
     """Everything that reads or parses a whole tableau, many at once: four valid 15 MB posts while twelve
     clients read a stored tableau, then twelve layouts and twelve recognitions of a 15 MB tableau, then
     forty layouts of a 2.5 MB one. Parsing and laying out happen in the intake processes, so the server
@@ -189,10 +201,8 @@ def test_valid_16_mb_posts_layouts_recognitions_and_reads_keep_the_server_under_
     s = memory_server
     docs = [json.dumps(valid_16_mb_tableau(seed)).encode() for seed in range(4)]
     assert all(15 * MB < len(d) < 16 * MB for d in docs)
+    small_id, large_id = stored["small"], stored["large"]
     with s.client() as c:
-        small = c.post("/tableaux", json=big_tableau())
-        assert small.status_code == 201, small.text[:500]
-        small_id = small.json()["id"]
         expected = c.get(f"/tableaux/{small_id}").content
     answers: list[tuple[str, int]] = []
 
@@ -214,7 +224,6 @@ def test_valid_16_mb_posts_layouts_recognitions_and_reads_keep_the_server_under_
     at_once([("post", "POST", "/tableaux", {"content": d, "headers": {"content-type": "application/json"}})
              for d in docs] + [("read", "GET", f"/tableaux/{small_id}", {}) for _ in range(12)])
     with s.client() as c:
-        large_id = max(item["id"] for item in c.get("/tableaux?limit=1000").json()["items"])
         image = c.get(f"/tableaux/{large_id}").json()["tableau"]["steps"][5]["image"]
     at_once([("layout", "GET", f"/tableaux/{large_id}/layout", {}) for _ in range(12)]
             + [("recognise", "POST", f"/tableaux/{large_id}/recognise", {"json": {"image": image}})
@@ -260,7 +269,7 @@ def test_connections_that_trickle_their_headers_or_send_nothing_are_closed_at_th
     assert time.monotonic() - t0 < 2 + 5
 
 
-def test_idle_readers_hold_no_database_connection_and_are_closed_at_the_send_time_out(memory_server):
+def test_idle_readers_hold_no_database_connection_and_are_closed_at_the_send_time_out(memory_server, stored):
     """Forty-five clients ask for a 15 MB tableau (more than the kernel's buffers hold) and read nothing.
     Each read is copied from the database and the connection given back at once, so /health and other
     reads are answered meanwhile (before, each idle reader held a database connection: /health answered
@@ -268,14 +277,9 @@ def test_idle_readers_hold_no_database_connection_and_are_closed_at_the_send_tim
     closed, its answer cut short."""
     s = memory_server
     url = urlsplit(s.url)
+    small, large = stored["small"], stored["large"]
     with s.client(timeout=120) as c:
-        ids = []
-        for doc in (big_tableau(), valid_16_mb_tableau(9)):
-            stored = c.post("/tableaux", json=doc)
-            assert stored.status_code == 201, stored.text[:500]
-            ids.append(stored.json()["id"])
-        small, large = ids
-        expected = {tid: len(c.get(f"/tableaux/{tid}").content) for tid in ids}
+        expected = {tid: len(c.get(f"/tableaux/{tid}").content) for tid in (small, large)}
 
     def idle_reader(tid: int) -> socket.socket:
         sock = socket.socket()

@@ -2,11 +2,11 @@
 
 Its solve leases stop counting once its heartbeat is stale (3 s), so a token whose solve places it held
 gets them back on another server within seconds; its solver and intake processes notice that their
-parent is gone and end, and multiprocessing's resource tracker with them. Bounds are generous (5 s for
+parent is gone and end (a solver in the middle of a solve too), and multiprocessing's resource tracker
+with them. Bounds are generous (5 s for
 what takes about 3 s) and nothing depends on how busy the machine is but how long things take.
 """
 
-import json
 import os
 import signal
 import time
@@ -65,12 +65,15 @@ def cmdline(pid: int) -> str:
         return "?"
 
 
-def test_a_killed_servers_solve_places_free_on_another_server_within_seconds(tmp_path):
-    """Two servers on one SQLite file; the token's two solve places are taken by hard solves on a, which
-    is then killed. Before, its leases kept the token at 429 for a minute and more (their TTL)."""
+def test_a_killed_server_frees_its_tokens_solve_places_and_leaves_no_process_behind(tmp_path):
+    """Two servers on one SQLite file; the token's two solve places are taken by hard solves on a (30 s
+    each), which is then killed. Before, its leases kept the token at 429 for a minute and more (their
+    TTL), and its intake processes and multiprocessing's resource tracker ran on for good. Now b takes
+    the token's post within seconds, and every process a started (its solvers, one of them busy, its
+    intake processes, the resource tracker) ends."""
     db = str(tmp_path / "shared.sqlite3")
     settings = {"db": db, "require_tokens": True, "token_max_solves": 2, "max_concurrent_solves": 1,
-                "max_queued_solves": 2, "solve_time_limit_s": 3, "solve_kill_grace_s": 1}
+                "max_queued_solves": 2, "solve_time_limit_s": 30, "solve_kill_grace_s": 2}
     token = make_token("alice", db=db)
     servers = []
     for name in ("a", "b"):
@@ -86,6 +89,9 @@ def test_a_killed_servers_solve_places_free_on_another_server_within_seconds(tmp
             assert over.status_code == 429 and "BOOTMAP_TOKEN_MAX_SOLVES" in over.json()["detail"], over.text
 
             left_behind = descendants(a.process.pid)
+            names = {pid: cmdline(pid) for pid in left_behind}
+            # Its solver, the intake processes (one or two) and the resource tracker, at least.
+            assert len(left_behind) >= 3 and any("resource_tracker" in n for n in names.values()), names
             os.kill(a.process.pid, signal.SIGKILL)
             killed = time.monotonic()
             statuses = []
@@ -94,53 +100,28 @@ def test_a_killed_servers_solve_places_free_on_another_server_within_seconds(tmp
                 statuses.append(r.status_code)
                 if r.status_code != 429:
                     break
-                assert int(r.headers["retry-after"]) <= 5, r.headers["retry-after"]  # what is true
+                # What is true from b's side: when a's solve would end (its limit and grace), or a's silence + 3 s.
+                assert 1 <= int(r.headers["retry-after"]) <= 30 + 2 + 1, r.headers["retry-after"]
                 time.sleep(0.2)
             seconds = time.monotonic() - killed
             print(f"the token's solve place was free on b {seconds:.2f} s after a was killed "
                   f"({len(statuses) - 1} answers 429 before)")
             assert r.status_code == 201, (statuses, r.text)
             assert r.json()["map"]["summary"]["dstates"] == 8
+
+            a.process.wait(5)
+            while any(alive(pid, start) for pid, start in left_behind.items()) and time.monotonic() - killed < 5:
+                time.sleep(0.05)
+            left = {pid: names[pid] for pid, start in left_behind.items() if alive(pid, start)}
+            print(f"{len(left_behind) - len(left)} of {len(left_behind)} processes ended within "
+                  f"{time.monotonic() - killed:.2f} s of the kill")
+            assert not left, f"still running 5 s after the server was killed: {left}"
     finally:
         for s in flood:
             s.close()
         for s in servers:
             s.stop()
         _kill_survivors(left_behind)
-
-
-def test_a_killed_servers_processes_all_end_within_seconds(tmp_path):
-    """Its solvers (one of them busy with a hard solve that would run 30 s), its intake processes and
-    multiprocessing's resource tracker. Before, the intake processes and the tracker ran on for good."""
-    server = Server(tmp_path, require_tokens=True, max_concurrent_solves=2, solve_time_limit_s=30,
-                    solve_kill_grace_s=2).start()
-    token = make_token("alice", data_dir=server.data_dir)
-    hard = None
-    found: dict[int, str] = {}
-    try:
-        with server.client() as c:
-            hard = hang_up_later(server, token)
-            wait_for(lambda: solves(c) == (1, 0))
-            time.sleep(0.5)  # well into the solve
-            found = descendants(server.process.pid)
-            names = {pid: cmdline(pid) for pid in found}
-            print(json.dumps(names, indent=1))
-            # Two solvers, the intake processes (one or two) and the resource tracker, at least.
-            assert len(found) >= 4 and any("resource_tracker" in n for n in names.values()), names
-            os.kill(server.process.pid, signal.SIGKILL)
-            killed = time.monotonic()
-            server.process.wait(5)
-            while any(alive(pid, start) for pid, start in found.items()) and time.monotonic() - killed < 5:
-                time.sleep(0.05)
-            left = {pid: names[pid] for pid, start in found.items() if alive(pid, start)}
-            print(f"{len(found) - len(left)} of {len(found)} processes ended within "
-                  f"{time.monotonic() - killed:.2f} s of the kill")
-            assert not left, f"still running 5 s after the server was killed: {left}"
-    finally:
-        if hard is not None:
-            hard.close()
-        _kill_survivors(found)
-        server.stop()
 
 
 def _kill_survivors(processes: dict[int, str]) -> None:
