@@ -82,3 +82,25 @@ def test_the_predicate_dictionary_in_docs_asp_md_names_every_predicate_of_the_vo
     assert len(predicates) > 30
     missing = [f"{p.name}/{p.arity}" for p in predicates if not re.search(r"`" + re.escape(p.name) + r"(\(|`)", doc)]
     assert not missing, f"docs/asp.md has no entry for {missing}"
+
+
+def test_the_vocabulary_names_every_function_term_of_the_shipped_axioms_and_no_other():
+    assert vocab.term_mismatches(axiom_files(default_axioms_dir())) == []
+    assert {(t.name, t.arity) for t in vocab.TERMS} >= {("d", 2), ("k", 3), ("c", 2), ("after", 1), ("s", 1)}
+
+
+def test_a_renamed_function_term_in_an_lp_file_is_caught(tmp_path):
+    shutil.copytree(default_axioms_dir(), tmp_path / "asp")
+    causal = tmp_path / "asp" / "causal.lp"
+    causal.write_text(causal.read_text().replace("after(S)", "seen_after(S)"))
+    problems = vocab.term_mismatches(axiom_files(tmp_path / "asp"))
+    assert "no rule uses the term after/1" in problems
+    assert "the rules use the term seen_after/1, which the vocabulary does not name" in problems
+
+
+def test_terms_are_built_as_the_axioms_build_them():
+    assert str(vocab.CLASS_KEY_TERM(vocab.VIEW_FEATURE(), "V0", vocab.NIL())) == 'k(view,"V0",nil)'
+    assert str(vocab.action_term("travel", 0, 40)) == "travel(40)" and str(vocab.action_term("turn", -90)) == "turn(-90)"
+    assert vocab.SEQUENCE.matches(vocab.SEQUENCE(vocab.TURN_ACTION(90), vocab.NIL()))
+    with pytest.raises(TypeError):
+        vocab.FIXED_DSTATE(1, 2)

@@ -17,12 +17,13 @@ from dataclasses import dataclass, field
 from typing import Callable, Collection, Sequence
 
 import clingo
-from clingo import Function, Symbol
+from clingo import Symbol
 
 from .facts import add_facts
 from .theory import Theory
 from .trace import Instrumented, load_instrumented
-from .vocabulary import CLASS_KEY, DSTATE_BOUND, FEATURE, FUTURE_DEPTH_CONST, PREV_IN_CLASS, SHOWN_BY_ALL, SLOTS
+from .vocabulary import (AFTER, CLASS_KEY, CLASS_KEY_TERM, DSTATE_BOUND, FEATURE, FUTURE_DEPTH_CONST, PREV_IN_CLASS, SEQUENCE, SHOWN_BY_ALL,
+                         SLOTS, VIEW_FEATURE)
 
 
 @dataclass(frozen=True)
@@ -158,7 +159,7 @@ class Grounding:
                 k = ids.get(key)
                 if k is None:
                     k = ids[key] = len(ids)
-                    if key.name == "after":
+                    if AFTER.matches(key):
                         distance[k] = _actions_in(key.arguments[0])
                 partial[t.number][k].add(ids.setdefault(value, len(ids)))
                 if k in distance:
@@ -324,18 +325,18 @@ class Classes:
 
 def key_with_view(key: Symbol, view: Symbol) -> Symbol:
     """A class key (``k(F, X, Rest)`` folded in core/partition.lp) with its view replaced."""
-    if key.type != clingo.SymbolType.Function or key.name != "k" or len(key.arguments) != 3:
+    if not CLASS_KEY_TERM.matches(key):
         return key
     feature, value, rest = key.arguments
-    if feature.type == clingo.SymbolType.Function and feature.name == "view" and not feature.arguments:
+    if VIEW_FEATURE.matches(feature):
         value = view
-    return Function("k", [feature, value, key_with_view(rest, view)])
+    return CLASS_KEY_TERM(feature, value, key_with_view(rest, view))
 
 
 def _actions_in(sequence: Symbol) -> int:
     """The number of actions in a sequence ``c(A, c(A2, ... nil))`` (causal.lp's futures)."""
     n = 0
-    while sequence.type == clingo.SymbolType.Function and sequence.name == "c" and len(sequence.arguments) == 2:
+    while SEQUENCE.matches(sequence):
         n, sequence = n + 1, sequence.arguments[1]
     return n
 

@@ -19,7 +19,7 @@ from clingo import Symbol
 
 from .cogmap import CognitiveMap
 from .trace import Derivations, Instrumented, RuleRef
-from .vocabulary import IS, PLACE_OF, QUIET, action_word, predicate
+from .vocabulary import IS, PLACE_OF, QUIET, TURN_ACTION, action_word, predicate
 
 
 @dataclass
@@ -121,7 +121,7 @@ class Names:
             return self.dstates[term]
         if term.type == clingo.SymbolType.String:
             return repr(term.string)
-        if term.type == clingo.SymbolType.Function and term.name == "turn" and len(term.arguments) == 1:
+        if TURN_ACTION.matches(term):
             return action_word(term)
         return str(term)
 

@@ -76,6 +76,27 @@ class Predicate:
                 yield sa.symbol.arguments
 
 
+@dataclass(frozen=True)
+class Term:
+    """A function term the axioms build or read (an argument of a predicate, not an atom), with what it
+    means. Python makes and reads these terms only through their :class:`Term` (:data:`TERMS`), and a
+    test finds each in the .lp files with this name and arity."""
+
+    name: str
+    arity: int
+    meaning: str
+    python_only: bool = False  # made by Python alone; the rules take it as any other term
+
+    def __call__(self, *args: int | str | Symbol) -> Symbol:
+        if len(args) != self.arity:
+            raise TypeError(f"{self.name}/{self.arity} takes {self.arity} arguments, got {len(args)}")
+        return Function(self.name, [_term(a) for a in args])
+
+    def matches(self, symbol: Symbol) -> bool:
+        return symbol.type == clingo.SymbolType.Function and symbol.name == self.name \
+            and len(symbol.arguments) == self.arity
+
+
 class Atoms:
     """A model's atoms grouped by predicate in one pass (reading a symbol's name and arguments is a call
     into clingo each): ``atoms[IS]`` lists the arguments of every ``is/2`` atom."""
@@ -168,6 +189,28 @@ LEFT = Predicate("left", 2, "derived", "{P1} lies left of the path {0} faces")
 PREDICATES: tuple[Predicate, ...] = tuple(v for v in list(globals().values()) if isinstance(v, Predicate))
 _BY_SIGNATURE = {p.signature: p for p in PREDICATES}
 
+# --------------------------------------------------------------------------------------------------
+# Function terms
+# --------------------------------------------------------------------------------------------------
+
+CANDIDATE_DSTATE = Term("d", 2, "a candidate dstate: slot I of class K, d(K, I) (core/partition.lp)")
+CLASS_KEY_TERM = Term("k", 3, "a class key: value X of grouping feature F, then the rest, k(F, X, Rest) (core/partition.lp)")
+NIL = Term("nil", 0, "the end of a class key or of an action sequence")
+FIXED_DSTATE = Term("s", 1, "a dstate of a partition being checked, fixed(T, s(N))", python_only=True)
+SEQUENCE = Term("c", 2, "a sequence of actions: the first, then the rest, c(A, Rest) (causal.lp's futures)")
+AFTER = Term("after", 1, "the feature: what the robot saw after a sequence of actions, after(S) (causal.lp)")
+VIEW_FEATURE = Term("view", 0, "the feature: the view seen")
+HEADING_FEATURE = Term("heading", 0, "the feature: the heading, counted from t0 (metrical.lp)")
+HEADING_SINCE = Term("heading_since", 1, "the feature: the heading counted from where the steps resume after a gap")
+LENGTH_FEATURE = Term("length", 0, "the feature: a travel's length type (metrical.lp)")
+SAME, OPPOSITE = Term("same", 0, "one way along a path"), Term("opposite", 0, "the other way along a path")
+POS, NEG = Term("pos", 0, "the way a path's least dstate faces"), Term("neg", 0, "the other way")
+TURN_ACTION = Term("turn", 1, "a turn by its angle type, turn(A) (causal.lp's action/2)")
+TRAVEL_ACTION = Term("travel", 0, "a travel, whatever its length (causal.lp's action/2)")
+TRAVEL_BY_LENGTH = Term("travel", 1, "a travel by its length type, travel(L), where the robot drove through dstates")
+
+TERMS: tuple[Term, ...] = tuple(v for v in list(globals().values()) if isinstance(v, Term))
+
 #: Atoms a proof need not spell out: bookkeeping of the search layout.
 QUIET = frozenset(p.signature for p in (TIME, DSTATE, CANDIDATE, FLIP))
 
@@ -186,7 +229,7 @@ def predicate(symbol: Symbol) -> Predicate | None:
 def fixed_dstate(n: int) -> Symbol:
     """``s(N)``: the dstate a partition being checked puts a time point at (``fixed(T, s(N))``): any
     numbering of the partition's groups will do."""
-    return Function("s", [Number(n)])
+    return FIXED_DSTATE(n)
 
 
 def action_term(kind: str, angle: int, length: int | None = None) -> Symbol:
@@ -195,15 +238,15 @@ def action_term(kind: str, angle: int, length: int | None = None) -> Symbol:
     through dstates without stopping (``travel_action_passing``), a travel by its length type,
     ``travel(L)``."""
     if kind == "turn":
-        return Function("turn", [Number(angle)])
-    return Function("travel") if length is None else Function("travel", [Number(length)])
+        return TURN_ACTION(angle)
+    return TRAVEL_ACTION() if length is None else TRAVEL_BY_LENGTH(length)
 
 
 def action_word(term: Symbol) -> str:
     """An action term as a person reads it: ``turn(-90)`` -> "turn -90", ``travel`` -> "travel"."""
-    if term.name == "turn" and len(term.arguments) == 1:
+    if TURN_ACTION.matches(term):
         return f"turn {term.arguments[0].number:+d}"
-    if term.name == "travel" and len(term.arguments) == 1:
+    if TRAVEL_BY_LENGTH.matches(term):
         return f"travel {term.arguments[0].number / 10:g} m"
     return term.name
 
@@ -245,6 +288,49 @@ def signatures(files: Iterable[str | Path]) -> tuple[set[tuple[str, int]], set[t
 
     ast.parse_files([str(f) for f in files], statement)
     return defined, used, constants
+
+
+def function_terms(files: Iterable[str | Path]) -> set[tuple[str, int]]:
+    """Every function term (name, arity) the rules of these files build or match, atoms and ``#const``
+    names left out: what :data:`TERMS` names."""
+    found: set[tuple[str, int]] = set()
+
+    class Collect(ast.Transformer):
+        def visit_SymbolicAtom(self, atom):  # the atom's own name is a predicate: only its arguments
+            term = atom.symbol
+            if term.ast_type == ast.ASTType.Function:
+                for arg in term.arguments:
+                    self(arg)
+            return atom
+
+        def visit_Function(self, term):
+            found.add((term.name, len(term.arguments)))
+            for arg in term.arguments:
+                self(arg)
+            return term
+
+        def visit_SymbolicTerm(self, term):
+            if term.symbol.type == clingo.SymbolType.Function:
+                found.add((term.symbol.name, len(term.symbol.arguments)))
+            return term
+
+    def statement(stm) -> None:
+        if stm.ast_type in (ast.ASTType.Rule, ast.ASTType.Minimize):
+            Collect()(stm)
+
+    ast.parse_files([str(f) for f in files], statement)
+    return found - {(name, 0) for name in signatures(files)[2]}
+
+
+def term_mismatches(files: Iterable[str | Path]) -> list[str]:
+    """How :data:`TERMS` and these axiom files disagree (empty when they agree): a term of the table no
+    rule uses (but Python's own), or a term the rules use that the table does not name."""
+    found = function_terms(files)
+    table = {(t.name, t.arity) for t in TERMS}
+    problems = [f"no rule uses the term {t.name}/{t.arity}" for t in TERMS
+                if not t.python_only and (t.name, t.arity) not in found]
+    problems += [f"the rules use the term {n}/{a}, which the vocabulary does not name" for n, a in sorted(found - table)]
+    return problems
 
 
 def mismatches(files: Iterable[str | Path]) -> list[str]:
