@@ -16,7 +16,7 @@ import tempfile
 from dataclasses import dataclass
 from datetime import datetime, timedelta, timezone
 from pathlib import Path
-from typing import Iterator
+from typing import Callable, Iterator
 
 from sqlalchemy import (
     BigInteger,
@@ -442,10 +442,11 @@ class Store:
                              .order_by(TableauRow.id).limit(limit).offset(offset)).all()
         return total, [TableauSummary(*r[:6], _utc(r[6])) for r in rows]
 
-    def stream(self, tableau_id: int, what: str) -> "Stream":
+    def stream(self, tableau_id: int, what: str, allowed: Callable[[TableauRecord], None] | None = None) -> "Stream":
         """A stored text (``tableau``, ``map`` or ``text``), read in chunks of STREAM_CHUNK from one
-        snapshot: the server never holds a whole large document for a read. Close it when done."""
-        return Stream(self.engine, tableau_id, what)
+        snapshot: the server never holds a whole large document for a read. ``allowed(head)`` raises if the
+        text may not be read, before any of it is copied. Close it when done."""
+        return Stream(self.engine, tableau_id, what, allowed)
 
     # --- Tokens and quotas ---------------------------------------------------------------------------
 
@@ -603,7 +604,8 @@ class Stream:
     _COLUMNS = {"tableau": (TableauRow, "document", "id"), "map": (MapRow, "document", "tableau_id"),
                 "text": (MapRow, "text", "tableau_id")}
 
-    def __init__(self, engine: Engine, tableau_id: int, what: str):
+    def __init__(self, engine: Engine, tableau_id: int, what: str,
+                 allowed: Callable[[TableauRecord], None] | None = None):
         self.whole: bytes | None = None
         self._file = None
         with engine.connect() as conn:
@@ -613,6 +615,8 @@ class Stream:
                 self.head = _head_record_or_none(conn, tableau_id)
                 if self.head is None:
                     raise NotFound(tableau_id)
+                if allowed is not None:
+                    allowed(self.head)
                 chunks = _chunks(conn, *self._COLUMNS[what], tableau_id)
                 first = next(chunks, b"")
                 following = next(chunks, None)

@@ -12,7 +12,7 @@ from ..auth import CallerDep, readable
 from ..deps import ServicesDep, TableauId
 from ..models import MapOut, MinimalMap, MinimalMaps
 from ..problems import JSONRoute, openapi_responses
-from .tableaux import streamed
+from .tableaux import read_stream, streamed
 
 router = APIRouter(prefix="/tableaux/{tableau_id}", tags=["maps"], route_class=JSONRoute)
 READ_ERRORS = openapi_responses(401, 404, 422, 429)
@@ -24,7 +24,7 @@ def read_map(tableau_id: TableauId, services: ServicesDep, caller: CallerDep) ->
     a path a place is on; and every step annotated with its dstate, place, path and direction, like the
     paper's table (6)."""
     # Stored as the API serves it (validated when solved), so a read is a lookup, streamed in chunks.
-    return streamed(services.store.stream(tableau_id, "map"), caller)
+    return streamed(read_stream(services, caller, tableau_id, "map"))
 
 
 @router.get("/map/text", response_class=PlainTextResponse, responses=READ_ERRORS,
@@ -32,7 +32,7 @@ def read_map(tableau_id: TableauId, services: ServicesDep, caller: CallerDep) ->
 def read_map_text(tableau_id: TableauId, services: ServicesDep, caller: CallerDep) -> Response:
     """The map as `bootmap map` prints it: a summary line, then t, view, dstate, place, path, dir and action
     for every step, then the paths and sides."""
-    return streamed(services.store.stream(tableau_id, "text"), caller, media_type="text/plain; charset=utf-8")
+    return streamed(read_stream(services, caller, tableau_id, "text"), media_type="text/plain; charset=utf-8")
 
 
 @router.get("/maps", response_model=MinimalMaps, responses=READ_ERRORS, summary="Every minimal map")

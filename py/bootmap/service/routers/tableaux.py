@@ -33,15 +33,14 @@ SOLVE_ERRORS = openapi_responses(400, 401, 403, 413, 415, 422, 429, 500, 503)
 READ_ERRORS = openapi_responses(401, 404, 422, 429)
 
 
-def streamed(stream: Stream, caller: Caller, before: str = "", after: str = "",
-             media_type: str = "application/json") -> Response:
-    """A stored text streamed to a caller who may read it (else 404, and the stream is closed)."""
-    try:
-        check_read(caller, stream.head)
-    except Exception:
-        stream.close()
-        raise
+def read_stream(services: Services, caller: Caller, tableau_id: int, what: str) -> Stream:
+    """A stored text (``tableau``, ``map``, ``text``) the caller may read (else 404 before any of it is
+    copied: a token that may not read a tableau costs the server no copy of it)."""
+    return services.store.stream(tableau_id, what, lambda head: check_read(caller, head))
 
+
+def streamed(stream: Stream, before: str = "", after: str = "", media_type: str = "application/json") -> Response:
+    """A stored text as the response: at once when small, else streamed from its copy."""
     if stream.whole is not None:  # small: one response, no streaming
         return Response(before.encode() + stream.whole + after.encode(), media_type=media_type)
 
@@ -93,7 +92,7 @@ async def create_tableau(services: ServicesDep, caller: CallerDep, request: Requ
     `bootmap map` does. Fails with 422 when no map satisfies the axioms or the solve runs past its limits
     (nothing is stored then), with 503 and Retry-After when every solver is busy, and with 429 when the
     token is over its limits. The tableau belongs to the caller's token."""
-    # Parsed and checked in an intake process (bootmap.service.intake): the server sees only the text.
+    # Parsed, checked and stored by an intake process (bootmap.service.intake): the server never holds the text.
     async with body_file(request) as body:
         prepared = await services.intake.run(prepare_tableau, body, services.limits)
         solved, theory = await _solve(services, prepared.document, caller, request)
@@ -117,10 +116,10 @@ def list_tableaux(services: ServicesDep, caller: CallerDep, limit: Annotated[int
 @router.get("/{tableau_id}", response_model=TableauOut, responses=READ_ERRORS, summary="Read a stored tableau")
 def read_tableau(tableau_id: TableauId, services: ServicesDep, caller: CallerDep) -> Response:
     """The tableau as stored (images-only tableaux as posted; the views found are in its map)."""
-    stream = services.store.stream(tableau_id, "tableau")
+    stream = read_stream(services, caller, tableau_id, "tableau")
     head = json.dumps(_info(stream.head))
     # Validated when it was stored: its text is streamed as it is, in chunks, never parsed or held whole.
-    return streamed(stream, caller, head[:-1] + ', "tableau": ', "}")
+    return streamed(stream, head[:-1] + ', "tableau": ', "}")
 
 
 @router.delete("/{tableau_id}", status_code=204, responses=READ_ERRORS, summary="Delete a tableau and its map")
