@@ -40,20 +40,18 @@ DSTATE_COST_CONST = "dstate_cost"
 
 
 @dataclass(frozen=True)
-class Predicate:
-    """One predicate of the boundary: name, arity, role, and how an atom of it reads to a person."""
+class Functor:
+    """A name and an arity: what builds a symbol (an atom, or a term inside one) and recognises it."""
 
     name: str
     arity: int
-    role: str
-    phrase: str | None = None
 
     @property
     def signature(self) -> tuple[str, int]:
         return self.name, self.arity
 
     def __call__(self, *args: int | str | Symbol) -> Symbol:
-        """The atom with these arguments: ints become numbers, str become clingo *strings* (never
+        """The symbol with these arguments: ints become numbers, str become clingo *strings* (never
         constants: a user's label is data, not program text)."""
         if len(args) != self.arity:
             raise TypeError(f"{self.name}/{self.arity} takes {self.arity} arguments, got {len(args)}")
@@ -62,6 +60,14 @@ class Predicate:
     def matches(self, symbol: Symbol) -> bool:
         return symbol.type == clingo.SymbolType.Function and symbol.name == self.name \
             and len(symbol.arguments) == self.arity
+
+
+@dataclass(frozen=True)
+class Predicate(Functor):
+    """One predicate of the boundary: name, arity, role, and how an atom of it reads to a person."""
+
+    role: str
+    phrase: str | None = None
 
     def args(self, symbols: Iterable[Symbol]) -> Iterator[Sequence[Symbol]]:
         """The arguments of each atom of this predicate among ``symbols`` (e.g. a model)."""
@@ -77,24 +83,13 @@ class Predicate:
 
 
 @dataclass(frozen=True)
-class Term:
+class Term(Functor):
     """A function term the axioms build or read (an argument of a predicate, not an atom), with what it
     means. Python makes and reads these terms only through their :class:`Term` (:data:`TERMS`), and a
     test finds each in the .lp files with this name and arity."""
 
-    name: str
-    arity: int
     meaning: str
     python_only: bool = False  # made by Python alone; the rules take it as any other term
-
-    def __call__(self, *args: int | str | Symbol) -> Symbol:
-        if len(args) != self.arity:
-            raise TypeError(f"{self.name}/{self.arity} takes {self.arity} arguments, got {len(args)}")
-        return Function(self.name, [_term(a) for a in args])
-
-    def matches(self, symbol: Symbol) -> bool:
-        return symbol.type == clingo.SymbolType.Function and symbol.name == self.name \
-            and len(symbol.arguments) == self.arity
 
 
 class Atoms:
