@@ -1,4 +1,4 @@
-"""Active mapping (issue 14): actions until the map is unique and true, active against the fixed explorer
+"""Active mapping: actions until the map is unique and true, active against the fixed explorer
 and a random walk.
 
 For every hallway world in worlds/*.toml (the worlds explored, not circled: the notched rectangle is a

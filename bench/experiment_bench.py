@@ -1,4 +1,4 @@
-"""Wall time of the whole experiment per world, and of each stage (issue 5's speed targets).
+"""Wall time of the whole experiment per world, and of each stage (the speed targets).
 
 Targets on the 2-core machine: the k sweep on 400 images of 180 values under 1 s (the views stage of
 notched_rectangle); the whole notched_rectangle experiment (50 circuits) under 10 s; taylor_hall under

@@ -1,7 +1,7 @@
 """The experiment on a real robot's log: seconds for ingest + pipeline on the whole Killian log, scans
-per second, and the issue's figures beside their targets (and the paper's Taylor Hall numbers).
+per second, and the targets set for a real log beside what was measured (and the paper's Taylor Hall numbers).
 
-Targets: the whole run under 120 s (the issue's); the issue's accuracy targets are printed as measured
+Targets: the whole run under 120 s; the accuracy targets are printed as measured
 (corner recall 95%, turn angles within 10 degrees, 80% of visits in their true dstate, 60% nearest
 neighbour on revisited dstates): they are ambitious for a log whose dstates are mostly seen once.
 

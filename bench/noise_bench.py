@@ -11,7 +11,7 @@ Then misclustered views (0-5% of the time points given another view, support.noi
 on explorations of other worlds (seeds 50-52) at turn sd 3: ours (misreads abduced), ours reading every view as seen
 (--no-misreads) and RPNI, with the misread steps the map names and those it names wrongly.
 
-Targets (issue 12): the true map on every tableau up to 10 degrees of turn noise, and up to 2% misreads,
+Targets: the true map on every tableau up to 10 degrees of turn noise, and up to 2% misreads,
 each in under 5 s.
 Writes docs/noise_sweep.png. Run: .venv/bin/python bench/noise_bench.py
 """

@@ -1,7 +1,7 @@
 """Simulator benchmark: simulated seconds per wall second, wall time for 50 notched-rectangle circuits,
 and microseconds per 180-beam laser scan against 100 wall segments.
 
-Run: ``.venv/bin/python bench/sim_bench.py`` (targets from issue 4: 50 circuits under 3 s wall; a scan
+Run: ``.venv/bin/python bench/sim_bench.py`` (targets: 50 circuits under 3 s wall; a scan
 against 100 segments under 100 us). Each target is printed beside the measured figure; the exit status
 is 1 if any is missed.
 """

@@ -1,4 +1,4 @@
-"""Streaming maps (issue 14): latency per appended step on a long exploration, against a full resolve.
+"""Streaming maps: latency per appended step on a long exploration, against a full resolve.
 
 A random grid world is explored step by step; after each step the map is brought up to date by
 ``MapStream.update`` (extend by determinism, checked by clingo; resolve only when that does not

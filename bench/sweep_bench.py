@@ -1,4 +1,4 @@
-"""Cells per minute: a sweep on the local process pool against the serial loop (issue 17's target).
+"""Cells per minute: a sweep on the local process pool against the serial loop (the target).
 
 The cells are the paper's notched rectangle, the paper's run (``--circuits``, default 50: 400 images) over
 ``--seeds`` (default 1-60: a sweep long enough that starting the workers and writing the report, about

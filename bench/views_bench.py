@@ -1,7 +1,7 @@
 """Views benchmark: wall time of the k sweep (k = 1..12, k-means + M + U) on the 400 images x 180 values of
 50 notched_rectangle circuits, and the k it chooses.
 
-Run: ``.venv/bin/python bench/views_bench.py`` (targets: from issue 5, the sweep under 1 s on 2 cores;
+Run: ``.venv/bin/python bench/views_bench.py`` (targets: the sweep under 1 s on 2 cores;
 from the paper, k = 4 chosen by M and 4 the largest k with U = 1). Each target is printed beside the
 measured figure; the exit status is 1 if any is missed.
 """

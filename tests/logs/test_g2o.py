@@ -100,4 +100,4 @@ def test_the_whole_killian_log_from_rtb_data():
     scans = killian()
     assert len(scans) == 3873
     drift = max(math.dist(s.odometry[:2], s.truth[:2]) for s in scans)
-    assert 120 < drift < 130  # the probe: dead reckoning off by up to 126 m
+    assert 120 < drift < 130  # dead reckoning off by up to 126 m

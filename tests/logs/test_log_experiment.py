@@ -116,7 +116,7 @@ def test_the_whole_killian_log_in_under_two_minutes(tmp_path, capsys):
     r = json.loads((tmp_path / "results.json").read_text())
     assert (r["scans"], r["images"], r["truth"]["true_dstates"]) == (3873, 98, 75)
     assert sum(r["timings"].values()) < 120
-    # The map by loop closing meets the target (80% of visits in their true dstate) and beats
+    # The map by loop closing meets its target (80% of visits in their true dstate) and beats
     # a dstate per visit, which most of the log's dstates (seen once) would make look good.
     m, nn = r["map"], r["nn_revisited"]
     assert code == 0 and m["found_by"] == "loop closing"

@@ -24,7 +24,7 @@ def test_bootmap_map_on_a_hard_tableau_returns_within_the_limit(tmp_path):
     out = subprocess.run([sys.executable, "-m", "bootmap.cli", "map", str(path), "--time-limit", "5"],
                          capture_output=True, text=True, timeout=60)
     elapsed = time.monotonic() - start
-    assert elapsed < 5 + GRACE_S + 1.5, elapsed  # the bound: 8 s for a limit of 5
+    assert elapsed < 5 + GRACE_S + 1.5, elapsed  # the promised bound: 8 s for a limit of 5
     assert out.returncode in (0, 1) and "Traceback" not in out.stderr
     if out.returncode == 1:
         assert "time limit of 5 s" in out.stderr

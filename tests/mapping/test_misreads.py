@@ -1,4 +1,4 @@
-"""Misread views: the map names them instead of inventing dstates for them (issue 12, item 2)."""
+"""Misread views: the map names them instead of inventing dstates for them."""
 
 import json
 import subprocess

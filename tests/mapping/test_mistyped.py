@@ -1,5 +1,5 @@
 """Mistyped actions: a reading far from its learned type is abduced as the neighbouring type, at a cost,
-and the map names it (issue 12; the Killian log's 45- and 60-degree corners read on a 90-degree grid)."""
+and the map names it (the Killian log's 45- and 60-degree corners read on a 90-degree grid)."""
 
 import numpy as np
 import pytest

@@ -48,7 +48,7 @@ def test_turn_noise_up_to_10_degrees_does_not_change_the_map(seed, turn_sd, drif
 
 
 def test_a_fixed_quantum_breaks_where_learned_types_do_not():
-    # The example: one turn read at -98 degrees. Rounded to 15 degrees it is -105, every later
+    # An example: one turn read at -98 degrees. Rounded to 15 degrees it is -105, every later
     # heading is off, and the map splits dstates; learned, it is one of the robot's right turns.
     rng = np.random.default_rng(7)
     world = random_world(rng, 3, 3, extra_edges=1, landmarks=0.4)
@@ -100,7 +100,7 @@ def test_travel_lengths_tell_look_alike_dstates_apart_and_odometry_error_does_no
 @settings(max_examples=12, deadline=None)
 @given(seed=st.integers(0, 2**31), width=st.integers(3, 5), turn_sd=st.floats(0, 10), drift_sd=st.floats(0, 4))
 def test_property_noisy_walks_of_random_worlds_resolve_to_the_truth(seed, width, turn_sd, drift_sd):
-    # A random world, explored for 240 steps, read with random odometry noise within the bounds
+    # A random world, explored for 240 steps, read with random odometry noise within the bounds the typing promises
     # (turns up to sd 10 degrees, travel drift up to sd 4): the map is the truth.
     rng = np.random.default_rng(seed)
     world = random_world(rng, width, 3, extra_edges=2, landmarks=0.4)

@@ -1,4 +1,4 @@
-"""Rehearsal (issue 14): the shortest actions whose outcome the minimal maps predict differently."""
+"""Rehearsal: the shortest actions whose outcome the minimal maps predict differently."""
 
 import itertools
 import json

@@ -1,4 +1,4 @@
-"""Streaming maps (issue 14): the map after every appended step equals a fresh resolve of the same steps."""
+"""Streaming maps: the map after every appended step equals a fresh resolve of the same steps."""
 
 import numpy as np
 import pytest
