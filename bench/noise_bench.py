@@ -1,18 +1,20 @@
 """Odometry noise against the map: learned action types beside a fixed 15-degree quantum and RPNI.
 
 600-step explorations of random 20-place grid worlds (5 x 4, landmarks on 40% of the places), read with
-turn noise of sd 0-12 degrees and travel drift of sd 0-4 degrees (support.noise); for each level,
-3 seeds. Ours (action types learned, the default), ours with ``--quantum 15`` (the rounding used before),
-and AALpy's RPNI with views + dead-reckoned heading (rounded to 15 degrees, as bench/resolve_bench.py
-feeds it), all against the truth: dstates found, time points on their true dstate (best one-to-one
-renaming), seconds.
+turn noise of sd 0-12 degrees, travel drift of sd 0-4 degrees and 3% error on distances (support.noise;
+none at turn sd 0); for each level, 3 seeds. Ours (action types learned, the default) on the readings
+unrounded and recorded as a log records them (centimetres, tenths of a degree), ours with
+``--quantum 15``, and AALpy's RPNI with views + dead-reckoned heading (rounded to 15 degrees, as
+bench/resolve_bench.py feeds it), all against the truth: dstates found, time points on their true dstate
+(best one-to-one renaming), seconds.
 
 Then misclustered views (0-5% of the time points given another view, support.noise.with_misreads)
 on explorations of other worlds (seeds 50-52) at turn sd 3: ours (misreads abduced), ours reading every view as seen
-(--no-misreads) and RPNI, with the misread steps the map names and those it names wrongly.
+(--no-misreads) and RPNI, with the misread steps the map names and those it names wrongly; ours again
+on the same tableaux recorded as a log records them.
 
 Targets: the true map on every tableau up to 10 degrees of turn noise, and up to 2% misreads,
-each in under 5 s.
+each in under 5 s, unrounded and rounded alike.
 Writes docs/noise_sweep.png. Run: .venv/bin/python bench/noise_bench.py
 """
 
@@ -30,7 +32,7 @@ from bootmap.metrics import dstate_accuracy
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # tests/support: grid worlds, the checker
 from support.check import true_partition
 from support.gridworld import random_world, walk
-from support.noise import with_misreads, with_odometry_noise
+from support.noise import LOGGED, with_misreads, with_odometry_noise
 from resolve_bench import rpni
 from targets import Targets
 
@@ -42,15 +44,19 @@ FIGURE = Path(__file__).resolve().parents[1] / "docs" / "noise_sweep.png"
 MISREAD = (0.0, 0.005, 0.01, 0.02, 0.05)
 MISREAD_SEEDS = (50, 51, 52)  # the suspects' rules were worked out on seeds 21-26 and 40-49
 EXACT_UP_TO_MISREAD = 0.02
+DISTANCE_SD = 0.03  # odometry's error on a travel's length, a share of it (at every level but the clean one)
 MISREAD_FIGURE = FIGURE.with_name("misread_sweep.png")
 
 
-def tableaux(turn_sd: float, seeds=SEEDS):
+def tableaux(turn_sd: float, seeds=SEEDS, rounding=None):
+    """Per seed, the exploration read with this turn noise, recorded at ``rounding`` (None: unrounded);
+    the same walk and noise whatever the rounding."""
     for seed in seeds:
         rng = np.random.default_rng(seed)
         world = random_world(rng, 5, 4, extra_edges=4, landmarks=0.4)
         yield seed, with_odometry_noise(walk(world, STEPS, rng, policy="explore"), turn_sd,
-                                        min(4.0, turn_sd / 2.5), rng)
+                                        min(4.0, turn_sd / 2.5), rng, distance_sd=DISTANCE_SD if turn_sd else 0.0,
+                                        rounding=rounding)
 
 
 def run(resolver: Resolver, tableau) -> tuple[int | None, float, float]:
@@ -77,21 +83,24 @@ def main() -> int:
         return targets.exit_status()
     learned, fixed = Resolver(time_limit=30), Resolver(quantum_deg=15, time_limit=10)
     print(f"{'turn sd':>7} {'drift':>5} {'seed':>4} {'true':>4} | {'ours':>5} {'acc':>6} {'s':>5} | "
-          f"{'q=15':>5} {'acc':>6} {'s':>5} | {'rpni':>5} {'acc':>6} {'s':>5}")
+          f"{'logged':>6} {'acc':>6} {'s':>5} | {'q=15':>5} {'acc':>6} {'s':>5} | {'rpni':>5} {'acc':>6} {'s':>5}")
     rows = []
     for sd in TURN_SD:
-        for seed, tableau in tableaux(sd):
+        for (seed, tableau), (_, logged) in zip(tableaux(sd), tableaux(sd, rounding=LOGGED)):
             truth = true_partition(tableau)
-            ours, q15 = run(learned, tableau), run(fixed, tableau)
+            ours, rounded, q15 = run(learned, tableau), run(learned, logged), run(fixed, tableau)
             states, rpni_s = rpni(tableau, with_heading=True)
             theirs = (len(set(states)), dstate_accuracy(truth, states), rpni_s)
-            rows.append((sd, ours, q15, theirs))
-            cells = [f"{'-' if n is None else n:>5} {acc:>6.1%} {s:>5.2f}" for n, acc, s in (ours, q15, theirs)]
+            rows.append((sd, ours, rounded, q15, theirs))
+            cells = [f"{'-' if n is None else n:>5} {acc:>6.1%} {s:>5.2f}" for n, acc, s in (ours, rounded, q15, theirs)]
+            cells[1] = " " + cells[1]
             print(f"{sd:>7} {min(4.0, sd / 2.5):>5.1f} {seed:>4} {len(set(truth)):>4} | " + " | ".join(cells))
             if sd <= EXACT_UP_TO_DEG:
-                targets.check(f"  ours, turn sd {sd}, seed {seed}: time points right", ours[1], "==", 1.0,
-                              fmt="{:.1%}", bound_text="100%")
-                targets.check(f"  ours, turn sd {sd}, seed {seed}: seconds", ours[2], "<", MAX_S, fmt="{:.2f}")
+                for how, (_, acc, secs) in (("unrounded", ours), ("logged", rounded)):
+                    targets.check(f"  ours, {how}, turn sd {sd}, seed {seed}: time points right", acc, "==", 1.0,
+                                  fmt="{:.1%}", bound_text="100%")
+                    targets.check(f"  ours, {how}, turn sd {sd}, seed {seed}: seconds", secs, "<", MAX_S,
+                                  fmt="{:.2f}")
     print("\n'-': no map within the time limit (q=15: 10 s); accuracy then of the best map found, if any")
     _figure(rows)
     if only is None:
@@ -104,12 +113,12 @@ def misread_sweep(targets: Targets) -> None:
     ours (misreads abduced, the default), ours reading every view as seen, RPNI; and how many of the
     misread steps the map names, and how many it names wrongly."""
     robust, as_seen = Resolver(time_limit=30), Resolver(time_limit=10, misreads=False, diagnose=False)
-    print(f"\nmisclustered views (turn sd 3, drift 1.2):\n{'misread':>7} {'seed':>4} {'true':>4} | "
-          f"{'ours':>5} {'acc':>6} {'s':>5} {'named':>7} {'wrong':>5} | {'as seen':>7} {'acc':>6} {'s':>5} | "
-          f"{'rpni':>5} {'acc':>6} {'s':>5}")
+    print(f"\nmisclustered views (turn sd 3, drift 1.2, distances 3%):\n{'misread':>7} {'seed':>4} {'true':>4} | "
+          f"{'ours':>5} {'acc':>6} {'s':>5} {'named':>7} {'wrong':>5} | {'logged':>6} {'acc':>6} {'s':>5} | "
+          f"{'as seen':>7} {'acc':>6} {'s':>5} | {'rpni':>5} {'acc':>6} {'s':>5}")
     rows = []
     for fraction in MISREAD:
-        for seed, clean in tableaux(3.0, MISREAD_SEEDS):
+        for (seed, clean), (_, logged) in zip(tableaux(3.0, MISREAD_SEEDS), tableaux(3.0, MISREAD_SEEDS, LOGGED)):
             tableau, wrong = with_misreads(clean, fraction, np.random.default_rng(seed))
             truth = true_partition(tableau)
             t0 = time.perf_counter()
@@ -119,45 +128,50 @@ def misread_sweep(targets: Targets) -> None:
                 ours = (cmap.n_dstates, dstate_accuracy(truth, cmap.dstate_of), time.perf_counter() - t0)
             except SolveTimeout:
                 named, ours = set(), (None, 0.0, time.perf_counter() - t0)
+            rounded = run(robust, with_misreads(logged, fraction, np.random.default_rng(seed))[0])
             exact = run(as_seen, tableau)
             states, rpni_s = rpni(tableau, with_heading=True)
             theirs = (len(set(states)), dstate_accuracy(truth, states), rpni_s)
             hit, miss = len(named & set(wrong)), len(named - set(wrong))
-            rows.append((fraction, ours, exact, theirs))
+            rows.append((fraction, ours, rounded, exact, theirs))
             cells = [f"{'-' if n is None else n:>5} {acc:>6.1%} {s:>5.2f}" for n, acc, s in (ours,)]
             print(f"{fraction:>7.1%} {seed:>4} {len(set(truth)):>4} | {cells[0]} {hit:>3}/{len(wrong):<3} {miss:>5} | "
+                  f"{'-' if rounded[0] is None else rounded[0]:>6} {rounded[1]:>6.1%} {rounded[2]:>5.2f} | "
                   f"{'-' if exact[0] is None else exact[0]:>7} {exact[1]:>6.1%} {exact[2]:>5.2f} | "
                   f"{theirs[0]:>5} {theirs[1]:>6.1%} {theirs[2]:>5.2f}")
             if fraction <= EXACT_UP_TO_MISREAD:
-                targets.check(f"  ours, {fraction:.1%} misreads, seed {seed}: time points right", ours[1], "==", 1.0,
-                              fmt="{:.1%}", bound_text="100%")
-                targets.check(f"  ours, {fraction:.1%} misreads, seed {seed}: seconds", ours[2], "<", MAX_S,
-                              fmt="{:.2f}")
+                for how, (_, acc, secs) in (("unrounded", ours), ("logged", rounded)):
+                    targets.check(f"  ours, {how}, {fraction:.1%} misreads, seed {seed}: time points right", acc,
+                                  "==", 1.0, fmt="{:.1%}", bound_text="100%")
+                    targets.check(f"  ours, {how}, {fraction:.1%} misreads, seed {seed}: seconds", secs, "<", MAX_S,
+                                  fmt="{:.2f}")
     _misread_figure(rows)
 
 
 def _figure(rows) -> None:
-    _plot(rows, TURN_SD, 1, ("ours (learned action types)", "ours, --quantum 15", "RPNI, views + heading"),
+    _plot(rows, TURN_SD, 1, ("ours (learned action types)", "ours, readings as logged (cm, 0.1 deg)",
+                             "ours, --quantum 15", "RPNI, views + heading"),
           "turn noise, sd (degrees); travel drift sd = min(4, turn / 2.5)",
           f"{STEPS}-step explorations of 20-place grid worlds, {len(SEEDS)} seeds", FIGURE)
 
 
 def _misread_figure(rows) -> None:
-    _plot(rows, MISREAD, 100, ("ours (misreads abduced)", "ours, --no-misreads", "RPNI, views + heading"),
+    _plot(rows, MISREAD, 100,
+          ("ours (misreads abduced)", "ours, readings as logged", "ours, --no-misreads", "RPNI, views + heading"),
           "misclustered views (% of time points); turn noise sd 3 degrees",
           f"{STEPS}-step explorations of 20-place grid worlds, seeds {MISREAD_SEEDS[0]}-{MISREAD_SEEDS[-1]}",
           MISREAD_FIGURE)
 
 
 def _plot(rows, levels, scale, labels, xlabel: str, title: str, path: Path) -> None:
-    """Mean accuracy of three resolvers (rows: level, then (dstates, accuracy, s) for each) per level."""
+    """Mean accuracy of each resolver (rows: level, then (dstates, accuracy, s) for each) per level."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(6, 3.5))
-    for i, (label, style) in enumerate(zip(labels, ("o-", "s--", "^:"))):
+    for i, (label, style) in enumerate(zip(labels, ("o-", "x-", "s--", "^:"))):
         means = [np.mean([r[1 + i][1] for r in rows if r[0] == level]) for level in levels]
         ax.plot([scale * level for level in levels], means, style, label=label)
     ax.set_xlabel(xlabel)

@@ -9,6 +9,10 @@ Targets (docs/results/benchmarks.md): the paper's 401-step tableau resolved in u
 tableau); no time-out (10 s) on the aliased 30-step walks; within 10 times RPNI's time where both are
 right. Each is printed beside the measured figure; the exit status is 1 if any is missed.
 
+Every family is also read by a robot: turns with noise of sd 3 degrees, travels' heading with 1.2 and
+their length 3% off (support.noise), unrounded and recorded as a log records them (centimetres, tenths
+of a degree): the same targets of accuracy hold for both.
+
 Run: make bench   (or .venv/bin/python bench/resolve_bench.py [--quick])
 """
 
@@ -30,6 +34,7 @@ from bootmap.tableau import Tableau, Turn
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # tests/support: grid worlds, the checker
 from support.check import tableau_headings
 from support.gridworld import random_world, walk
+from support.noise import LOGGED, with_odometry_noise
 from targets import Targets
 
 
@@ -72,6 +77,28 @@ def cases(quick: bool):
     world = random_world(rng, 4, 4, extra_edges=2, landmarks=0.0)
     n = 500 if quick else 2_000
     yield f"4x4 grid, no landmarks, {n} steps", walk(world, n, rng, policy="explore")
+    yield from read_by_a_robot(quick)
+
+
+#: Odometry's noise on the families read by a robot: turn sd, drift sd (degrees), length error (share).
+ROBOT_NOISE = (3.0, 1.2, 0.03)
+
+
+def read_by_a_robot(quick: bool):
+    """The families again, as a robot's odometry reads them (:data:`ROBOT_NOISE`), unrounded and as
+    logged; the same walk and the same noise either way."""
+    families = [("paper", lambda rng: examples.notched_rectangle(circuits=50)),
+                ("5x5 grid, 1000 steps", lambda rng: walk(random_world(rng, 5, 5, extra_edges=3, landmarks=0.3),
+                                                          1_000, rng, policy="explore"))]
+    if not quick:
+        families.append(("4x4 grid, no landmarks, 2000 steps",
+                         lambda rng: walk(random_world(rng, 4, 4, extra_edges=2, landmarks=0.0), 2_000, rng,
+                                          policy="explore")))
+    for name, make in families:
+        for how, rounding in (("unrounded", None), ("as logged", LOGGED)):
+            rng = np.random.default_rng(11)
+            yield f"{name}, noisy, {how}", with_odometry_noise(make(rng), *ROBOT_NOISE[:2], rng,
+                                                                distance_sd=ROBOT_NOISE[2], rounding=rounding)
 
 
 def aliased_walks(count: int):
@@ -124,7 +151,7 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true", help="small tableaux only")
     ap.add_argument("--repeat", type=int, default=3, help="resolves per tableau; the median is printed")
     args = ap.parse_args(argv)
-    head = (f"{'tableau':34} {'steps':>6} {'true':>5} | {'ours':>5} {'acc':>6} {'ground':>7} {'solve':>7} {'total':>7}"
+    head = (f"{'tableau':40} {'steps':>6} {'true':>5} | {'ours':>5} {'acc':>6} {'ground':>7} {'solve':>7} {'total':>7}"
             f" {'uniq':>5} | {'rpni(v)':>7} {'acc':>6} {'time':>7} | {'rpni(v+h)':>9} {'acc':>6} {'time':>7}")
     print(head)
     print("-" * len(head))
@@ -140,7 +167,7 @@ def main(argv=None) -> int:
         total, cmap = sorted(runs, key=lambda r: r[0])[len(runs) // 2]
         v_states, v_time = rpni(tableau, with_heading=False)
         h_states, h_time = rpni(tableau, with_heading=True)
-        print(f"{name:34} {len(tableau):>6} {len(set(truth)):>5} | {cmap.n_dstates:>5} "
+        print(f"{name:40} {len(tableau):>6} {len(set(truth)):>5} | {cmap.n_dstates:>5} "
               f"{dstate_accuracy(truth, cmap.dstate_of):>6.1%} {cmap.stats.ground_s:>7.3f} "
               f"{cmap.stats.solve_s:>7.3f} {total:>7.3f} {str(cmap.unique):>5} | "
               f"{len(set(v_states)):>7} {dstate_accuracy(truth, v_states):>6.1%} {v_time:>7.3f} | "

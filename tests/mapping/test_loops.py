@@ -22,7 +22,7 @@ from bootmap.mapping.facts import typed_actions
 from bootmap.tableau import Tableau, Travel, Turn
 from support.check import check_map, true_partition
 from support.gridworld import random_world, walk
-from support.noise import with_odometry_noise
+from support.noise import ROUNDINGS, with_odometry_noise
 
 FORMAT = "bootmap.tableau/1"
 
@@ -88,7 +88,7 @@ def noisy_walks(draw):
                          landmarks=draw(st.sampled_from([0.0, 0.3])), cell_m=8.0)
     clean = walk(world, draw(st.integers(10, 60)), rng, policy=draw(st.sampled_from(["random", "explore"])))
     noise = draw(st.sampled_from([0.0, 2.0, 5.0]), label="turn_sd")
-    return world, with_odometry_noise(clean, noise, noise / 2, rng)
+    return world, with_odometry_noise(clean, noise, noise / 2, rng, rounding=draw(st.sampled_from(ROUNDINGS)))
 
 
 def _typed(action, angle):

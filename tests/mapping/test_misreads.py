@@ -15,14 +15,18 @@ from bootmap.mapping.misreads import RARE_VIEW_COST, find_suspects, rare_views
 from bootmap.metrics import dstate_accuracy
 from support.check import check_map, true_partition
 from support.gridworld import random_world, walk
-from support.noise import with_misreads, with_odometry_noise
+from support.noise import LOGGED, ROUNDINGS, with_misreads, with_odometry_noise
+
+READINGS = pytest.mark.parametrize("rounding", ROUNDINGS, ids=["logged", "unrounded"])
 
 
-def exploration(seed: int, turn_sd: float = 3.0):
-    """600 steps exploring a 20-place grid world, turns read with noise (as the noise bench makes them)."""
+def exploration(seed: int, turn_sd: float = 3.0, rounding=LOGGED):
+    """600 steps exploring a 20-place grid world, turns read with noise (as the noise bench makes them),
+    recorded as a log records them (or unrounded)."""
     rng = np.random.default_rng(seed)
     world = random_world(rng, 5, 4, extra_edges=4, landmarks=0.4)
-    return with_odometry_noise(walk(world, 600, rng, policy="explore"), turn_sd, turn_sd / 2, rng), rng
+    return with_odometry_noise(walk(world, 600, rng, policy="explore"), turn_sd, turn_sd / 2, rng,
+                               rounding=rounding), rng
 
 
 def assert_misreads_named(cmap, tableau, wrong):
@@ -53,16 +57,18 @@ def test_two_misclustered_views_in_the_papers_tableau_are_named(seed):
 
 
 @pytest.mark.slow
+@READINGS
 @pytest.mark.parametrize("seed", [41, 44])
-def test_half_a_percent_misreads_on_a_600_step_exploration(seed):
-    clean, rng = exploration(seed)
+def test_half_a_percent_misreads_on_a_600_step_exploration(seed, rounding):
+    clean, rng = exploration(seed, rounding=rounding)
     tableau, wrong = with_misreads(clean, 0.005, rng)
     assert_misreads_named(Resolver(time_limit=60).resolve(tableau), tableau, wrong)
 
 
 @pytest.mark.slow
-def test_two_percent_misreads_on_a_600_step_exploration():
-    clean, rng = exploration(45)
+@READINGS
+def test_two_percent_misreads_on_a_600_step_exploration(rounding):
+    clean, rng = exploration(45, rounding=rounding)
     tableau, wrong = with_misreads(clean, 0.02, rng)
     assert_misreads_named(Resolver(time_limit=60).resolve(tableau), tableau, wrong)
 

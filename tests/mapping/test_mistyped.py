@@ -12,14 +12,16 @@ from bootmap.metrics import dstate_accuracy
 from bootmap.tableau import Turn
 from support.check import check_map, true_partition
 from support.gridworld import random_world, walk
-from support.noise import with_mistyped_action, with_odometry_noise
+from support.noise import LOGGED, ROUNDINGS, with_mistyped_action, with_odometry_noise
 
 
-def exploration(seed: int, turn_sd: float = 3.0, steps: int = 600):
-    """600 steps exploring a 20-place grid world, turns read with noise (as tests/mapping/test_misreads.py makes them)."""
+def exploration(seed: int, turn_sd: float = 3.0, steps: int = 600, rounding=LOGGED):
+    """600 steps exploring a 20-place grid world, turns read with noise (as tests/mapping/test_misreads.py
+    makes them), recorded as a log records them (or unrounded)."""
     rng = np.random.default_rng(seed)
     world = random_world(rng, 5, 4, extra_edges=4, landmarks=0.4)
-    return with_odometry_noise(walk(world, steps, rng, policy="explore"), turn_sd, turn_sd / 2, rng), rng
+    return with_odometry_noise(walk(world, steps, rng, policy="explore"), turn_sd, turn_sd / 2, rng,
+                               rounding=rounding), rng
 
 
 def learned(tableau):
@@ -27,10 +29,11 @@ def learned(tableau):
     return m.angles_, m.grid_deg_
 
 
+@pytest.mark.parametrize("rounding", ROUNDINGS, ids=["logged", "unrounded"])
 @pytest.mark.parametrize("seed", [21, 22])
-def test_a_mistyped_turn_is_named_and_the_map_is_the_truth(seed):
-    clean, rng = exploration(seed)
-    tableau, at = with_mistyped_action(clean, rng)
+def test_a_mistyped_turn_is_named_and_the_map_is_the_truth(seed, rounding):
+    clean, rng = exploration(seed, rounding=rounding)
+    tableau, at = with_mistyped_action(clean, rng, rounding=rounding)
     angles, grid = learned(tableau)
     truth_angle = clean.steps[at].action.angle_deg
     # The learned types take the misread turn for another action: that is what the resolver has to undo.

@@ -10,12 +10,14 @@ from hypothesis import strategies as st
 
 from bootmap.cli import main
 from bootmap.mapping import Resolver
-from bootmap.mapping.motion import MotionPrimitives
+from bootmap.mapping.motion import LengthTypes, MotionPrimitives, exact_readings, length_types, reading_step
 from bootmap.metrics import dstate_accuracy
 from bootmap.tableau import Step, Tableau, Travel, Turn
 from support.check import true_partition
 from support.gridworld import random_world, walk
-from support.noise import with_odometry_noise
+from support.noise import LOGGED, ROUNDINGS, Rounding, rounded, with_odometry_noise
+
+READINGS = pytest.mark.parametrize("rounding", ROUNDINGS, ids=["logged", "unrounded"])
 
 
 @settings(max_examples=60, deadline=None)
@@ -31,15 +33,18 @@ def test_exact_angles_that_repeat_are_kept_as_they_are(turns, bends):
     assert sum(t.count for t in m.types_) == len(actions) and all(t.sd_deg == 0 for t in m.types_)
 
 
+@READINGS
 @pytest.mark.parametrize("turn_sd, drift_sd", [(0, 0), (3, 1.5), (6, 3), (10, 4)])
 @pytest.mark.parametrize("seed", [101, 202, 303])
-def test_turn_noise_up_to_10_degrees_does_not_change_the_map(seed, turn_sd, drift_sd):
-    # Long explorations of random grid worlds, read with turn noise and travel drift: the learned action
+def test_turn_noise_up_to_10_degrees_does_not_change_the_map(seed, turn_sd, drift_sd, rounding):
+    # Long explorations of random grid worlds, read with turn noise, travel drift and 3% error on
+    # distances (none on the clean ones), recorded as a log records them or unrounded: the learned action
     # types give the true map, exactly as the clean tableau does.
     rng = np.random.default_rng(seed)
     world = random_world(rng, 4, 3, extra_edges=2, landmarks=0.4)
     clean = walk(world, 300, rng, policy="explore")
-    tableau = with_odometry_noise(clean, turn_sd, drift_sd, rng)
+    tableau = with_odometry_noise(clean, turn_sd, drift_sd, rng, distance_sd=0.03 if turn_sd else 0.0,
+                                  rounding=rounding)
     truth = true_partition(tableau)
     cmap = Resolver(time_limit=60).resolve(tableau)
     assert cmap.n_dstates == len(set(truth)) and dstate_accuracy(truth, cmap.dstate_of) == 1.0
@@ -98,13 +103,17 @@ def test_travel_lengths_tell_look_alike_dstates_apart_and_odometry_error_does_no
 
 
 @settings(max_examples=12, deadline=None)
-@given(seed=st.integers(0, 2**31), width=st.integers(3, 5), turn_sd=st.floats(0, 10), drift_sd=st.floats(0, 4))
-def test_property_noisy_walks_of_random_worlds_resolve_to_the_truth(seed, width, turn_sd, drift_sd):
+@given(seed=st.integers(0, 2**31), width=st.integers(3, 5), turn_sd=st.floats(0, 10), drift_sd=st.floats(0, 4),
+       distance_sd=st.floats(0, 0.04), rounding=st.sampled_from(ROUNDINGS + (Rounding(0.001, 0.01),)))
+def test_property_noisy_walks_of_random_worlds_resolve_to_the_truth(seed, width, turn_sd, drift_sd, distance_sd,
+                                                                     rounding):
     # A random world, explored for 240 steps, read with random odometry noise within the bounds the typing promises
-    # (turns up to sd 10 degrees, travel drift up to sd 4): the map is the truth.
+    # (turns up to sd 10 degrees, travel drift up to sd 4, distances up to 4% off), recorded at a log's
+    # resolution, a finer one or unrounded: the map is the truth.
     rng = np.random.default_rng(seed)
     world = random_world(rng, width, 3, extra_edges=2, landmarks=0.4)
-    tableau = with_odometry_noise(walk(world, 240, rng, policy="explore"), turn_sd, drift_sd, rng)
+    tableau = with_odometry_noise(walk(world, 240, rng, policy="explore"), turn_sd, drift_sd, rng,
+                                  distance_sd=distance_sd, rounding=rounding)
     truth = true_partition(tableau)
     cmap = Resolver(time_limit=60).resolve(tableau)
     assert cmap.n_dstates == len(set(truth)) and dstate_accuracy(truth, cmap.dstate_of) == 1.0, \
@@ -193,3 +202,129 @@ def test_bends_are_drawn_from_multiples_of_the_bend_angle():
     assert world.frames and all(a % 45 == 0 for a in world.frames.values())
     with pytest.raises(ValueError, match="bend_deg"):
         random_world(np.random.default_rng(3), 5, 4, bends=1.0, bend_deg=20)
+
+
+# -------------------------------------------------------------------------------------------------
+# Readings at their resolution: clean or noisy never hinges on whether numbers repeat
+# -------------------------------------------------------------------------------------------------
+
+CORRIDORS_M = (1.5, 2.5, 4.0, 6.5, 10.5, 17.0)  # neighbours more than 1.6 times apart
+
+
+@settings(max_examples=80, deadline=None)
+@given(corridors=st.lists(st.sampled_from(CORRIDORS_M), min_size=1, max_size=4, unique=True),
+       reads=st.integers(5, 40), error=st.floats(0.005, 0.03), step=st.sampled_from([0.01, 0.001, 0.0]),
+       seed=st.integers(0, 2**31))
+def test_rounded_lengths_of_one_corridor_are_one_type(corridors, reads, error, step, seed):
+    # Each corridor driven many times, its length read a share ``error`` off (sd) and recorded to the
+    # centimetre, the millimetre or unrounded: rounded readings repeat (3.95 m, 3.96 m, each several
+    # times), and are still one corridor. Typing each repeated value as its own length made a 20-place
+    # floor need 214 dstates.
+    rng = np.random.default_rng(seed)
+    truth = [c for c in corridors for _ in range(reads)]
+    read = [c * (1 + error * rng.standard_normal()) for c in truth]
+    read = [round(round(d / step) * step, 3) if step else d for d in read]
+    labels = length_types(read)
+    assert len(set(labels)) == len(corridors)
+    assert all(len({lab for lab, c in zip(labels, truth) if c == corridor}) == 1 for corridor in corridors)
+    # The resolution the readings show is the one they were recorded at, or coarser where every reading
+    # happens to lie on a coarser step; exact only where each corridor was read as one value.
+    learned = LengthTypes().fit(read)
+    assert learned.resolution_m_ >= step and (not learned.exact_ or len(set(read)) == len(corridors))
+
+
+@settings(max_examples=80, deadline=None)
+@given(units=st.lists(st.integers(10, 2000), min_size=1, max_size=6, unique=True), repeat=st.integers(2, 5),
+       step=st.sampled_from([0.1, 0.01, 0.001]))
+def test_exact_lengths_are_each_their_own_type_at_any_resolution(units, repeat, step):
+    # Clean experience (hand-written, or a simulator without odometry error): every length read the same
+    # way every time. Lengths at least two steps of the resolution apart are as many types as values,
+    # however fine or coarse the resolution.
+    units = sorted(units)
+    spaced = [u * 2 for u in units]  # no two neighbouring steps
+    lengths = [round(u * step, 3) for u in spaced] * repeat
+    learned = LengthTypes().fit(lengths)
+    assert learned.exact_ and len(learned.types_) == len(units)
+    assert [t.count for t in learned.types_] == [repeat] * len(units)
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**31), turn_sd=st.floats(0.2, 8.0), n=st.integers(40, 600),
+       rounding=st.sampled_from([LOGGED, Rounding(0.01, 1.0), Rounding(0.001, 0.01)]))
+def test_rounded_noisy_turns_are_typed_as_the_unrounded_ones(seed, turn_sd, n, rounding):
+    # Turns read with noise and recorded to a tenth of a degree (or a whole degree, or a hundredth)
+    # repeat, the more so the longer the run; they are still the robot's few turns.
+    rng = np.random.default_rng(seed)
+    true_turns = rng.choice([-90.0, 90.0, 180.0], size=n)
+    actions = [Turn(float(a + turn_sd * rng.standard_normal())) for a in true_turns]
+    actions += [Travel(2.0, float(turn_sd / 3 * rng.standard_normal())) for _ in range(n)]
+    steps = [Step("A", a) for a in actions] + [Step("A")]
+    tableau = rounded(Tableau(tuple(steps)), rounding)
+    m = MotionPrimitives().fit(tableau.actions)
+    assert m.angles_[:n] == [int(a) for a in true_turns] and set(m.angles_[n:]) == {0}
+    assert m.resolution_["turn"] == rounding.angle_deg or turn_sd * 3 < rounding.angle_deg
+    assert not m.exact_["turn"]
+
+
+def test_the_readings_show_their_resolution_or_are_continuous():
+    assert reading_step([3.95, 4.06, 12.1]) == 0.01
+    assert reading_step([-90.0, 91.3, 179.9]) == 0.1
+    assert reading_step([2.0, 4.0]) == 1.0
+    assert reading_step([2.0312345678, 4.0]) == 0.0
+    # Exact: values repeat and are never neighbouring steps; noisy readings fill neighbouring steps.
+    assert exact_readings([2.0, 2.2, 2.0, 2.2], 0.1)
+    assert not exact_readings([2.0, 2.1, 2.0, 2.1], 0.1)
+    assert not exact_readings([3.95, 3.96, 3.95, 4.06, 3.96, 4.05], 0.01)
+    assert not exact_readings([4.0312, 3.9871, 4.0102], 0.0)  # continuous noise never repeats
+    assert exact_readings([179.9, -90.0, 179.9, -90.0], 0.1) and not exact_readings([179.9, -180.0, 179.9, 180.0], 0.1, 360.0)
+
+
+def _corridor_pair(second_m: float, resolution: dict | None = None) -> Tableau:
+    """Two look-alike corridors (view A, then B) driven twice each: 2.00 m and ``second_m``."""
+    steps = []
+    for d in (2.0, second_m, 2.0, second_m):
+        steps += [Step("A", Travel(d)), Step("B", Turn(180.0))]
+    meta = {"resolution": resolution} if resolution else {}
+    return Tableau(tuple(steps) + (Step("A"),), meta=meta)
+
+
+def test_a_resolution_the_tableau_states_is_the_one_used(tmp_path, capsys):
+    # 2.00 and 2.01 m, each read twice: at the centimetre the readings show, they are neighbouring steps,
+    # one corridor read with noise; a tableau that states its odometry reads to the millimetre has two
+    # exact lengths, ten steps apart.
+    shown = LengthTypes().fit([2.0, 2.01, 2.0, 2.01])
+    assert (shown.resolution_m_, shown.exact_, len(shown.types_)) == (0.01, False, 1)
+    for resolution, lengths in ((None, 1), ({"distance_m": 0.001}, 2)):
+        path = tmp_path / "t.json"
+        path.write_text(_corridor_pair(2.01, resolution).dumps())
+        assert main(["map", str(path), "--format", "json"]) == 0
+        out = json.loads(capsys.readouterr().out)
+        assert len(out["length_types"]) == lengths
+        assert out["length_types"][0]["resolution_m"] == (0.001 if resolution else 0.01)
+
+
+def test_the_map_records_the_resolution_of_its_action_types(tmp_path, capsys):
+    rng = np.random.default_rng(5)
+    tableau = with_odometry_noise(walk(random_world(rng, 3, 3, landmarks=0.4), 80, rng), 4, 2, rng, distance_sd=0.02)
+    path = tmp_path / "t.json"
+    path.write_text(tableau.dumps())
+    assert main(["map", str(path), "--format", "json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert {(t["kind"], t["resolution_deg"], t["exact"]) for t in out["action_types"]} == \
+        {("turn", 0.1, False), ("travel", 0.1, False)}
+    assert [(t["length_dm"], t["resolution_m"], t["exact"]) for t in out["length_types"]] == [(20, 0.01, False)]
+    assert main(["map", str(path)]) == 0
+    assert ("readings: turn angles to 0.1 deg (noisy); travel angles to 0.1 deg (noisy); "
+            "distances to 0.01 m (noisy)") in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("resolution, field", [({"distance_m": 0}, "distance_m"), ({"angle_deg": -0.1}, "angle_deg"),
+                                               ({"distance_m": "1cm"}, "distance_m"), ({"metres": 0.01}, "metres")])
+def test_a_bad_resolution_is_refused_naming_the_field(tmp_path, capsys, resolution, field):
+    doc = json.loads(_corridor_pair(4.0).dumps())
+    doc["meta"] = {"resolution": resolution}
+    path = tmp_path / "t.json"
+    path.write_text(json.dumps(doc))
+    assert main(["map", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "meta.resolution" in err and field in err and "t.json" in err and "Traceback" not in err

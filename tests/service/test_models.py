@@ -51,8 +51,12 @@ step = st.fixed_dictionaries({}, optional={
     "view": text.filter(bool), "action": action, "image": st.lists(finite, min_size=1, max_size=3),
     "truth": st.one_of(text, st.integers()), "pose": st.lists(finite, min_size=3, max_size=3)}
 ).filter(lambda d: "view" in d or "image" in d)
+resolution = st.fixed_dictionaries({}, optional={"distance_m": st.floats(0, 1, exclude_min=True),
+                                                 "angle_deg": st.floats(0, 10, exclude_min=True)})
+meta = st.one_of(st.dictionaries(text, finite, max_size=2),
+                 st.fixed_dictionaries({"resolution": resolution}, optional={"seed": st.integers(0, 99)}))
 valid = st.fixed_dictionaries({"format": st.just(FORMAT), "steps": st.lists(step, min_size=1, max_size=3)},
-                              optional={"world": text, "meta": st.dictionaries(text, finite, max_size=2)})
+                              optional={"world": text, "meta": meta})
 
 
 def _places(x, path=()):
@@ -117,6 +121,14 @@ def test_integral_floats_are_integers_as_in_json_schema():
     doc = {"format": FORMAT, "steps": [{"view": "a", "truth": 3.0}]}
     assert verdicts(doc) == (True, True, True)
     assert Tableau.from_dict(doc).steps[0].truth == 3
+
+
+@pytest.mark.parametrize("given, ok", [({"distance_m": 0.01, "angle_deg": 0.1}, True), ({"angle_deg": 1}, True),
+                                       ({"distance_m": 0}, False), ({"angle_deg": 11}, False),
+                                       ({"distance_m": "0.01"}, False), ({"ticks": 0.01}, False), (0.01, False)])
+def test_the_resolution_a_tableau_states_is_checked_by_all_three(given, ok):
+    doc = {"format": FORMAT, "meta": {"resolution": given, "seed": 3}, "steps": [{"view": "a"}]}
+    assert verdicts(doc) == (ok, ok, ok)
 
 
 def test_nul_in_a_label_is_refused_by_all_three():

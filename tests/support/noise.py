@@ -1,21 +1,65 @@
-"""Odometry as a real robot reads it: noise added to a clean tableau's turns and travels (tests, benchmarks)."""
+"""Odometry as a real robot reads it: noise added to a clean tableau's turns and travels, recorded at a
+log's resolution (tests, benchmarks)."""
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from bootmap.tableau import Tableau, Travel, Turn
 
 
-def with_odometry_noise(tableau: Tableau, turn_sd: float, drift_sd: float, rng: np.random.Generator) -> Tableau:
-    """The tableau with every turn off by N(0, ``turn_sd``) degrees and every travel's heading change by
-    N(0, ``drift_sd``); views, images and truth as they were.
+@dataclass(frozen=True)
+class Rounding:
+    """The resolution a robot's log records odometry at."""
+
+    distance_m: float
+    angle_deg: float
+
+
+#: As real logs and tableaux record readings: distances to the centimetre, angles to a tenth of a degree.
+LOGGED = Rounding(0.01, 0.1)
+#: Both ways a test family reads its noisy tableaux (``pytest.mark.parametrize("rounding", ROUNDINGS)``).
+ROUNDINGS = (LOGGED, None)
+
+
+def rounded(tableau: Tableau, rounding: Rounding | None = LOGGED) -> Tableau:
+    """The tableau with every reading recorded at ``rounding`` (None: as it is).
+
+    >>> from bootmap.tableau import Step
+    >>> t = rounded(Tableau((Step("A", Travel(3.956, -0.27)), Step("B", Turn(-91.349)), Step("A"))))
+    >>> t.actions
+    [Travel(distance_m=3.96, heading_change_deg=-0.3), Turn(angle_deg=-91.3)]
+    """
+    if rounding is None:
+        return tableau
+    steps = []
+    for s in tableau.steps:
+        a = s.action
+        if isinstance(a, Turn):
+            a = Turn(_on(a.angle_deg, rounding.angle_deg))
+        elif isinstance(a, Travel):
+            a = Travel(_on(a.distance_m, rounding.distance_m), _on(a.heading_change_deg, rounding.angle_deg))
+        steps.append(replace(s, action=a))
+    return Tableau(tuple(steps), tableau.world, dict(tableau.meta))
+
+
+def _on(value: float, step: float) -> float:
+    """The value as a log prints it at this step (3.956 at 0.01 is 3.96, not 3.9600000000000004)."""
+    decimals = max(0, -int(np.floor(np.log10(step) + 1e-9)))
+    return round(round(value / step) * step, decimals)
+
+
+def with_odometry_noise(tableau: Tableau, turn_sd: float, drift_sd: float, rng: np.random.Generator,
+                        distance_sd: float = 0.0, rounding: Rounding | None = LOGGED) -> Tableau:
+    """The tableau with every turn off by N(0, ``turn_sd``) degrees, every travel's heading change by
+    N(0, ``drift_sd``) and its distance by a share N(0, ``distance_sd``) of itself, recorded at
+    ``rounding`` (a log's, by default; None: unrounded); views, images and truth as they were.
 
     >>> from bootmap.examples import notched_rectangle
     >>> t = with_odometry_noise(notched_rectangle(1), 5.0, 2.0, np.random.default_rng(0))
-    >>> round(t.steps[0].action.angle_deg, 1), t.steps[0].view
+    >>> t.steps[0].action.angle_deg, t.steps[0].view
     (-89.4, 'V0')
     """
     steps = []
@@ -24,9 +68,11 @@ def with_odometry_noise(tableau: Tableau, turn_sd: float, drift_sd: float, rng: 
         if isinstance(a, Turn):
             a = Turn(a.angle_deg + float(rng.normal(0, turn_sd)))
         elif isinstance(a, Travel):
-            a = Travel(a.distance_m, a.heading_change_deg + float(rng.normal(0, drift_sd)))
+            heading = a.heading_change_deg + float(rng.normal(0, drift_sd))
+            distance = a.distance_m * (1.0 + float(rng.normal(0, distance_sd))) if distance_sd else a.distance_m
+            a = Travel(distance, heading)
         steps.append(replace(s, action=a))
-    return Tableau(tuple(steps), tableau.world, dict(tableau.meta))
+    return rounded(Tableau(tuple(steps), tableau.world, dict(tableau.meta)), rounding)
 
 
 def with_misreads(tableau: Tableau, fraction: float, rng: np.random.Generator) -> tuple[Tableau, list[int]]:
@@ -54,11 +100,12 @@ def with_misreads(tableau: Tableau, fraction: float, rng: np.random.Generator) -
     return Tableau(tuple(steps), tableau.world, dict(tableau.meta)), wrong
 
 
-def with_mistyped_action(tableau: Tableau, rng: np.random.Generator, off_deg: tuple[float, float] = (47.0, 55.0)
-                         ) -> tuple[Tableau, int]:
+def with_mistyped_action(tableau: Tableau, rng: np.random.Generator, off_deg: tuple[float, float] = (47.0, 55.0),
+                         rounding: Rounding | None = LOGGED) -> tuple[Tableau, int]:
     """The tableau with one quarter turn, from the middle half of the walk, read ``off_deg`` degrees off
     (drawn uniformly, either way): past the midpoint to the neighbouring grid angle, so that the robot's
-    learned types take it for another action (a slipped wheel, a gyro glitch); and its time point.
+    learned types take it for another action (a slipped wheel, a gyro glitch), recorded at ``rounding``;
+    and its time point.
 
     >>> from bootmap.examples import notched_rectangle
     >>> t, at = with_mistyped_action(notched_rectangle(4), np.random.default_rng(0))
@@ -73,5 +120,6 @@ def with_mistyped_action(tableau: Tableau, rng: np.random.Generator, off_deg: tu
     steps = list(tableau.steps)
     s = steps[at]
     off = float(rng.uniform(*off_deg)) * float(rng.choice([-1.0, 1.0]))
-    steps[at] = replace(s, action=Turn(s.action.angle_deg + off))  # type: ignore[union-attr]
+    angle = s.action.angle_deg + off  # type: ignore[union-attr]
+    steps[at] = replace(s, action=Turn(angle if rounding is None else _on(angle, rounding.angle_deg)))
     return Tableau(tuple(steps), tableau.world, dict(tableau.meta)), at

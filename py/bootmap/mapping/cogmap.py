@@ -12,7 +12,8 @@ from dataclasses import dataclass, field
 from clingo import Symbol
 
 from ..tableau import Tableau, Turn
-from .motion import ActionType
+from .facts import length_types_of
+from .motion import ActionType, LengthType
 from .vocabulary import AHEAD, HEADING_OF, IS, LEFT, MISREAD, PATH_OF, PLACE_OF, RIGHT, VIEW_OF, Atoms
 
 
@@ -71,7 +72,10 @@ class CognitiveMap:
     alternatives : list of list of str
         The dstate of each time point in the other minimal maps.
     action_types : list of ActionType
-        The robot's action types the axioms saw (learned, or the measurements rounded to a quantum).
+        The robot's action types the axioms saw (learned, or the measurements rounded to a quantum), each
+        with the resolution its kind's angles were recorded at and whether they were read as exact.
+    length_types : list of LengthType
+        The lengths of its travels (decimetres), with the resolution the distances were recorded at.
     suspect_steps : list of dict
         The time points whose views the map takes as misreads: ``t``, the view ``observed``, the view
         its dstate shows (``expected``) and what calling it a misread cost (a dstate costs 4).
@@ -106,6 +110,7 @@ class CognitiveMap:
     stats: SolveStats = field(default_factory=SolveStats)
     minimal: bool = True
     action_types: list[ActionType] = field(default_factory=list)
+    length_types: list[LengthType] = field(default_factory=list)
     suspect_steps: list[dict] = field(default_factory=list)
     retyped_steps: list[dict] = field(default_factory=list)
     found_by: str = "fewest dstates"
@@ -145,6 +150,7 @@ class CognitiveMap:
             "left_of": [list(x) for x in self.left_of],
             "alternatives": self.alternatives,
             "action_types": [a.to_dict() for a in self.action_types],
+            "length_types": [a.to_dict() for a in self.length_types],
             "suspect_steps": self.suspect_steps,
             "retyped_steps": self.retyped_steps,
             "stats": self.stats.to_dict(),
@@ -168,6 +174,8 @@ class CognitiveMap:
         lines.append("")
         if self.action_types:
             lines.append("action types: " + "; ".join(str(a) for a in self.action_types))
+        if self.action_types or self.length_types:
+            lines.append("readings: " + readings_text(self.action_types, self.length_types))
         if self.suspect_steps:
             lines.append("views taken as misreads: " + "; ".join(
                 f"t{s['t']} saw {s['observed']}, its dstate shows {s['expected']}" for s in self.suspect_steps))
@@ -182,6 +190,18 @@ class CognitiveMap:
         for p, pa in self.left_of:
             lines.append(f"{p} is left of {pa} (facing pos)")
         return "\n".join(lines)
+
+
+def readings_text(action_types: list[ActionType], length_types: list[LengthType]) -> str:
+    """How the robot's readings were taken, kind by kind: the resolution they were recorded at, and
+    whether they were read as exact primitives or as noisy readings of fewer types."""
+    def one(what: str, step: float, unit: str, exact: bool) -> str:
+        return f"{what} {'continuous' if step == 0 else f'to {step:g} {unit}'} ({'exact' if exact else 'noisy'})"
+    kinds = {a.kind: a for a in action_types}
+    out = [one(f"{kind} angles", a.resolution_deg, "deg", a.exact) for kind, a in kinds.items()]
+    if length_types:
+        out.append(one("distances", length_types[0].resolution_m, "m", length_types[0].exact))
+    return "; ".join(out)
 
 
 def action_text(action) -> str:
@@ -263,7 +283,8 @@ def build_map(tableau: Tableau, models: list[list[Symbol]], exhausted: bool, lev
         order=order, right_of=sorted(sides["right"], key=_natural), left_of=sorted(sides["left"], key=_natural),
         n_models=len(models) if minimal else 0, unique=minimal and len(models) == 1 and exhausted,
         models_capped=minimal and not exhausted, alternatives=alternatives, levels=list(levels),
-        stats=stats, minimal=minimal, action_types=list(action_types or []))
+        stats=stats, minimal=minimal, action_types=list(action_types or []),
+        length_types=length_types_of(tableau))
 
 
 def step_row(t: int, step, dstate: str, place_of: dict, path_of: dict) -> dict:

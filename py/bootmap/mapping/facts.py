@@ -18,7 +18,7 @@ import clingo
 from clingo import Function, Number, String, Symbol
 
 from ..tableau import Action, Tableau, Travel, Turn
-from .motion import ActionType, MotionPrimitives, action_types, length_types, measured_angle, quantise
+from .motion import ActionType, LengthType, LengthTypes, MotionPrimitives, action_types, measured_angle, quantise, resolution_of
 from .vocabulary import LENGTH, PASSES_THROUGH, RESUME, TRAVEL, TURN, VIEW, action_term
 
 
@@ -34,13 +34,14 @@ def typed_actions(tableau: Tableau, quantum_deg: float | None = None) -> tuple[l
     """:func:`read_actions`, and the grid the learned types lie on (None with a fixed quantum, or no
     actions): the grid says which readings may be mistyped (:func:`.motion.type_suspects`)."""
     actions = tableau.actions
+    resolution = resolution_of(tableau.meta, "angle_deg")
     if quantum_deg is None:
         if not actions:
             return [], [], None
-        learned = MotionPrimitives().fit(actions)
+        learned = MotionPrimitives(resolution_deg=resolution).fit(actions)
         return learned.angles_, learned.types_, learned.grid_deg_
     angles = [quantise(measured_angle(a), quantum_deg) for a in actions]
-    return angles, action_types(actions, angles), None
+    return angles, action_types(actions, angles, resolution), None
 
 
 def action_symbol(action: Action | None, angle: int, length: int | None = None) -> Symbol | None:
@@ -93,10 +94,21 @@ def tableau_facts(tableau: Tableau, quantum_deg: float | None = None,
 
 
 def travel_lengths(tableau: Tableau) -> dict[int, int]:
-    """The length type (decimetres) of each travel, by its time point (:func:`.motion.length_types`)."""
+    """The length type (decimetres) of each travel, by its time point (:class:`.motion.LengthTypes`, at
+    the resolution the tableau states, or the distances show)."""
+    travels, learned = _learned_lengths(tableau)
+    return dict(zip(travels, learned.labels_))
+
+
+def length_types_of(tableau: Tableau) -> list[LengthType]:
+    """The tableau's travel lengths as types (what the map reports beside its action types)."""
+    return _learned_lengths(tableau)[1].types_
+
+
+def _learned_lengths(tableau: Tableau) -> tuple[list[int], LengthTypes]:
     travels = [t for t, s in enumerate(tableau.steps) if isinstance(s.action, Travel)]
-    types = length_types([tableau.steps[t].action.distance_m for t in travels])  # type: ignore[union-attr]
-    return dict(zip(travels, types))
+    distances = [tableau.steps[t].action.distance_m for t in travels]  # type: ignore[union-attr]
+    return travels, LengthTypes(resolution_of(tableau.meta, "distance_m")).fit(distances)
 
 
 def add_facts(ctl: clingo.Control, facts: Iterable[Symbol]) -> None:

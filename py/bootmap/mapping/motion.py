@@ -19,6 +19,14 @@ are learned for images:
 The axioms then see each action's type angle (``turn(T, -90)``), as if the robot had turned exactly.
 Clean experience, whose angles are exact multiples of the grid, gets exactly its own angles.
 
+Clean or noisy is decided at the readings' resolution, never by whether numbers repeat alone: a log
+records distances to the centimetre and angles to a tenth of a degree, so noisy readings of one corridor
+repeat (3.95 m, 3.96 m, ... 4.06 m, each several times). The resolution is a fact about the sensor: given
+(``meta.resolution`` of the tableau), or read from the readings as the coarsest decimal step they all lie
+on (:func:`reading_step`). Readings are exact when values repeat and no two distinct values are
+neighbouring steps of that resolution (:func:`exact_readings`): noise, at any resolution, spreads one
+primitive over neighbouring steps; exact experience reads each primitive as one value.
+
 Example
 -------
 >>> from bootmap.tableau import Travel, Turn
@@ -46,7 +54,7 @@ GRIDS = (180, 90, 45, 15, 5, 1)
 BIAS_DEG = 10.0
 #: A type that sets the grid accounts for at least this share of its kind's actions (and three of them) ...
 MIN_SHARE = 0.05
-#: Readings that repeat within this many degrees are exact (a hand-written or simulated tableau) ...
+#: Readings whose types spread less than this many degrees are as good as exact (every type is kept) ...
 EXACT_DEG = 0.5
 #: ... and a type read the same, within this many degrees, at least twice sets the grid however few its
 #: readings (noise of a degree or more cannot do that; two turn-arounds of a real robot read at +163.0
@@ -60,22 +68,103 @@ TAIL, TAIL_SDS = 3, 4.0
 FAR_SDS = 6.0
 
 
+#: Resolutions a log may record readings at, coarsest first: a whole unit (metre, degree) to a millionth.
+STEPS = tuple(10.0 ** -k for k in range(7))
+#: A reading within this share of a step of a whole multiple lies on that step (floating point's own error).
+ON_STEP = 1e-6
+#: Readings lie on a step when this share of them do: a reading or two typed in by hand, or merged from
+#: another source, do not make a log's readings continuous (continuous readings lie on a step by chance
+#: about once in a million).
+ON_STEP_SHARE = 0.95
+
+
 @dataclass(frozen=True)
 class ActionType:
-    """One motion primitive: its kind, the angle the axioms see, and what the robot measured for it."""
+    """One motion primitive: its kind, the angle the axioms see, and what the robot measured for it, at
+    the resolution its readings were recorded at."""
 
-    kind: str           # "turn" or "travel"
-    angle: int          # degrees, in (-180, 180]
-    count: int          # actions of this type
-    mean_deg: float     # their measured mean (circular)
-    sd_deg: float       # and spread
+    kind: str                   # "turn" or "travel"
+    angle: int                  # degrees, in (-180, 180]
+    count: int                  # actions of this type
+    mean_deg: float             # their measured mean (circular)
+    sd_deg: float               # and spread
+    resolution_deg: float = 0.0  # the step the angles of its kind were recorded at (0: continuous)
+    exact: bool = True          # its kind's readings are exact primitives (else noisy readings, clustered)
 
     def to_dict(self) -> dict:
         return {"kind": self.kind, "angle_deg": self.angle, "count": self.count,
-                "measured_mean_deg": round(self.mean_deg, 2), "measured_sd_deg": round(self.sd_deg, 2)}
+                "measured_mean_deg": round(self.mean_deg, 2), "measured_sd_deg": round(self.sd_deg, 2),
+                "resolution_deg": self.resolution_deg, "exact": self.exact}
 
     def __str__(self) -> str:
         return f"{self.kind} {self.angle:+d} ({self.count}x, measured {self.mean_deg:+.1f} +- {self.sd_deg:.1f})"
+
+
+@dataclass(frozen=True)
+class LengthType:
+    """One length of travel: the label the axioms see (decimetres) and what odometry measured for it."""
+
+    length_dm: int              # the label: the type's mean length in decimetres
+    count: int                  # travels of this length
+    mean_m: float               # their measured mean
+    sd_m: float                 # and spread
+    resolution_m: float = 0.0   # the step the distances were recorded at (0: continuous)
+    exact: bool = True          # the distances are exact (else noisy readings, clustered)
+
+    def to_dict(self) -> dict:
+        return {"length_dm": self.length_dm, "count": self.count, "measured_mean_m": round(self.mean_m, 3),
+                "measured_sd_m": round(self.sd_m, 3), "resolution_m": self.resolution_m, "exact": self.exact}
+
+    def __str__(self) -> str:
+        return f"{self.length_dm / 10:g} m ({self.count}x, measured {self.mean_m:.2f} +- {self.sd_m:.2f})"
+
+
+def reading_step(values: Sequence[float]) -> float:
+    """The resolution the readings were recorded at, as they show it: the coarsest decimal step
+    (:data:`STEPS`) that the readings are whole multiples of (:data:`ON_STEP_SHARE` of them); 0.0 where
+    there is none (continuous).
+
+    >>> reading_step([3.95, 4.06, 12.1]), reading_step([-90.0, 91.3]), reading_step([2.0312345678])
+    (0.01, 0.1, 0.0)
+    """
+    v = np.asarray(values, dtype=float)
+    for step in STEPS:
+        q = v / step
+        if np.mean(np.abs(q - np.round(q)) < ON_STEP) >= ON_STEP_SHARE:
+            return step
+    return 0.0
+
+
+def exact_readings(values: Sequence[float], step: float, period: float | None = None) -> bool:
+    """Whether readings recorded at ``step`` (0: continuous) are exact, each value a primitive read without
+    noise: values repeat (noise at a fine resolution never does), and no two distinct values are
+    neighbouring steps (noise at a coarse one spreads a primitive over neighbouring steps: a corridor read
+    3.95, 3.96, ... 4.06 m). Angles wrap at ``period``.
+
+    >>> exact_readings([2.0, 2.2, 2.0, 2.2], 0.1), exact_readings([3.95, 3.96, 3.95, 4.06, 3.96, 4.05], 0.01)
+    (True, False)
+    >>> exact_readings([4.0312, 3.9871, 4.0102], 0.0)
+    False
+    """
+    v = np.asarray(values, dtype=float)
+    if v.size == 0:
+        return True
+    units = np.unique(np.round(v / (step or ON_STEP)))
+    if len(units) > len(v) / 2:
+        return False
+    if step == 0 or len(units) < 2:
+        return True
+    gaps = np.diff(units)
+    if period is not None:
+        gaps = np.append(gaps, units[0] + round(period / step) - units[-1])
+    return bool(gaps.min() > 1)
+
+
+def resolution_of(tableau_meta: dict, field: str) -> float | None:
+    """The resolution a tableau states for its readings (``meta.resolution.distance_m`` or ``.angle_deg``),
+    or None where it states none (it is then read from the readings)."""
+    given = (tableau_meta.get("resolution") or {}).get(field)
+    return None if given is None else float(given)
 
 
 class MotionPrimitives:
@@ -85,6 +174,9 @@ class MotionPrimitives:
     ----------
     grids : sequence of int
         Candidate grids in degrees, coarsest first, each a divisor of the one before.
+    resolution_deg : float, optional
+        The step the angles were recorded at (0: continuous); by default read from the readings of each
+        kind (:func:`reading_step`).
 
     Attributes
     ----------
@@ -94,20 +186,29 @@ class MotionPrimitives:
         The type angle of each action, in order.
     grid_deg_ : int
         The grid the type angles lie on.
+    resolution_ : dict
+        Per kind, the step its angles were recorded at (given, or read from them).
+    exact_ : dict
+        Per kind, whether its readings are exact primitives (:func:`exact_readings`).
     """
 
-    def __init__(self, grids: Sequence[int] = GRIDS):
+    def __init__(self, grids: Sequence[int] = GRIDS, resolution_deg: float | None = None):
         self.grids = grids
+        self.resolution_deg = resolution_deg
 
     def fit(self, actions: Sequence[Action]) -> "MotionPrimitives":
         is_turn, read = _readings(actions)
         kinds = np.where(is_turn, "turn", "travel")
         measured = _wrap(read)
+        self.resolution_, self.exact_ = {}, {}
         clusters: list[tuple[str, np.ndarray]] = []  # (kind, indices into actions)
         for kind in ("turn", "travel"):
             idx = np.flatnonzero(kinds == kind)
             if idx.size:
-                clusters += [(kind, idx[members]) for members in _cluster(measured[idx])]
+                step = reading_step(read[idx]) if self.resolution_deg is None else self.resolution_deg
+                self.resolution_[kind] = step
+                self.exact_[kind] = exact_readings(measured[idx], step, period=360.0)
+                clusters += [(kind, idx[members]) for members in _cluster(measured[idx], self.exact_[kind])]
         means = [_circular_mean(measured[i]) for _, i in clusters]
         spreads = [_circular_sd(measured[i], m) for m, (_, i) in zip(means, clusters)]
         # A type seen once or twice is as likely a misread as a primitive: the grid is set by the types
@@ -119,8 +220,9 @@ class MotionPrimitives:
             # How far this kind's readings stray from their types: the noise every type of it shares.
             pooled = float(np.sqrt(sum(n * sd * sd for _, sd, n in mine) / total)) if total else 0.0
             # Readings without noise (a hand-written or simulated tableau) are all primitives.
+            same = self.resolution_.get(kind, 0.0) < SAME_DEG  # can two readings agree by more than chance?
             keep = [(m, pooled) for i, (m, sd, n) in enumerate(mine)
-                    if n >= max(3, MIN_SHARE * total) or (n >= 2 and sd < SAME_DEG) or pooled < EXACT_DEG
+                    if n >= max(3, MIN_SHARE * total) or (n >= 2 and sd < SAME_DEG and same) or pooled < EXACT_DEG
                     or (n >= 3 and _apart(m, [o for j, (o, _, _) in enumerate(mine) if j != i], pooled))]
             common += keep or [(m, pooled) for m, _, _ in mine]
             # A few readings (a tail, at most TAIL) set the grid only where no grid angle is near them:
@@ -133,7 +235,7 @@ class MotionPrimitives:
         for (_, idx), angle in zip(clusters, snapped):
             angles[idx] = angle
         self.angles_ = angles.tolist()
-        self.types_ = _types(is_turn, read, angles)
+        self.types_ = _types(is_turn, read, angles, self.resolution_, self.exact_)
         return self
 
 
@@ -151,11 +253,17 @@ def measured_angle(action: Action) -> float:
     return action.angle_deg if isinstance(action, Turn) else action.heading_change_deg
 
 
-def action_types(actions: Sequence[Action], angles: Sequence[int]) -> list[ActionType]:
+def action_types(actions: Sequence[Action], angles: Sequence[int], resolution_deg: float | None = None
+                 ) -> list[ActionType]:
     """The types of these actions given the angle each was read as (learned, or rounded to a quantum):
-    turns first, by angle."""
+    turns first, by angle, each with its kind's resolution (given, or read from the readings)."""
     is_turn, read = _readings(actions)
-    return _types(is_turn, read, np.asarray(angles, dtype=int))
+    resolution, exact = {}, {}
+    for kind, mine in (("turn", is_turn), ("travel", ~is_turn)):
+        if mine.any():
+            resolution[kind] = reading_step(read[mine]) if resolution_deg is None else resolution_deg
+            exact[kind] = exact_readings(_wrap(read[mine]), resolution[kind], period=360.0)
+    return _types(is_turn, read, np.asarray(angles, dtype=int), resolution, exact)
 
 
 def _readings(actions: Sequence[Action]) -> tuple[np.ndarray, np.ndarray]:
@@ -165,13 +273,16 @@ def _readings(actions: Sequence[Action]) -> tuple[np.ndarray, np.ndarray]:
     return is_turn, read
 
 
-def _types(is_turn: np.ndarray, read: np.ndarray, angles: np.ndarray) -> list[ActionType]:
-    """The action types, turns first, by angle: each with its count and measured mean and spread."""
+def _types(is_turn: np.ndarray, read: np.ndarray, angles: np.ndarray, resolution: dict, exact: dict
+           ) -> list[ActionType]:
+    """The action types, turns first, by angle: each with its count, measured mean and spread, and its
+    kind's resolution and exactness."""
     out = []
     for kind, mine in (("turn", is_turn), ("travel", ~is_turn)):
         for angle in np.unique(angles[mine]):
             v = _wrap(read[mine & (angles == angle)])
-            out.append(ActionType(kind, int(angle), len(v), _circular_mean(v), _circular_sd(v, int(angle))))
+            out.append(ActionType(kind, int(angle), len(v), _circular_mean(v), _circular_sd(v, int(angle)),
+                                  resolution.get(kind, 0.0), exact.get(kind, True)))
     return out
 
 
@@ -181,9 +292,9 @@ def _wrap(a: np.ndarray) -> np.ndarray:
     return np.where(w == -180.0, 180.0, w)
 
 
-def _cluster(values: np.ndarray) -> list[np.ndarray]:
+def _cluster(values: np.ndarray, exact: bool) -> list[np.ndarray]:
     """The angles split wherever neighbours (sorted, on the circle) are more than :data:`BIAS_DEG`
-    apart, then each moved to the type whose mean is nearest."""
+    apart (exact readings: wherever they differ), then each moved to the type whose mean is nearest."""
     order = np.argsort(values)
     v = values[order]
     # Start the circle at its widest empty arc, so that a type around 180 (turn-arounds read as 178 and
@@ -192,8 +303,8 @@ def _cluster(values: np.ndarray) -> list[np.ndarray]:
     start = (int(np.argmax(gaps)) + 1) % len(v)
     order = np.concatenate([order[start:], order[:start]])
     v = np.concatenate([v[start:], v[:start] + 360.0])
-    # Readings that repeat exactly are as many types as values.
-    splits = np.flatnonzero(np.diff(v) > (EXACT_DEG if _repeats_exactly(v) else BIAS_DEG)) + 1
+    # Exact readings are as many types as values.
+    splits = np.flatnonzero(np.diff(v) > (EXACT_DEG if exact else BIAS_DEG)) + 1
     parts = np.split(np.arange(len(v)), splits)
     # A gap that noise opened inside one type: neighbours less than twice the bias apart, one of them
     # spread over more than a quarter of the distance, are one type (exact angles 15 apart stay two).
@@ -314,37 +425,68 @@ def quantise(angle_deg: float, quantum_deg: float) -> int:
     return 180 if a == -180 else a
 
 
-def _repeats_exactly(values: np.ndarray) -> bool:
-    """Readings that repeat exactly (a hand-written tableau, a simulator without odometry noise): noisy
-    readings never repeat to a millionth."""
-    return len(np.unique(np.round(values, 6))) <= len(values) / 2
-
-
 #: Two travels whose distances differ by more than this factor are of different lengths (odometry reads a
 #: travel's length to a few per cent; where the robot stops varies by a few centimetres).
 LENGTH_RATIO = 1.25
 
 
-def length_types(distances: Sequence[float]) -> list[int]:
+def length_types(distances: Sequence[float], resolution_m: float | None = None) -> list[int]:
     """The length type of each travel, in decimetres (the mean of its type): travels are sorted by length
-    and split wherever the next is more than :data:`LENGTH_RATIO` times longer; lengths that repeat
-    exactly (clean experience) are each a type.
+    and split wherever the next is more than :data:`LENGTH_RATIO` times longer; exact lengths (clean
+    experience, :func:`exact_readings` at the distances' resolution, given or read) are each a type.
 
     >>> length_types([4.02, 1.98, 3.95, 2.03, 12.1, 4.0])
     [40, 20, 40, 20, 121, 40]
     >>> length_types([2.0, 2.2, 2.0, 2.2])
     [20, 22, 20, 22]
+    >>> length_types([3.95, 3.96, 4.06, 3.95, 4.05, 3.96])  # one corridor, read to the centimetre
+    [40, 40, 40, 40, 40, 40]
     """
-    d = np.asarray(distances, dtype=float)
-    if d.size == 0:
-        return []
-    order = np.argsort(d)
-    v = np.log(np.maximum(d[order], 1e-3))
-    splits = np.flatnonzero(np.diff(v) > (1e-6 if _repeats_exactly(d) else np.log(LENGTH_RATIO))) + 1
-    out = np.empty(len(d), dtype=int)
-    for part in np.split(order, splits):
-        out[part] = int(round(float(d[part].mean()) * 10))
-    return out.tolist()
+    return LengthTypes(resolution_m).fit(distances).labels_
+
+
+class LengthTypes:
+    """Learn the lengths of a robot's travels (scikit-learn's estimator contract): :func:`length_types`.
+
+    Parameters
+    ----------
+    resolution_m : float, optional
+        The step the distances were recorded at (0: continuous); by default read from them
+        (:func:`reading_step`).
+
+    Attributes
+    ----------
+    labels_ : list of int
+        Each travel's length type, in decimetres.
+    types_ : list of LengthType
+        The types found, shortest first.
+    resolution_m_ : float
+        The resolution used.
+    exact_ : bool
+        Whether the distances were taken as exact (each value its own type).
+    """
+
+    def __init__(self, resolution_m: float | None = None):
+        self.resolution_m = resolution_m
+
+    def fit(self, distances: Sequence[float]) -> "LengthTypes":
+        d = np.asarray(distances, dtype=float)
+        self.resolution_m_ = (reading_step(d) if d.size else 0.0) if self.resolution_m is None else self.resolution_m
+        self.exact_ = exact_readings(d, self.resolution_m_)
+        self.labels_, self.types_ = [], []
+        if d.size == 0:
+            return self
+        order = np.argsort(d)
+        v = np.log(np.maximum(d[order], 1e-3))
+        splits = np.flatnonzero(np.diff(v) > (1e-6 if self.exact_ else np.log(LENGTH_RATIO))) + 1
+        out = np.empty(len(d), dtype=int)
+        for part in np.split(order, splits):
+            mine = d[part]
+            out[part] = label = int(round(float(mine.mean()) * 10))
+            self.types_.append(LengthType(label, len(mine), float(mine.mean()), float(mine.std()),
+                                          self.resolution_m_, self.exact_))
+        self.labels_ = out.tolist()
+        return self
 
 
 # -------------------------------------------------------------------------------------------------

@@ -45,7 +45,7 @@ from clingo import Symbol
 
 from ..tableau import Tableau
 from .cogmap import CognitiveMap, SolveStats, Try, build_map, step_row
-from .facts import action_symbol, action_symbols, passes_through, tableau_facts, travel_lengths, typed_actions
+from .facts import action_symbol, action_symbols, length_types_of, passes_through, tableau_facts, travel_lengths, typed_actions
 from .grounding import Deadline, check_fixed, prepass
 from .misreads import MIN_VISITS, find_suspects, has_images, rare_clustered_views
 from .motion import ActionType, type_suspects
@@ -154,7 +154,8 @@ class MapStream:
         stats = SolveStats(classes=len(replay.members), lower_bound=cmap.n_dstates, total_s=seconds,
                            bounds=(Try("the last map extended by determinism (stock axioms replayed)", "sat",
                                        seconds),))
-        return replace(cmap, steps=rows, dstate_of=list(dstate_of), action_types=types, stats=stats)
+        return replace(cmap, steps=rows, dstate_of=list(dstate_of), action_types=types,
+                       length_types=length_types_of(tableau), stats=stats)
 
     def _suspect(self, tableau: Tableau, angles: list[int]) -> bool:
         actions = action_symbols(tableau, angles)

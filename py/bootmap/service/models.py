@@ -110,6 +110,22 @@ class StepIn(BaseModel):
         return self
 
 
+class ResolutionIn(BaseModel):
+    """The step the robot's odometry recorded readings at; where left out, read from the readings."""
+
+    model_config = STRICT
+    distance_m: float = optional(gt=0, le=1, description="A travel's distance, metres (a centimetre: 0.01).")
+    angle_deg: float = optional(gt=0, le=10, description="An angle, degrees (a tenth of a degree: 0.1).")
+
+
+class MetaIn(BaseModel):
+    """Run information, free-form but for the keys the resolver reads."""
+
+    model_config = ConfigDict(extra="allow", strict=True, allow_inf_nan=False)
+    __pydantic_extra__: dict[str, JsonValue]  # the free-form keys: any JSON
+    resolution: ResolutionIn = optional(description="The resolution of the robot's readings.")
+
+
 class TableauIn(BaseModel):
     """A tableau, format ``bootmap.tableau/1``: the robot's experience as steps (see /schemas/tableau)."""
 
@@ -117,7 +133,7 @@ class TableauIn(BaseModel):
     format: Literal["bootmap.tableau/1"] = Field(description=f"Always {FORMAT!r}.")
     world: StrictStr = optional(max_length=200, pattern=NO_NUL,
                                 description="Name of the world the run came from (informational).")
-    meta: dict[str, JsonValue] = optional(description="Free-form run information; never read by the resolver.")
+    meta: MetaIn = optional(description="Run information: free-form, but for the keys the resolver reads.")
     steps: list[StepIn] = Field(min_length=1)
 
 
@@ -207,6 +223,22 @@ class ActionTypeOut(Out):
     count: int = Field(description="Actions of this type in the tableau.")
     measured_mean_deg: float
     measured_sd_deg: float
+    resolution_deg: float = Field(description="The step its kind's angles were recorded at (0: continuous), "
+                                              "as the tableau states it (meta.resolution) or its readings show.")
+    exact: bool = Field(description="Its kind's readings were taken as exact primitives (every value a type), "
+                                    "not as noisy readings clustered into types.")
+
+
+class LengthTypeOut(Out):
+    """One length of the robot's travels: the label the axioms saw, and what odometry measured for it."""
+
+    length_dm: int = Field(description="The label the axioms saw: the type's mean length in decimetres.")
+    count: int = Field(description="Travels of this length in the tableau.")
+    measured_mean_m: float
+    measured_sd_m: float
+    resolution_m: float = Field(description="The step the distances were recorded at (0: continuous).")
+    exact: bool = Field(description="The distances were taken as exact (every value a type), not as noisy "
+                                    "readings clustered into lengths.")
 
 
 class MapOut(Out):
@@ -228,6 +260,8 @@ class MapOut(Out):
     alternatives: list[list[str]] = Field(description="The dstate of each time point in the other minimal maps.")
     action_types: list[ActionTypeOut] = Field(description="The robot's action types, learned from the tableau's "
                                                          "angles (or its angles rounded to the server's quantum).")
+    length_types: list[LengthTypeOut] = Field(description="The lengths of the robot's travels, learned from the "
+                                                          "tableau's distances.")
     suspect_steps: list[SuspectStep] = Field(description="Time points whose views the map takes as misreads: "
                                                          "explaining them as seen needs far more dstates.")
     retyped_steps: list[RetypedStep] = Field(description="Actions the map takes as mistyped: read far from "
