@@ -58,10 +58,10 @@ def test_without_retyping_the_mistyped_turn_costs_dstates():
     clean, rng = exploration(21)
     tableau, _ = with_mistyped_action(clean, rng)
     from bootmap.mapping.grounding import Deadline
-    from bootmap.mapping.resolver import _Search
+    from bootmap.mapping.search import Search
 
-    search = _Search(Resolver(retype=False), tableau, Deadline.after(60))
-    assert search._proved_with(search.angles) > len(set(true_partition(tableau))) + 1
+    search = Search(Resolver(retype=False), tableau, Deadline.after(60))
+    assert search.retyping.proved_with(search.state.angles) > len(set(true_partition(tableau))) + 1
 
 
 def test_clean_and_noisy_readings_have_no_suspects():

@@ -190,16 +190,16 @@ def test_a_feature_only_some_time_points_show_does_not_split_the_others(axioms_c
 
 
 def test_time_out_hands_back_a_valid_map_found_on_the_way(paper_tableau, monkeypatch):
-    from bootmap.mapping import resolver as resolver_module
+    from bootmap.mapping.search.exact import ExactSearch
 
-    real_solve = resolver_module._Search._solve
+    real_solve = ExactSearch.solve
 
     def run_out_of_time_when_optimising(self, layout, what, models=None, optimise=False, keep=False):
         if optimise:  # pretend the optimiser's proof runs out of time before its first model
-            raise self._timed_out(what, [])
+            raise self.budget.timed_out(what, [])
         return real_solve(self, layout, what, models, optimise, keep)
 
-    monkeypatch.setattr(resolver_module._Search, "_solve", run_out_of_time_when_optimising)
+    monkeypatch.setattr(ExactSearch, "solve", run_out_of_time_when_optimising)
     with pytest.raises(SolveTimeout) as e:
         Resolver(levels=NO_METRICAL).resolve(paper_tableau)
     best = e.value.best_map

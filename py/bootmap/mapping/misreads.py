@@ -69,7 +69,7 @@ MIN_VISITS = 5
 SEEN_RARELY = 2
 #: Why a rare view is suspect.
 RARE_VIEW = "a view with one or two images"
-#: Why a view no rule here suspected became a suspect (the resolver finds these: :meth:`_ghosts`).
+#: Why a view no rule here suspected became a suspect (the resolver finds these: :mod:`.search.abduction`).
 GHOST = "a dstate of its own in a first map"
 #: A misread costs more where its contexts showed the other views fewer times than this (3 times: double).
 FULL_EVIDENCE = 6

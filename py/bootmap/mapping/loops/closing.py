@@ -1,45 +1,7 @@
-"""Loop closing: a map from the robot's own odometry, checked by every axiom.
-
-The paper's map is the one with the fewest dstates: two time points are one dstate unless the
-experience proves them different. That needs views that tell dstates apart. On a real log they barely
-do (the Killian log's views are near chance, and most of its dstates are seen once), so the fewest
-dstates merge visits the experience merely fails to tell apart, and the search for them does not end.
-
-Here the robot's odometry proposes which visits are one dstate, and the axioms dispose:
-
-1. Every visit starts as a dstate of its own.
-2. Two visits facing one way (the metrical level's heading) are proposed as one dstate where
-   odometry says so: **near**, within ``radius_m`` plus ``near_share`` of the distance driven between
-   them (dead reckoning drifts slowly: a short loop closes tightly); or **retraced**, the robot did the
-   same actions (turn types, travel length types) for ``context`` steps before and after them, they
-   show one view, and they are within ``radius_m`` plus ``drift_share`` of the distance driven (a long
-   loop driven again, whose ends dead reckoning has drifted apart). Longest context first, then
-   nearest.
-3. A proposal is folded as the causal level demands (the same action from one dstate reaches one
-   dstate: merge and fold, as RPNI does); every pair of visits the fold joins must face one way and
-   lie within the drift bound, or the proposal is dropped.
-4. What is left is checked by clingo with every axiom file (the partition fixed, ``fixed/2``), views
-   taken as soft evidence: each dstate shows the view most of its visits show, and the other visits
-   are listed as misreads (``suspect_steps``). A proposal the axioms reject is dropped.
-
-The result satisfies every axiom but is not proved minimal (``minimal`` is False): it is the map
-odometry supports, not the smallest one the views allow. A tableau whose steps carry ``odometry``
-(a log) is dead-reckoned from it; otherwise from its actions (turns on the spot, as the simulator's,
-at the learned types' angles). :meth:`LoopCloser.explain` says why two time points are one dstate of
-the map (each join, proposed or forced) or not (headings, odometry, the rules that reject joining them,
-or no evidence); :func:`mapper_for` picks loop closing for a log's tableau (``passes_through``).
-
-Example
--------
-Two laps of a square whose corners look alike: views say nothing, odometry closes the loop.
-
->>> from bootmap.tableau import Tableau
->>> lap = [{"view": "corner", "action": {"type": "travel", "distance_m": 5}},
-...        {"view": "corner", "action": {"type": "turn", "angle_deg": 90}}] * 4
->>> square = Tableau.from_dict({"format": "bootmap.tableau/1", "steps": lap * 2 + [{"view": "corner"}]})
->>> cmap = LoopCloser().resolve(square)
->>> cmap.n_dstates, cmap.n_places, cmap.minimal
-(8, 4, False)
+"""Loop closing itself: odometry proposes which visits are one dstate, each proposal is folded as the
+causal level demands, and every axiom checks the partition (the steps in :mod:`bootmap.mapping.loops`).
+:class:`Closing` keeps the partition with every join undoable and why each join was made
+(:class:`~.explain.Join`), which :mod:`.explain` reads to say why two time points are one dstate or not.
 """
 
 from __future__ import annotations
@@ -48,34 +10,32 @@ import math
 import time
 from collections import Counter
 from dataclasses import dataclass, field, replace
-from functools import cached_property, partial
-from typing import Callable, Sequence
+from functools import cached_property
+from typing import Sequence
 
 import numpy as np
 from clingo import Symbol
 
-from ..errors import InconsistentTableau, SolveTimeout
-from ..tableau import Tableau, Travel, Turn
-from .cogmap import CognitiveMap, SolveStats, Try, build_map
-from .explain import time_points
-from .facts import action_symbols, passes_through, tableau_facts, travel_lengths, typed_actions
-from .grounding import Deadline, Grounding, check_fixed
-from .motion import measured_angle
-from .proof import rule_dict
-from .resolver import Resolver
-from .trace import RuleRef
-from .vocabulary import FIXED, VIEW, Predicate, action_word, fixed_dstate
-
-__all__ = ["LoopCloser", "LoopExplanation", "MAPPERS", "closes_loops", "dead_reckoning"]
+from ...errors import InconsistentTableau, SolveTimeout
+from ...tableau import Tableau, Travel, Turn
+from ..cogmap import CognitiveMap, SolveStats, Try, build_map
+from ..explain import time_points
+from ..facts import action_symbols, passes_through, tableau_facts, travel_lengths, typed_actions
+from ..grounding import Deadline, check_fixed
+from ..motion import measured_angle
+from ..resolver import Resolver
+from ..vocabulary import FIXED, VIEW, Predicate, action_word, fixed_dstate
+from .explain import Join, LoopExplanation, explain
 
 #: How a map is found: ``auto`` (loop closing where the robot drove through dstates, as a log's tableau
-#: says, else the fewest dstates), ``loops`` or ``fewest`` (the paper's, :class:`~.resolver.Resolver`).
+#: says, else the fewest dstates), ``loops`` or ``fewest`` (the paper's,
+#: :class:`~bootmap.mapping.resolver.Resolver`).
 MAPPERS = ("auto", "loops", "fewest")
 
 
 @dataclass(frozen=True)
 class LoopCloser:
-    """Maps from odometry-proposed merges that every axiom accepts (see the module's docstring).
+    """Maps from odometry-proposed merges that every axiom accepts (see :mod:`bootmap.mapping.loops`).
 
     Parameters
     ----------
@@ -109,17 +69,17 @@ class LoopCloser:
             Out of time; ``best_map`` is the last map the axioms accepted, if any.
         """
         tableau.require_views()
-        return _Closing(self, tableau, deadline or Deadline.after(self.resolver.time_limit)).run()
+        return Closing(self, tableau, deadline or Deadline.after(self.resolver.time_limit)).run()
 
-    def explain(self, tableau: Tableau, a, b, deadline: Deadline | None = None) -> "LoopExplanation":
+    def explain(self, tableau: Tableau, a, b, deadline: Deadline | None = None) -> LoopExplanation:
         """Why time points (``t4``, ``4``) or dstates (``S4``) ``a`` and ``b`` are one dstate of the loop-closed
         map, or not: the joins that made them one (each proposed by odometry or forced by determinism), or
         what keeps them apart (odometry, or the axioms that reject the map joining them)."""
         tableau.require_views()
-        closing = _Closing(self, tableau, deadline or Deadline.after(self.resolver.time_limit))
+        closing = Closing(self, tableau, deadline or Deadline.after(self.resolver.time_limit))
         cmap = closing.run()
         x, y = time_points(cmap, a, b)
-        return closing.explain(cmap, x, y)
+        return explain(closing, cmap, x, y)
 
 
 def closes_loops(tableau: Tableau, how: str = "auto") -> bool:
@@ -135,8 +95,8 @@ def dead_reckoning(tableau: Tableau, angles: Sequence[int] | None = None) -> tup
     """Each time point's dead-reckoned position ``(n, 2)`` and the distance driven to it ``(n,)``: from
     the steps' ``odometry`` where every step has one, else from the actions: a turn on the spot, a travel
     along the heading halfway through its bend. ``angles`` are the actions' angles to use (the learned
-    types' angles, :func:`~.facts.typed_actions`, which odometry's drift on straight travels does not
-    bend), else the measured ones."""
+    types' angles, :func:`~bootmap.mapping.facts.typed_actions`, which odometry's drift on straight travels
+    does not bend), else the measured ones."""
     steps = tableau.steps
     if all(s.odometry is not None for s in steps):
         xy = np.array([s.odometry[:2] for s in steps], dtype=float)
@@ -158,7 +118,7 @@ def dead_reckoning(tableau: Tableau, angles: Sequence[int] | None = None) -> tup
     return xy, along
 
 
-class _Closing:
+class Closing:
     """One loop closing: the evidence, the partition (with every join undoable) and the last map the axioms
     accepted."""
 
@@ -193,7 +153,7 @@ class _Closing:
         # Every proposal at once first: the topological level may reject a partition on the way to one it
         # accepts (two dstates of one place facing one way, until their other dstates are joined too).
         if self.deadline.passed():
-            raise self._timed_out()
+            raise self.timed_out()
         self._fold_all(self.proposals)
         if not self._accepted():
             # Else one proposal at a time, each kept only where the axioms accept the partition it makes.
@@ -201,11 +161,11 @@ class _Closing:
             self._accepted()
             for i, j in self.proposals:
                 if self.deadline.passed():
-                    raise self._timed_out()
+                    raise self.timed_out()
                 if self.dstates.root[i] == self.dstates.root[j]:
                     continue
                 before = self.dstates.mark()
-                if not (self._fold(i, j) and self._accepted()):
+                if not (self.fold(i, j) and self._accepted()):
                     self.dstates.undo(before)
         if self.best is None:
             raise InconsistentTableau("no map found by loop closing: no partition it reached satisfies the axioms",
@@ -217,10 +177,11 @@ class _Closing:
         for i, j in proposals:
             if self.dstates.root[i] != self.dstates.root[j]:
                 before = self.dstates.mark()
-                if not self._fold(i, j):
+                if not self.fold(i, j):
                     self.dstates.undo(before)
 
-    def _partition(self) -> list[int]:
+    def partition(self) -> list[int]:
+        """Each time point's dstate as it stands, named by one of its time points."""
         return list(self.dstates.root)
 
     @cached_property
@@ -232,7 +193,7 @@ class _Closing:
                 if self.heading[i] != self.heading[j]:
                     continue
                 near = self._apart(i, j, self.closer.near_share)
-                agree = self._agreeing(i, j)
+                agree = self.agreeing(i, j)
                 # a retraced pair's odometry is loose: it needs its views to agree as well
                 retraced = (agree >= self.closer.context and self.views[i] == self.views[j]
                             and self._apart(i, j, self.closer.drift_share) <= 1.0)
@@ -247,7 +208,7 @@ class _Closing:
         gap = float(np.hypot(*(self.xy[i] - self.xy[j])))
         return gap / (self.closer.radius_m + share * abs(self.along[j] - self.along[i]))
 
-    def _agreeing(self, i: int, j: int) -> int:
+    def agreeing(self, i: int, j: int) -> int:
         """How many actions agree in a row after i and j, plus before them."""
         key, last = self.context_key, len(self.context_key)
         after = 0
@@ -259,7 +220,7 @@ class _Closing:
         return after + before
 
     # ------------------------------------------------------------------------------------------
-    def _fold(self, i: int, j: int, why: Join | None = None) -> bool:
+    def fold(self, i: int, j: int, why: Join | None = None) -> bool:
         """Join i's and j's dstates and every pair determinism then joins; False if some pair joined would
         face two ways or lie beyond the drift bound (``refused`` says which; the caller undoes the joins
         made)."""
@@ -271,7 +232,7 @@ class _Closing:
             if a == b:
                 continue
             refused = next(((x, y, cause) for x in members[a] for y in members[b]
-                            if (cause := self._kept_apart(x, y))), None)
+                            if (cause := self.kept_apart(x, y))), None)
             if refused:
                 self.refused = refused
                 return False
@@ -287,7 +248,7 @@ class _Closing:
                         led[action] = t
         return True
 
-    def _kept_apart(self, x: int, y: int) -> str:
+    def kept_apart(self, x: int, y: int) -> str:
         """What keeps visits x and y from being one dstate before any axiom is asked ("" if nothing): they
         face two ways, travel on unequally far (where the robot stopped at every dstate), or lie beyond the
         drift bound."""
@@ -297,33 +258,27 @@ class _Closing:
         if lx is not None and ly is not None and lx != ly:
             return f"the travels from them differ ({lx} and {ly} dm: length_is_feature)"
         if self._apart(x, y, self.closer.drift_share) > 1.0:
-            return (f"{self._odometry(x, y)}, more than odometry may drift "
-                    f"({self._bound(x, y, self.closer.drift_share):.1f} m)")
+            return (f"{self.odometry(x, y)}, more than odometry may drift "
+                    f"({self.drift_bound(x, y, self.closer.drift_share):.1f} m)")
         return ""
 
-    def _odometry(self, x: int, y: int) -> str:
+    def odometry(self, x: int, y: int) -> str:
+        """How far apart dead reckoning puts x and y, in words."""
         return (f"dead reckoning puts them {float(np.hypot(*(self.xy[x] - self.xy[y]))):.1f} m apart after "
                 f"{abs(self.along[y] - self.along[x]):.0f} m driven")
 
-    def _bound(self, x: int, y: int, share: float) -> float:
+    def drift_bound(self, x: int, y: int, share: float) -> float:
+        """The metres dead reckoning may put x and y apart, drifting ``share`` per metre driven between them."""
         return self.closer.radius_m + share * abs(self.along[y] - self.along[x])
-
-    def _evidence(self, x: int, y: int) -> str:
-        """The odometry behind a proposal, in words."""
-        i, j = min(x, y), max(x, y)
-        if self.kinds.get((i, j)) == "retraced":
-            return (f"the same {self._agreeing(i, j)} actions around them, one view, and {self._odometry(x, y)} "
-                    f"(within {self._bound(x, y, self.closer.drift_share):.1f} m)")
-        return f"{self._odometry(x, y)} (within {self._bound(x, y, self.closer.near_share):.1f} m)"
 
     def _accepted(self) -> bool:
         """Check the partition with every axiom; keep its map if they accept it."""
-        found = self._checked(self._partition())
+        found = self.checked(self.partition())
         if found is not None:
             self.best = found
         return found is not None
 
-    def _facts(self, dstate_of: list[int]) -> tuple[list[Symbol], dict[int, str]]:
+    def facts_of(self, dstate_of: list[int]) -> tuple[list[Symbol], dict[int, str]]:
         """The tableau's facts with the partition fixed, each dstate showing its visits' commonest view (and
         that view, per dstate). Only the views and the partition change from one check to the next."""
         groups: dict[int, list[int]] = {}
@@ -342,19 +297,19 @@ class _Closing:
             self.made[key] = predicate(t, value if predicate is VIEW else fixed_dstate(value))
         return self.made[key]
 
-    def _checked(self, dstate_of: list[int]) -> CognitiveMap | None:
+    def checked(self, dstate_of: list[int]) -> CognitiveMap | None:
         """The map of this partition if every axiom accepts it, each dstate showing its visits' most common
         view (the other visits' views are misreads)."""
         resolver = self.resolver
         self.checks += 1
-        facts, shown = self._facts(dstate_of)
+        facts, shown = self.facts_of(dstate_of)
         groups = set(dstate_of)
         views = self.views
         models, grounding = check_fixed(resolver.theory, facts, resolver.future_depth, self.deadline)
         self.tries.append(Try(f"{len(groups)} dstates (loop closing)", "sat" if models else
                               ("timeout" if models is None else "unsat"), grounding.ground_s + grounding.solve_s))
         if models is None:
-            raise self._timed_out()  # not a rejection: the axioms did not answer in time
+            raise self.timed_out()  # not a rejection: the axioms did not answer in time
         if not models:
             return None
         cmap = build_map(self.tableau, models, True, resolver.theory.levels, self._stats(), minimal=False,
@@ -363,141 +318,17 @@ class _Closing:
                     for t in range(self.n) if views[t] != shown[dstate_of[t]]]
         return replace(cmap, suspect_steps=misreads, found_by="loop closing")
 
-    def explain(self, cmap: CognitiveMap, a: int, b: int) -> "LoopExplanation":
-        """Why a and b are one dstate of ``cmap`` (this closing's map), or not."""
-        names = (cmap.dstate_of[a], cmap.dstate_of[b])
-        answer = partial(LoopExplanation, a, b, names, levels=list(self.resolver.theory.levels))
-        if names[0] == names[1]:
-            chain = [j.text(self._evidence) for j in self._chain(a, b)]
-            return answer("same", f"t{a} and t{b} are one dstate: loop closing joined them (below) and every "
-                                  f"axiom accepts the map.", chain, total_s=time.perf_counter() - self.start)
-        sentence, axioms = self._kept_apart_why(a, b)
-        return answer("different", sentence, axioms=axioms, total_s=time.perf_counter() - self.start)
-
-    def _chain(self, a: int, b: int) -> list[Join]:
-        """The joins that link a to b (a path in the forest of the joins standing)."""
-        links: dict[int, list[tuple[int, Join]]] = {}
-        for join in self.dstates.reasons():
-            links.setdefault(join.x, []).append((join.y, join))
-            links.setdefault(join.y, []).append((join.x, join))
-        came: dict[int, tuple[int, Join] | None] = {a: None}  # breadth first from a: how each was reached
-        frontier = [a]
-        while frontier and b not in came:
-            reached = []
-            for t in frontier:
-                for u, join in links.get(t, []):
-                    if u not in came:
-                        came[u] = (t, join)
-                        reached.append(u)
-            frontier = reached
-        chain, t = [], b
-        while came.get(t):
-            t, join = came[t]
-            chain.append(join)
-        return chain[::-1]
-
-    def _kept_apart_why(self, a: int, b: int) -> tuple[str, list[RuleRef]]:
-        """What keeps a and b apart, in words, and the constraints joining them would break (if any)."""
-        cause = self._kept_apart(a, b)
-        if cause:
-            return f"t{a} and t{b} are different dstates: {cause}.", []
-        mark = self.dstates.mark()
-        try:
-            if not self._fold(a, b, Join(a, b, "asked")):
-                x, y, cause = self.refused
-                return (f"t{a} and t{b} are different dstates: making them one makes t{x} and t{y} one (by their "
-                        f"dstates, or by determinism), but {cause}."), []
-            failing = self._failing_rules(self._partition())
-        finally:
-            self.dstates.undo(mark)
-        if failing:
-            return (f"t{a} and t{b} are different dstates: the axioms reject the map that makes them one (with "
-                    f"what determinism then joins): it breaks {' and '.join(r.cite() for r in failing)}."), failing
-        proposed = self.kinds.get((min(a, b), max(a, b)))
-        why = (f"it was proposed ({proposed}) but rejected beside joins made before it" if proposed else
-               f"nothing proposed them ({self._odometry(a, b)}: beyond {self._bound(a, b, self.closer.near_share):.1f} "
-               f"m for visits proposed as near; {self._agreeing(min(a, b), max(a, b))} actions around them agree, where "
-               f"{self.closer.context} and one view propose visits as retraced)")
-        return (f"t{a} and t{b} are different dstates only for want of evidence: {why}. Every axiom would accept "
-                f"them as one dstate; loop closing joins only what odometry proposes."), []
-
-    def _failing_rules(self, dstate_of: list[int]) -> list[RuleRef]:
-        """The constraints this partition breaks: a subset-minimal set that still rules it out (each switched
-        off in turn, kept off if the partition stays ruled out); empty if every axiom accepts it."""
-        if self._checked(dstate_of) is not None:
-            return []
-        facts, _ = self._facts(dstate_of)
-        traced = Grounding(self.resolver.theory, facts, self.resolver.future_depth, ["1"], instrumented=True).ground()
-        rules = traced.rules
-        needed = list(rules.switchable)
-        for r in list(needed):
-            trial = [x for x in needed if x != r]
-            result = traced.solve(self.deadline, assumptions=[(rules.on(x), x in trial) for x in rules.switchable])
-            if result is None:
-                raise self._timed_out()
-            if not result.satisfiable:
-                needed = trial
-        return [rules.rules[r] for r in needed]
-
     def _stats(self) -> SolveStats:
         return SolveStats(classes=self.n, lower_bound=0, total_s=time.perf_counter() - self.start,
                           bounds=tuple(self.tries[-3:]))
 
-    def _timed_out(self) -> SolveTimeout:
+    def timed_out(self) -> SolveTimeout:
+        """Out of time: the error carries the last map the axioms accepted, if any."""
         best = None if self.best is None else replace(self.best, stats=self._stats())
         found = f"best map so far: {best.n_dstates} dstates" if best else "no map found yet"
         limit = self.deadline.limit_s
         return SolveTimeout(f"time limit of {limit:g} s reached while closing loops ({self.checks} partitions "
                             f"checked); {found}", best_map=best, time_limit_s=limit, stage="loop closing")
-
-
-@dataclass(frozen=True)
-class LoopExplanation:
-    """The answer to "are time points a and b one dstate of the loop-closed map, and why?"."""
-
-    a: int
-    b: int
-    names: tuple[str, str]              # their dstates in the map
-    verdict: str                        # "same" or "different"
-    sentence: str
-    joins: list[str] = field(default_factory=list)  # same: the joins that made them one, in order
-    axioms: list[RuleRef] = field(default_factory=list)  # different: the constraints joining them breaks
-    levels: list[str] = field(default_factory=list)
-    total_s: float = 0.0
-
-    def to_dict(self) -> dict:
-        # The keys of a minimal map's explanation (:class:`~.explain.Explanation`), those of proofs empty.
-        return {"a": self.a, "b": self.b, "dstates": list(self.names), "verdict": self.verdict,
-                "sentence": self.sentence, "evidence": [], "axioms": [rule_dict(r) for r in self.axioms],
-                "failures": [], "rules_cited": [r.name for r in self.axioms],
-                "agree_steps": 0, "suggestion": [], "alternatives": [], "levels": self.levels,
-                "found_by": "loop closing", "joins": self.joins, "stats": {"total_s": self.total_s}}
-
-    def to_text(self) -> str:
-        out = [f"t{self.a} ({self.names[0]}) vs t{self.b} ({self.names[1]}): {self.verdict} (loop-closed map)",
-               f"levels: {', '.join(self.levels)}", "", self.sentence]
-        return "\n".join(out + ([""] + [f"  {j}" for j in self.joins] if self.joins else []))
-
-
-@dataclass(frozen=True)
-class Join:
-    """Why time points ``x`` and ``y`` were put in one dstate: ``proposed`` by odometry (``kind`` near or
-    retraced), or ``forced`` by determinism (``after``: the time points before them, already one dstate,
-    took the same ``action``)."""
-
-    x: int
-    y: int
-    how: str                                 # "proposed" or "forced"
-    kind: str = ""                           # proposed: "near" or "retraced"
-    action: str = ""                         # forced: the action both took
-    after: tuple[int, int] | None = None     # forced: the time points that took it
-
-    def text(self, evidence: Callable[[int, int], str]) -> str:
-        if self.how == "proposed":
-            return f"t{self.x} = t{self.y}: proposed ({self.kind}): {evidence(self.x, self.y)}"
-        u, v = self.after
-        return (f"t{self.x} = t{self.y}: forced: t{u} and t{v} are one dstate and both took {self.action} "
-                f"(deterministic_action: one action from one dstate reaches one dstate)")
 
 
 class _Partition:

@@ -1,0 +1,241 @@
+"""Misread abduction: some views may be misreads (:mod:`bootmap.mapping.misreads` names the suspects and
+prices them), and the resolver keeps the better of two explanations of the experience.
+
+Read as seen, every view is evidence and the exact minimal map follows. With some suspects taken as
+misreads, a map may need fewer dstates; it is chosen only when it saves more dstates than its misreads
+cost (a dstate costs ``DSTATE_COST``). A suspect allowed as a misread may belong to the classes of the
+views its context expects (``may_be/2``); the classes' lower bounds without the suspects' views are read
+from the one prepass the exact search made. Where the suspects cannot reach the bound they leave, the
+views that make a dstate of their own (*ghosts*) become suspects too.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+from clingo import String, Symbol
+
+from ...images import as_images
+from ...tableau import Tableau
+from ..cogmap import CognitiveMap
+from ..facts import action_symbols
+from ..grounding import key_with_view
+from ..misreads import (GHOST, MIN_VISITS, MISREAD_COST, RARE_VIEW, Suspect, context_views, find_suspects,
+                        has_images, rare_clustered_views)
+from ..vocabulary import DSTATE_COST, MAY_BE, SUSPECT
+
+if TYPE_CHECKING:
+    from .budget import Budget
+    from .exact import ExactSearch
+    from .state import SearchState
+
+#: The share of the time left (and at most so many seconds) spent checking that reading every view as
+#: seen does not explain the experience more cheaply than the misreads do, when the bounds do not say.
+VERIFY_SHARE, VERIFY_MAX_S = 0.25, 10.0
+
+
+class MisreadAbduction:
+    """Weighs reading every view as seen against taking some suspect views as misreads: it changes the
+    facts the exact search (``search``) reads (``state.facts``, ``state.suspects``) and asks it for maps."""
+
+    def __init__(self, state: SearchState, budget: Budget, search: ExactSearch):
+        self.state, self.budget, self.search = state, budget, search
+
+    def suspects(self, found: CognitiveMap | None) -> list[Suspect]:
+        """The views the search may take as misreads: none unless allowed; where one dstate per class
+        explains the experience, only views with one or two images (each made a dstate of its own)."""
+        state = self.state
+        tableau = state.tableau
+        if not state.resolver.misreads or (found and not rare_clustered_views(tableau)):
+            return []
+        images = _images(tableau)
+        actions = action_symbols(tableau, state.angles)
+        suspects = find_suspects(tableau.views, actions, images)
+        if images is None:
+            # A rare view is suspect where views come from clustering images (one image a passer-by
+            # filled); a label given with no image is the user's word (a landmark seen once).
+            suspects = [s for s in suspects if s.reason != RARE_VIEW]
+        # A view is surprising in its context only against experience the robot has repeated: not
+        # where one dstate per class explains it, nor in early exploration (few visits per class).
+        repeated = not found and len(tableau) >= MIN_VISITS * state.classes.count
+        return suspects if repeated else [s for s in suspects if s.reason == RARE_VIEW]
+
+    def robust(self, suspects: list[Suspect], exact: CognitiveMap | None = None) -> CognitiveMap:
+        """The better of two explanations, when some views are suspect: read as seen (the exact minimal
+        map), or with some suspects taken as misreads (the fewest dstates any such map needs, then the
+        fewest misread costs). A misread map is chosen only when it needs fewer dstates than reading every
+        view as seen by more than its misreads cost (a dstate costs ``DSTATE_COST``): proved by the exact
+        lower bound where that suffices, else by asking for an exact map within the difference."""
+        state, search = self.state, self.search
+        exact_facts = state.facts
+        if state.classes is None:
+            state.classes = state.first.classes(range(len(state.tableau)))
+        search.bound_classes_from_below()
+        exact_lower = state.classes.lower
+        clear = [s for s in suspects if s.clear] or suspects
+        if exact is None and state.classes.lower_bound > state.classes.count and not self._misreads_evident(clear):
+            exact = search.bounded(state.classes.lower_bound)  # reading every view as seen, when that is easy
+        state.as_seen = exact.n_dstates if exact else max(state.proved, sum(exact_lower))
+        if exact is not None:
+            # Reading every view as seen is easy (its lower bound holds): a misread that carries a
+            # contradiction forward would have made it hard. Only views with one or two images, each a
+            # dstate of its own in the exact map, are left to weigh.
+            suspects = [s for s in suspects if s.reason == RARE_VIEW]
+            if not suspects:
+                return exact
+        fewest = self._allow_misreads(exact_facts, clear)
+        if exact is not None:
+            # The exact map is in hand: misreads must save more dstates than the cheapest of them costs,
+            # and are looked for in a share of the time (clean experience must not wait for them).
+            if DSTATE_COST * (exact.n_dstates - fewest) <= min(s.cost for s in clear):
+                misread = None
+            else:
+                misread = self.budget.within_share(lambda: self._misread_map(fewest, exact.n_dstates - 1),
+                                                   (VERIFY_SHARE, VERIFY_MAX_S))
+        else:
+            misread = self._misread_map(fewest, state.as_seen, exact_facts, suspects)
+        if misread is None:  # the misreads save nothing: read every view as seen
+            state.facts, state.suspects, state.classes.lower = exact_facts, {}, exact_lower
+            return exact or search.minimal_maps()
+        cost = sum(state.suspects[s["t"]].cost for s in misread.suspect_steps)
+        saved = state.as_seen - misread.n_dstates  # at least this many more dstates without the misreads
+        if not misread.suspect_steps or DSTATE_COST * saved > cost:
+            return misread
+        if exact is not None:  # the exact map is minimal: the misreads do not pay for themselves
+            state.suspects = {}
+            return exact
+        # Not proved by the bound: is there a map reading every view as seen within the misreads' cost?
+        # Looked for in a share of the time left: where reading misreads as seen is hard to explain, the
+        # search for it is hard too, and the misread map is kept (the tries say the check timed out).
+        suspects = state.suspects
+        state.facts, state.suspects, state.classes.lower = exact_facts, {}, exact_lower
+
+        def exact_within_cost() -> CognitiveMap | None:
+            for bound in range(state.as_seen, misread.n_dstates + cost // DSTATE_COST + 1):
+                found = search.bounded(bound)
+                if found:
+                    return found
+            return None
+
+        found = self.budget.within_share(exact_within_cost, (VERIFY_SHARE, VERIFY_MAX_S))
+        state.suspects = suspects
+        return found or misread
+
+    def _misreads_evident(self, clear: list[Suspect]) -> bool:
+        """Leaving the clear suspects' views out lowers the classes' bounds by a dstate or more per suspect:
+        reading them as seen is what splits the classes. Then the exact map at its lower bound (a search
+        that fails, and slowly: 1-8 s on 600-step explorations with 2% misreads) is not tried first; the
+        misreads are weighed against the exact lower bound instead. On clean experience whose suspects
+        are chance (aliasing), leaving them out lowers the bounds by less than one per suspect (0-7 for
+        1-84 suspects on 600-step explorations)."""
+        state = self.state
+        without = sum(state.features.lower_bounds(state.classes, leave_out={s.t for s in clear}))
+        return state.classes.lower_bound - without >= len(clear)
+
+    def _misread_map(self, fewest: int, ceiling: int, exact_facts: list[Symbol] | None = None,
+                     wider: list[Suspect] = ()) -> CognitiveMap | None:
+        """The best map with misreads and at most ``ceiling`` dstates, from ``fewest`` up; None if none.
+        If the suspects allowed so far do not reach ``fewest``, the ``wider`` set is allowed too.
+
+        Where some misread is no suspect (``exact_facts`` given: the first search of a resolution), the
+        views that raise their classes' bounds (:meth:`_ghosts`) become suspects first, in Python, as
+        long as they lower the bound (one unsuspected misread hides another: the second shows once the
+        first is left out), and the search starts from that bound. If it fails there, the layout of the
+        clear suspects' bound is tried with the same suspects: their higher bounds are the classes that
+        may need a slot back, where a suspect is no misread after all. A dstate more in the bound would
+        give every class a slot more instead, and that grounding grows past any time limit (2.8 s at
+        the bound, 18.5 s at one more, 600 steps with 27 suspects)."""
+        state, search = self.state, self.search
+        clear = chosen = list(state.suspects.values())
+        planned, proved = state.classes.lower, state.proved
+        if exact_facts is not None:
+            while True:
+                ghosts = self._ghosts()
+                if not ghosts:
+                    break
+                lowered = self._allow_misreads(exact_facts, chosen + ghosts)
+                if lowered >= (fewest if chosen is clear else lowest):
+                    self._allow_misreads(exact_facts, chosen)
+                    break
+                chosen, lowest = chosen + ghosts, lowered
+        if chosen is not clear:
+            misread = search.optimise(None, lowest)
+            if misread is not None:
+                return misread
+            state.classes.lower, state.proved = planned, max(proved, lowest + 1)
+        misread = search.optimise(None, fewest)
+        others = [s for s in wider if s.t not in state.suspects]
+        if misread is None and exact_facts is not None and others:
+            # The layout stays the one the clear suspects set: the others may join their classes'
+            # dstates, but each class keeps its dstates (a small search, where misreads are few).
+            self._allow_misreads(exact_facts, chosen + others)
+            state.classes.lower, state.proved = planned, proved
+            misread = search.optimise(None, fewest)
+            if misread is None:  # each dstate more is a slot more for every class, and each suspect's
+                self._allow_misreads(exact_facts, chosen)  # other classes' slots with it: too many
+                state.classes.lower, state.proved = planned, proved
+        while misread is None and fewest < ceiling:
+            fewest += 1
+            state.proved = max(state.proved, fewest)
+            misread = search.optimise(None, fewest)
+        return misread
+
+    def _ghosts(self) -> list[Suspect]:
+        """Views no suspect rule caught that the experience shows a dstate of their own.
+
+        A misread where the robot has seldom been has no context to make it surprising: reading it as
+        seen takes a dstate of its own (and splits those determinism carries it back to), so the suspects
+        allowed so far cannot reach the bound. Such a time point, or the one before it, disagrees with
+        every other time point of its class (a *loner*; the clear suspects' views already set aside):
+        each loner and the time point after it become suspects too. So do the time points whose view,
+        as the ones before them saw it later, raises their classes' lower bounds (*inflators*). Few are
+        (4-6 loners, 1-13 inflators in a 600-step exploration with 2% misreads)."""
+        state = self.state
+        loners = state.features.loners(state.classes, leave_out=state.suspects)
+        inflators = state.features.inflators(state.classes, leave_out=state.suspects)
+        times = sorted(({u for t in loners for u in (t, t + 1) if u < len(state.tableau)} | set(inflators))
+                       - set(state.suspects))
+        # Each may have been misread from the views its contexts show instead (any view where they show
+        # none): every other view would make each ghost a candidate of every class with its heading.
+        actions = action_symbols(state.tableau, state.angles)
+        expected = context_views(state.tableau.views, actions, times)
+        return [Suspect(t, MISREAD_COST, expected[t], GHOST) for t in times]
+
+    def _allow_misreads(self, exact_facts: list[Symbol], suspects: list[Suspect]) -> int:
+        """Let these suspects be misreads from now on; the classes' lower bounds without them, and what
+        that proves. Returns the dstates the search aims at: the bound the suspects leave."""
+        state = self.state
+        self.budget.check_clock("the lower bounds with misreads")
+        state.suspects = {s.t: s for s in suspects}
+        state.facts = exact_facts + [SUSPECT(s.t, s.cost) for s in suspects] + self._may_be(suspects)
+        # The prepass with these suspects would derive the same features but those their views show:
+        # read from the one prepass made reading every view as seen.
+        state.classes.lower = state.features.lower_bounds(state.classes, leave_out=state.suspects)
+        state.proved = state.classes.lower_bound  # no explanation, misreads or not, needs fewer dstates
+        return state.proved
+
+    def _may_be(self, suspects: list[Suspect]) -> list[Symbol]:
+        """For each suspect, the classes it may have been misread from: those of the views the
+        experience around it expects (any other view when it expects none), with every other feature
+        of its own class (its heading)."""
+        classes = self.state.classes
+        index = {key: c for c, key in enumerate(classes.keys) if key is not None}
+        views = sorted({v for v in self.state.tableau.views}, key=str)
+        out = []
+        for s in suspects:
+            own = classes.keys[classes.of_time[s.t]]
+            if own is None:
+                continue
+            for view in s.expected or views:
+                key = key_with_view(own, String(view))
+                if key != own and key in index:
+                    out.append(MAY_BE(s.t, key))
+        return out
+
+
+def _images(tableau: Tableau) -> np.ndarray | None:
+    """The tableau's images when every step has one (their margins price misreads), else None."""
+    if not has_images(tableau):
+        return None
+    return as_images([s.image for s in tableau.steps])

@@ -1,0 +1,80 @@
+"""What one resolution knows as its search goes on: the tableau as facts, its classes of time points,
+the dstates proved necessary, the best map found so far and the figures every map reports.
+
+The search's concerns share one :class:`SearchState` and add to it as they learn: retyping
+(:mod:`.retyping`) chooses the action angles the facts are made from, the abduction (:mod:`.abduction`)
+adds the suspects it allows as misreads, the exact search (:mod:`.exact`) learns the classes and
+proves bounds. The state turns models into maps, each with a snapshot of the figures, and words a
+time-out with what was proved and found.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import TYPE_CHECKING
+
+from clingo import Symbol
+
+from ...errors import SolveTimeout
+from ...tableau import Tableau
+from ..cogmap import CognitiveMap, SolveStats, Try, build_map
+from ..facts import tableau_facts, typed_actions
+from ..grounding import Classes, Grounding, PartialFeatures
+from ..misreads import Suspect
+from ..motion import TypeSuspect
+from .retyping import MISTYPE_COST
+
+if TYPE_CHECKING:
+    from ..resolver import Resolver
+
+
+class SearchState:
+    """One resolution: the tableau as facts, its classes, the figures, the best map so far."""
+
+    def __init__(self, resolver: Resolver, tableau: Tableau):
+        self.resolver, self.tableau = resolver, tableau
+        self.start = time.perf_counter()
+        # the actions' angles and types, and the learned types' grid (None with a fixed quantum)
+        self.angles, self.action_types, self.grid = typed_actions(tableau, resolver.quantum_deg)
+        self.facts = tableau_facts(tableau, angles=self.angles)
+        self.retyped: list[TypeSuspect] = []  # actions taken as mistyped
+        self.first: Grounding | None = None  # the first try's grounding
+        self.suspects: dict[int, Suspect] = {}  # views the search may take as misreads (robust only)
+        self.as_seen: int | None = None  # dstates proved necessary reading every view as seen
+        self.depth = 0  # futures only matter once one dstate per class has failed
+        self.classes: Classes | None = None  # known after the first try
+        self.features: PartialFeatures | None = None  # what the prepass derives, read once
+        self.proved = 1  # dstates proved necessary so far
+        self.best: CognitiveMap | None = None
+        self.ground_s = self.solve_s = 0.0
+        self.tries: list[Try] = []
+
+    def build(self, models: list[list[Symbol]], exhausted: bool, minimal: bool = True) -> CognitiveMap:
+        """The map of these models, with the misreads and retyped actions allowed, and the figures so far."""
+        return build_map(self.tableau, models, exhausted, self.resolver.theory.levels, self.stats(),
+                         minimal=minimal, action_types=self.action_types,
+                         misread_costs=self.misread_costs(), retyped_steps=self.retyped_steps())
+
+    def retyped_steps(self) -> list[dict]:
+        return [s.to_dict(MISTYPE_COST) for s in self.retyped]
+
+    def misread_costs(self) -> dict[int, int]:
+        return {t: s.cost for t, s in self.suspects.items()}
+
+    def stats(self) -> SolveStats:
+        """The figures so far, as a snapshot: each map keeps its own."""
+        return SolveStats(classes=self.classes.count if self.classes else 0, lower_bound=self.proved,
+                          as_seen_lower_bound=self.as_seen if self.suspects else None,
+                          ground_s=self.ground_s, solve_s=self.solve_s,
+                          total_s=time.perf_counter() - self.start, bounds=tuple(self.tries))
+
+    def timed_out(self, what: str, improving: list, limit: float | None) -> SolveTimeout:
+        """Out of time (``limit`` seconds) while looking for ``what``: the error carries the dstates proved
+        necessary and the best map so far (the optimiser's last, smallest, improving model if any)."""
+        if improving:  # the optimiser's last (smallest) model so far
+            self.best = self.build(improving[-1:], False, minimal=False)
+        found = (f"best map so far: {self.best.n_dstates} dstates, not proved minimal" if self.best
+                 else "no map found yet")
+        return SolveTimeout(f"time limit of {limit:g} s reached while looking for {what}; "
+                            f"at least {self.proved} dstates are proved necessary; {found}",
+                            lower_bound=self.proved, best_map=self.best, time_limit_s=limit, stage=what)
