@@ -207,7 +207,9 @@ def _print_summary(r: dict) -> None:
         print("  the map could not tell apart: " +
               "; ".join(", ".join(ts) for ts in m["merged_true_dstates"].values()))
     if rec and rec["cv_at_90"] is not None:
-        print(f"  recognition: nearest neighbour {rec['cv_at_90']:.1%} at 90 images (10-fold CV)")
+        beside = "" if rec.get("learner", "1-NN") == "1-NN" or rec.get("learner_cv_at_90") is None else \
+            f"; {rec['learner']} {rec['learner_cv_at_90']:.1%}"
+        print(f"  recognition: nearest neighbour {rec['cv_at_90']:.1%} at 90 images (10-fold CV){beside}")
     print(f"  {verdict}")
 
 
