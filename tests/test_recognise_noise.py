@@ -47,3 +47,12 @@ def test_the_number_of_components_is_chosen_on_the_training_images_and_fits_smal
     assert model.n_components_ in (5, 10) and model.score(X, y) == 1.0
     tiny = DespikedDiscriminant().fit(X[:4], y[:4])  # fewer images than any candidate needs
     assert tiny.n_components_ <= 3 and tiny.predict(X[:4]).tolist() == y[:4].tolist()
+
+
+def test_with_no_dstate_seen_twice_the_nearest_despiked_image_decides():
+    # A learning curve's first point can hold fewer images than dstates: the discriminant is undefined
+    # there, and the learner still answers.
+    X = np.array([[1.0, 1.0, 8.0, 1.0], [2.0, 2.0, 2.0, 2.0], [3.0, 8.0, 3.0, 3.0]])
+    model = DespikedDiscriminant().fit(X, ["S0", "S1", "S2"])
+    assert model.n_components_ is None
+    assert model.predict([[1.1, 1.0, 1.0, 1.0], [3.0, 2.9, 3.0, 3.0]]).tolist() == ["S0", "S2"]

@@ -62,7 +62,7 @@ def test_a_small_sweep_on_the_local_pool_runs_every_cell_as_the_experiment_does(
     # The pool's row for a cell is what the experiment gives when run here, directly.
     cell = spec.cells[3]  # seed 2 at twice the laser noise
     direct = run_experiment(load_world("notched_rectangle", dict(cell.noise.settings)), circuits=3, seed=2,
-                            time_limit=10)
+                            time_limit=10, learner=cell.learner)
     here = experiment_row(cell, direct)
     assert deterministic([result.table[3]]) == deterministic([here])
     assert result.table[3]["settings"] == {"laser.dropout": 0.002, "laser.noise_sd": 0.02}

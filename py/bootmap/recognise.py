@@ -511,8 +511,9 @@ class DespikedDiscriminant(ClassifierMixin, BaseEstimator):
     ----------
     model_ : Pipeline
         The fitted PCA and discriminant.
-    n_components_ : int
-        The number of components chosen.
+    n_components_ : int or None
+        The number of components chosen (None where no dstate was seen twice: then the nearest despiked
+        image decides).
     classes_ : ndarray
         The dstates seen in training.
 
@@ -537,7 +538,11 @@ class DespikedDiscriminant(ClassifierMixin, BaseEstimator):
         room = min(2 * len(X) // 3 - 1, X.shape[1])
         dims = sorted({d for d in self.dimensions if 0 < d <= room}) or [max(1, min(len(X) - 1, X.shape[1]))]
         pipeline = make_pipeline(PCA(), LinearDiscriminantAnalysis())
-        if len(dims) == 1 or len(X) < 9:
+        if len(X) <= len(np.unique(y)):
+            # No dstate seen twice: there is no spread within a dstate to weigh directions by, and the
+            # discriminant is undefined. Each image is its dstate's mean: the nearest one decides.
+            self.model_ = KNeighborsClassifier(n_neighbors=1).fit(X, y)
+        elif len(dims) == 1 or len(X) < 9:
             self.model_ = pipeline.set_params(pca__n_components=dims[0]).fit(X, y)
         else:
             inner = KFold(n_splits=3, shuffle=True, random_state=self.random_state)
@@ -545,7 +550,8 @@ class DespikedDiscriminant(ClassifierMixin, BaseEstimator):
                 warnings.simplefilter("ignore")  # a fold without some dstate warns; its score counts as it is
                 search = GridSearchCV(pipeline, {"pca__n_components": dims}, cv=inner, error_score=0.0)
                 self.model_ = search.fit(X, y).best_estimator_
-        self.n_components_ = int(self.model_.named_steps["pca"].n_components_)
+        pca = getattr(self.model_, "named_steps", {}).get("pca")
+        self.n_components_ = None if pca is None else int(pca.n_components_)
         self.classes_ = self.model_.classes_
         self.n_features_in_ = X.shape[1]
         return self
