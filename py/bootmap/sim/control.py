@@ -12,6 +12,14 @@ reaches it and carried by odometry, the far edge is seen in the scan; once the o
 the stop is where the far edge is half of it ahead. ``Turn`` rotates by odometry, corrected by the
 walls' direction, and then hill-climbs to alignment with the walls of the new path. Travel distances are
 odometry's signed progress: backing up onto a fixed point the robot overshot counts back.
+
+Every phase is bounded, so every law ends. A law whose hill-climbing has not converged ``SETTLE_BOUND``
+control periods into it (noisy readings that never hold the tolerance for two periods in a row, or a
+travel whose steering holds it still off its line) settles on filtered readings - the median of the
+last few, each carried to the present by odometry - with its tolerances doubled, and doubled again every
+``WIDEN_TICKS`` periods; after ``WIDENINGS`` doublings, or ``max_ticks`` periods of the whole law, it
+stands where it is. The law's ``bounded`` (the phase) and ``widened`` (the factor; ``inf`` for a law
+that stood) say so, and the simulator writes them to the tableau's ``meta["bounded_laws"]``.
 """
 
 from __future__ import annotations
@@ -44,6 +52,17 @@ PAIR_GATE = math.radians(3)  # and where it follows from the last scan's reading
 TAKEOVER = TRACK_LIMIT  # a turn's walls take over this far from its target, when they show there
 TURN_BOUND = math.radians(30)  # a turn never looks for or aligns with walls further than this from its target
 HOLD_TICKS = 10  # control periods an aligning turn waits for walls it lost before it stands where it is
+# Every hill-climbing phase is bounded. A law still short of its fixed point SETTLE_BOUND control periods
+# into its last phase (a turn aligning, a travel within STOP_ZONE of its stop) settles on filtered
+# readings: the median of the last FILTER_LENGTH readings, each carried to the present by odometry's
+# motion since (over half a second odometry is off by millimetres and hundredths of a degree), with the
+# tolerances doubled, and doubled again every WIDEN_TICKS periods; WIDENINGS doublings on, it stands
+# where it is. At the shipped noise hill-climbing takes at most about 70 periods (Taylor Hall's junctions).
+SETTLE_BOUND = 100
+FILTER_LENGTH = 5
+WIDEN_TICKS = 20
+WIDENINGS = 4
+STOP_ZONE = 0.1  # m: a travel this near its stop is hill-climbing onto it
 
 
 @dataclass(frozen=True)
@@ -77,13 +96,19 @@ def _approach_speed(error: float, lim: Limits) -> float:
 class ControlLaw:
     """Base of the control laws: the fixed-point bookkeeping and the odometry-measured action."""
 
-    timeout = 60.0  # simulated seconds before the robot counts as stuck
+    timeout = 60.0  # simulated seconds before the simulator declares the robot stuck
+    max_ticks = 500  # control periods after which the law stands where it is, whatever its phase
 
     def __init__(self, lim: Limits):
         self.lim = lim
         self.done = False
         self._calm = 0
         self.start: Odometry | None = None
+        self.climbing = 0  # control periods spent in the law's last, hill-climbing phase
+        self.bounded: str | None = None  # the phase that reached its bound, if one did
+        self.widened = 1.0  # the factor the tolerances were widened by when the law settled
+        self._readings: list[tuple[float, float, float, float]] = []  # (error, wall, progress, theta)
+        self.ticks = 0  # control periods so far
 
     def begin(self, odometry: Odometry) -> None:
         self.start = odometry.copy()
@@ -91,6 +116,51 @@ class ControlLaw:
     def _settle(self, converged: bool) -> None:
         self._calm = self._calm + 1 if converged else 0
         self.done = self._calm >= self.lim.settle_ticks
+
+    # -- the bound on the hill-climbing phase
+    def _climb(self, error: float, wall: float, odo: Odometry, phase: str) -> None:
+        """Count a control period of hill-climbing and remember its readings for the filter."""
+        self.climbing += 1
+        self._readings.append((error, wall, odo.progress, odo.theta))
+        del self._readings[:-FILTER_LENGTH]
+        if self.climbing > SETTLE_BOUND and self.bounded is None:
+            self.bounded = phase
+
+    @property
+    def relaxed(self) -> bool:
+        """The hill-climbing has passed its bound: settle on filtered readings, with wider tolerances."""
+        return self.bounded is not None
+
+    def _widening(self) -> float:
+        return 2.0 ** (1 + (self.climbing - SETTLE_BOUND - 1) // WIDEN_TICKS)
+
+    def _expired(self) -> bool:
+        """Past the last widening: the fixed point is where the robot stands."""
+        return self.climbing > SETTLE_BOUND + WIDENINGS * WIDEN_TICKS
+
+    def _filtered(self, odo: Odometry) -> tuple[float, float]:
+        """(error, wall angle): medians of the recent readings, each carried to now by odometry."""
+        errors = [e - (odo.progress - p) for e, _, p, _ in self._readings if math.isfinite(e)]
+        walls = [w - (odo.theta - t) for _, w, _, t in self._readings if not math.isnan(w)]
+        return (float(np.median(errors)) if errors else math.nan,
+                float(np.median(walls)) if walls else math.nan)
+
+    def _tick(self, phase: str) -> bool:
+        """Count a control period; past ``max_ticks``, end the law where it stands (True)."""
+        self.ticks += 1
+        if self.ticks >= self.max_ticks:
+            self.bounded = self.bounded or phase
+            self.widened = math.inf
+            self.done = True
+        return self.done
+
+    def _settle_relaxed(self, converged: bool) -> None:
+        self._settle(converged)
+        if self.done:
+            self.widened = self._widening()
+        elif self._expired():  # the last widening has passed: stand where it is
+            self.done = True
+            self.widened = math.inf
 
     def action(self, odometry: Odometry) -> Action:
         raise NotImplementedError
@@ -113,6 +183,7 @@ class Travel(ControlLaw):
     """
 
     timeout = 300.0
+    max_ticks = 2800  # 280 s at 10 Hz: a travel of the longest corridor takes a tenth of that
 
     def __init__(self, lim: Limits, perception: Perception, follow: str, wall_distance: float,
                  stop_distance: float, junctions: bool):
@@ -126,6 +197,8 @@ class Travel(ControlLaw):
         self._held = {+1: wall_distance, -1: wall_distance}
 
     def step(self, p: Percept, ranges: np.ndarray, odo: Odometry) -> tuple[float, float]:
+        if self._tick("travel"):
+            return 0.0, 0.0
         lim = self.lim
         phi = 0.0 if math.isnan(p.wall_angle) else p.wall_angle
         travelled = odo.progress - self.start.progress  # signed: backing up to the fixed point counts back
@@ -133,6 +206,21 @@ class Travel(ControlLaw):
         omega = lim.k_heading * phi + lim.k_lateral * self._lateral_error(p)
         omega = max(-lim.w_max, min(lim.w_max, omega))
         error = self._stop_error(p, ranges, travelled)
+        if abs(error) < STOP_ZONE or self.climbing:
+            self._climb(error, p.wall_angle, odo, "stop")
+        if self.relaxed:
+            # Standing at its stop the robot cannot move sideways: the lateral term is dropped (with it,
+            # a heading error and a lateral one that cancel hold the robot short of alignment for ever).
+            error, phi = self._filtered(odo)
+            phi = 0.0 if math.isnan(phi) else phi
+            error = error if math.isfinite(error) else 0.0
+            widen = self._widening()
+            omega = max(-lim.w_max, min(lim.w_max, lim.k_heading * phi))
+            self._settle_relaxed(abs(error) < widen * lim.stop_tolerance and
+                                 abs(phi) < widen * 2 * lim.align_tolerance)
+            if self.done:
+                return 0.0, 0.0
+            return _approach_speed(error, lim), omega
         v = _approach_speed(error, lim) if math.isfinite(error) else lim.v_max
         converged = abs(error) < lim.stop_tolerance and abs(phi) < 2 * lim.align_tolerance
         self._settle(converged)
@@ -253,6 +341,10 @@ class Turn(ControlLaw):
       then they take over;
     * ``final``: the walls led too far: the estimate settles the turn at the target.
 
+    ``align``, ``return`` and ``final`` are hill-climbing and bounded as every law's is (the module's
+    docstring): past ``SETTLE_BOUND`` control periods they settle on the median of the last readings, each
+    carried to the present by odometry, with widening tolerances; and the turn ends after ``max_ticks``.
+
     Parameters
     ----------
     lim : Limits
@@ -271,6 +363,7 @@ class Turn(ControlLaw):
     """
 
     timeout = 30.0
+    max_ticks = 250  # 25 s at 10 Hz: a turn-around takes two
 
     def __init__(self, lim: Limits, angle: float, align_window: float = math.radians(12)):
         super().__init__(lim)
@@ -319,6 +412,8 @@ class Turn(ControlLaw):
         self._anchor = (wall, self.turned)
 
     def step(self, p: Percept, ranges: np.ndarray, odo: Odometry) -> tuple[float, float]:
+        if self._tick(self.phase):
+            return 0.0, 0.0
         self._track(p.wall_angle, odo)
         remaining = self.angle - self.turned
         # The percept folds the walls onto the nearest axis; the estimate says which axis is the target's.
@@ -351,17 +446,33 @@ class Turn(ControlLaw):
                     self._settle(False)
                     return 0.0, self.direction * self.lim.k_align * min(self.align_window, gap)
         if self.phase == "align":
-            return self._align(wall)
-        return self._rotate(remaining, settle=self.phase in ("return", "final"))
+            self._climb(math.nan, wall, odo, "align")
+            return self._align(wall, odo)
+        settle = self.phase in ("return", "final")
+        if settle:
+            self._climb(remaining, math.nan, odo, self.phase)
+        return self._rotate(remaining, settle)
 
     def _rotate(self, remaining: float, settle: bool) -> tuple[float, float]:
         lim = self.lim
         mag = min(lim.w_max, math.sqrt(2 * lim.w_accel * abs(remaining)), lim.k_align * abs(remaining))
-        self._settle(settle and abs(remaining) < lim.align_tolerance)
+        if settle and self.relaxed:  # the estimate has kept moving (walls correcting it): widen
+            self._settle_relaxed(abs(remaining) < self._widening() * lim.align_tolerance)
+        else:
+            self._settle(settle and abs(remaining) < lim.align_tolerance)
         return 0.0, (0.0 if self.done else math.copysign(mag, remaining))
 
-    def _align(self, wall: float) -> tuple[float, float]:
+    def _align(self, wall: float, odo: Odometry) -> tuple[float, float]:
         lim = self.lim
+        if self.relaxed:
+            # past the bound: hill-climb and settle on the filtered wall angle, tolerance widening
+            _, wall = self._filtered(odo)
+            if math.isnan(wall):
+                self._settle_relaxed(False)
+                return 0.0, 0.0
+            widen = self._widening()
+            self._settle_relaxed(abs(wall) < widen * lim.align_tolerance)
+            return 0.0, (0.0 if self.done else max(-lim.w_max, min(lim.w_max, lim.k_align * wall)))
         if math.isnan(wall):  # the walls lost (drop-outs): hold still, and stand here if they stay lost
             self._lost += 1
             self._settle(False)

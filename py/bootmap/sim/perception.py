@@ -20,6 +20,8 @@ HALF_WINDOW = 3  # scan points either side of the centre of a straight-run windo
 MAX_SAG = 0.025  # m: a window with a point further than this from its chord is not straight
 AGREE = math.radians(1.5)  # chords within this of the weighted median direction are averaged
 FOLD_LIMIT = math.radians(25)  # wall directions further from the robot's axes than this are ignored
+MAX_CHORD = 1.0  # m: longer chords span too much (they bridge gaps and corners)
+NOMINAL_NOISE = 0.01  # m: the range noise HALF_WINDOW, MAX_SAG and MAX_CHORD are set for
 
 
 @dataclass(frozen=True)
@@ -72,6 +74,12 @@ class Perception:
     def __init__(self, laser: LaserSpec, open_range: float):
         self.range_max = laser.range_max
         self.open_range = open_range
+        # Noisier ranges need longer runs: a chord's direction error is the range noise over its length,
+        # so the window and the straightness test grow with the noise beyond the shipped 1 cm.
+        self.noise_scale = max(1.0, laser.noise_sd / NOMINAL_NOISE)
+        self.half_window = int(round(HALF_WINDOW * self.noise_scale))
+        self.max_sag = MAX_SAG * self.noise_scale
+        self.max_chord = MAX_CHORD * self.noise_scale
         a = laser.angles
         self.angles, self.cos, self.sin = a, np.cos(a), np.sin(a)
         deg = np.degrees(a)
@@ -102,7 +110,7 @@ class Perception:
     def wall_angle(self, ranges: np.ndarray) -> float:
         """Robust direction of the straight walls in view, folded onto the robot's axes; nan if none."""
         x, y = ranges * self.cos, ranges * self.sin
-        k = HALF_WINDOW
+        k = self.half_window
         cx, cy = x[2 * k:] - x[:-2 * k], y[2 * k:] - y[:-2 * k]
         length = np.hypot(cx, cy)
         # A window is straight when every point in it lies within MAX_SAG of its chord: testing the middle
@@ -115,7 +123,7 @@ class Perception:
             np.maximum(cross, np.abs(cx * my - cy * mx), out=cross)
         with np.errstate(divide="ignore", invalid="ignore"):
             sag = cross / length
-        ok = (sag < MAX_SAG) & (length > 0.05) & (length < 1.0)
+        ok = (sag < self.max_sag) & (length > 0.05) & (length < self.max_chord)
         ok &= (ranges[2 * k:] < self.range_max * 0.98) & (ranges[:-2 * k] < self.range_max * 0.98)
         if ok.sum() < 4:
             return math.nan

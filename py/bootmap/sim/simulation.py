@@ -79,6 +79,7 @@ class _Record:
     truths: list = field(default_factory=list)
     actions: list = field(default_factory=list)
     ticks: list = field(default_factory=list)
+    bounded: list = field(default_factory=list)  # laws that ended by a phase's bound, not at tolerance
 
 
 class Simulation:
@@ -137,7 +138,9 @@ class Simulation:
         policy.reset(self.rng)
         rec = _Record()
         bar = _progress_bar(progress, n_steps)
-        image, percept = self._execute(self._travel_law(policy))
+        law = self._travel_law(policy)
+        image, percept = self._execute(law)
+        self._note_bound(rec, law)
         self._record(rec, image, None)
         bar.update(1)
         while n_steps is None or len(rec.images) < n_steps:
@@ -156,6 +159,7 @@ class Simulation:
                             dstate_ticks=np.array(rec.ticks))
                 bar.close()
                 raise
+            self._note_bound(rec, law)
             self._record(rec, image, law.action(self.robot.odometry))
             bar.update(1)
         bar.close()
@@ -191,6 +195,16 @@ class Simulation:
                 raise SimulationError(
                     f"stuck: {type(law).__name__.lower()} did not reach a dstate within {law.timeout:g} s "
                     f"(true pose {x:.2f}, {y:.2f}, {math.degrees(th):.0f} deg; t = {self.time:.1f} s)")
+
+    @staticmethod
+    def _note_bound(rec: _Record, law: ControlLaw) -> None:
+        """A law that reached a phase's bound settled on filtered readings with widened tolerances, or
+        (``widened`` null) stood where it was: the run's record says so, against the dstate it reached."""
+        if law.bounded is None:
+            return
+        rec.bounded.append({"step": len(rec.images), "law": type(law).__name__.lower(), "phase": law.bounded,
+                            "ticks": law.ticks,
+                            "widened": law.widened if math.isfinite(law.widened) else None})
 
     def _record(self, rec: _Record, image: np.ndarray, action: Action | None) -> None:
         pose = self.robot.pose
@@ -240,6 +254,8 @@ class Simulation:
                       "beams": spec.beams},
             "trajectory": _thin(np.array(self._trajectory)),
         }
+        if rec.bounded:
+            meta["bounded_laws"] = rec.bounded
         return Tableau(steps, self.world.name, meta)
 
 
