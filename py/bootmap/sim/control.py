@@ -183,7 +183,10 @@ class Travel(ControlLaw):
     """
 
     timeout = 300.0
-    max_ticks = 2800  # 280 s at 10 Hz: a travel of the longest corridor takes a tenth of that
+    # Past the simulator's own limit: noise near the stop is bounded by the settle rule above, so a travel
+    # still going at 300 s is a robot that cannot move as its world file says (far too slow, say), which
+    # the simulator reports as stuck rather than stopping it mid-corridor and calling that a dstate.
+    max_ticks = 3100
 
     def __init__(self, lim: Limits, perception: Perception, follow: str, wall_distance: float,
                  stop_distance: float, junctions: bool):
