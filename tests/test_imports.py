@@ -21,8 +21,8 @@ PACKAGE = Path(__file__).resolve().parents[1] / "py" / "bootmap"
 STAGES: list[tuple[str, tuple[str, ...]]] = [
     ("foundation", ("bootmap", "bootmap.errors", "bootmap.arguments", "bootmap.proc", "bootmap.images",
                     "bootmap.tableau", "bootmap.metrics", "bootmap.examples")),
-    ("sources", ("bootmap.sim", "bootmap.logs", "bootmap.logs.scans", "bootmap.logs.carmen", "bootmap.logs.g2o",
-                 "bootmap.logs.rosbag", "bootmap.logs.dstates", "bootmap.logs.truth", "bootmap.logs.ingest")),
+    ("sources", ("bootmap.sim", "bootmap.ingest", "bootmap.ingest.scans", "bootmap.ingest.carmen", "bootmap.ingest.g2o",
+                 "bootmap.ingest.rosbag", "bootmap.ingest.dstates", "bootmap.ingest.truth", "bootmap.ingest.ingest")),
     ("views", ("bootmap.views",)),
     ("map", ("bootmap.mapping", "bootmap.layout")),
     ("recognition", ("bootmap.recognise",)),

@@ -219,7 +219,7 @@ def test_the_grid_is_every_combination_once_with_stable_ids(seeds, levels, learn
 def test_a_log_is_an_axis_of_the_grid_beside_worlds(tmp_path, monkeypatch):
     # A robot's log (a synthetic CARMEN log of a square, truth known by hand) runs as `bootmap experiment
     # --log` does, one cell per seed, beside a world's cells; its row has the log's own figures.
-    monkeypatch.syspath_prepend(str(Path(__file__).parent / "logs"))
+    monkeypatch.syspath_prepend(str(Path(__file__).parent / "ingest"))
     from synthetic import write_square_log
 
     write_square_log(tmp_path / "square.log")

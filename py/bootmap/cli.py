@@ -174,7 +174,7 @@ def _log_experiment(args: argparse.Namespace) -> int:
                                          ("--circuits", args.circuits), ("--steps", args.steps)) if value]
     if sim_only:
         raise BadInput(f"{', '.join(sim_only)}: for the simulated experiment, not for --log {args.log}")
-    from .logs.dstates import JunctionDetector
+    from .ingest.dstates import JunctionDetector
 
     r = run_log_experiment(args.log, out_dir=args.output, seed=args.seed, k_max=args.k_max,
                            time_limit=args.time_limit, quantum_deg=args.quantum, view_criterion=args.views,
@@ -343,7 +343,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "cannot carry)")
     p.add_argument("--junctions", action="store_true",
                    help="--log: a junction passed straight through (a side corridor's opening, mid-travel) is "
-                        "a dstate too, not only a turn's two ends (bootmap.logs.dstates.JunctionDetector)")
+                        "a dstate too, not only a turn's two ends (bootmap.ingest.dstates.JunctionDetector)")
     runs = p.add_mutually_exclusive_group()
     runs.add_argument("--circuits", type=arguments.count("circuits"), metavar="N",
                       help="circuits of a room (worlds of the circuits policy; default 50)")
@@ -384,7 +384,7 @@ def _register_optional(sub) -> None:
     surfaces."""
     import importlib
 
-    for module in ("bootmap.sim.commands", "bootmap.service.commands", "bootmap.logs.commands",
+    for module in ("bootmap.sim.commands", "bootmap.service.commands", "bootmap.ingest.commands",
                    "bootmap.experiments.sweep.commands"):
         try:
             register = importlib.import_module(module).register

@@ -1,6 +1,6 @@
 """How a map learned from a log compares with the log's own poses (truth from the data, not from us).
 
-Every figure here reads the true dstates that :mod:`bootmap.logs.truth` made from the log's poses
+Every figure here reads the true dstates that :mod:`bootmap.ingest.truth` made from the log's poses
 (``P3:N``: a place within a radius, a heading sector aligned to the building's axis); the learning
 never saw them.
 
@@ -39,8 +39,8 @@ from scipy.spatial.distance import cdist
 
 from ..metrics import dstate_accuracy
 from ..views import uncertainty_coefficient
-from ..logs.scans import Pose
-from ..logs.truth import main_axis, true_dstates
+from ..ingest.scans import Pose
+from ..ingest.truth import main_axis, true_dstates
 
 #: Descriptors :func:`nn_on_revisits` compares scans with.
 DESCRIPTORS = ("raw", "shift")

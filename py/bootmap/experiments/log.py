@@ -1,7 +1,7 @@
 """The paper's experiment on a robot's log: ingest -> views -> map -> recognise, judged by the log's poses.
 
-1. The log is read and cut into dstates where odometry turns (:mod:`bootmap.logs.ingest`); the log's
-   true poses give the true dstates (:mod:`bootmap.logs.truth`), used only to evaluate.
+1. The log is read and cut into dstates where odometry turns (:mod:`bootmap.ingest.ingest`); the log's
+   true poses give the true dstates (:mod:`bootmap.ingest.truth`), used only to evaluate.
 2. Images are clustered into views as in the simulated experiment; k by the paper's M and, since M
    falls steadily with k on real scans (it picks k = 1 or 2 there), by the Davies-Bouldin index, which
    does not (:func:`bootmap.views.davies_bouldin_k`). Both are reported; the map uses ``view_criterion``'s.
@@ -32,9 +32,9 @@ from ..mapping.api import Mapper
 from ..mapping.loops import MAPPERS
 from ..metrics import dstate_accuracy
 from ..views import ViewClusterer, davies_bouldin_k, view_labels, view_table
-from ..logs.dstates import JunctionDetector, TurnDetector
+from ..ingest.dstates import JunctionDetector, TurnDetector
 from .evaluate import DESCRIPTORS, dead_reckoned_dstates, map_against_truth, nn_on_revisits, views_against_truth
-from ..logs.ingest import log_tableau, read_log, travel_ends, turn_ends
+from ..ingest.ingest import log_tableau, read_log, travel_ends, turn_ends
 
 #: How k is chosen for the map's views: "auto" takes M's k unless M degenerates (k <= 2), then
 #: Davies-Bouldin's.
@@ -50,7 +50,7 @@ def run_log_experiment(log: str | Path, out_dir: str | Path | None = None, seed:
                        view_criterion: str = "auto", detector: TurnDetector = TurnDetector(),
                        max_range: float = 20.0, radius_m: float = 3.0, progress: bool = False,
                        junctions: JunctionDetector | None = None, mapper: str = "loops") -> dict:
-    """Run the experiment on a log (a path any of :func:`~bootmap.logs.ingest.read_log`'s formats, or
+    """Run the experiment on a log (a path any of :func:`~bootmap.ingest.ingest.read_log`'s formats, or
     ``killian``); see the module docstring. Returns the results and, given ``out_dir``, writes
     ``results.json``, ``report.md`` and figures there. The robot's action types are learned, as in the
     simulated experiment, unless ``quantum_deg`` rounds the angles instead."""

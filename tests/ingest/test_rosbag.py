@@ -9,8 +9,8 @@ pytest.importorskip("rosbags")
 from log_bags import MCAP, ROS1, SQLITE3, write_bag  # noqa: E402
 
 from bootmap.errors import LogError  # noqa: E402
-from bootmap.logs.ingest import read_log  # noqa: E402
-from bootmap.logs.rosbag import read_rosbag  # noqa: E402
+from bootmap.ingest.ingest import read_log  # noqa: E402
+from bootmap.ingest.rosbag import read_rosbag  # noqa: E402
 
 
 @pytest.mark.parametrize("kind", [ROS1, SQLITE3, MCAP])

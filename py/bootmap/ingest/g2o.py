@@ -3,7 +3,7 @@
 The file mixes three kinds of line:
 
 - ``VERTEX_SE2 id x y theta``: the optimised pose of scan ``id``, the log's truth;
-- ``ROBOTLASER1 ...`` (CARMEN's, see :mod:`bootmap.logs.carmen`), right after the vertex it was taken at.
+- ``ROBOTLASER1 ...`` (CARMEN's, see :mod:`bootmap.ingest.carmen`), right after the vertex it was taken at.
   Its own laser and robot poses are the optimised vertex pose again, not odometry;
 - ``EDGE_SE2 i j dx dy dtheta`` + 6 information values: the measured motion from ``i`` to ``j`` in
   ``i``'s frame. Edges ``i -> i+1`` are the wheel odometry (stored out of order: 0-1, 1-2, 4-5, 3-4,

@@ -41,7 +41,7 @@ def square_poses(laps: int = 2, side: float = 10.0, step: float = 0.25, turn_sca
 def write_square_log(path: Path, laps: int = 2, side: float = 10.0) -> Path:
     """Write the log as CARMEN lines (TRUEPOS, ODOM, RAWLASER1) and return its path."""
     corners = np.array([(side, 0.0), (side, side), (0.0, side), (0.0, 0.0)])
-    lines = ["# synthetic: laps of a square, written by tests/logs/synthetic.py"]
+    lines = ["# synthetic: laps of a square, written by tests/ingest/synthetic.py"]
     for i, (x, y, h) in enumerate(square_poses(laps, side)):
         corner = int(np.argmin(np.hypot(*(corners - (x, y)).T)))
         sector = int(np.rint(h / (np.pi / 2))) % 4

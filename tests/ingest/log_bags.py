@@ -11,7 +11,7 @@ from rosbags.rosbag2 import StoragePlugin
 from rosbags.rosbag2 import Writer as Ros2Writer
 from rosbags.typesys import Stores, get_typestore
 
-from bootmap.logs.scans import Scan
+from bootmap.ingest.scans import Scan
 
 ROS1, SQLITE3, MCAP = "ros1", "sqlite3", "mcap"
 

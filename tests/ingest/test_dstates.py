@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from bootmap.logs.dstates import TurnDetector, dstate_scans, find_turns, odometry_track
+from bootmap.ingest.dstates import TurnDetector, dstate_scans, find_turns, odometry_track
 
 
 def _run(headings_deg, step_m=0.5):
@@ -60,7 +60,7 @@ def _corridor_with_junctions():
     corridor 2.5 m wide on the left at 10 m, a crossing (both sides open) at 20 m, a doorway 0.5 m wide on
     the right at 27 m, a hall 8 m long on the right from 30 m, and a side corridor 1 m before the travel
     ends (at the turn's place already)."""
-    from bootmap.logs.dstates import FoundTurn
+    from bootmap.ingest.dstates import FoundTurn
 
     distance = np.arange(161) * 0.25
     left, right = np.ones(161), np.ones(161)
@@ -75,7 +75,7 @@ def _corridor_with_junctions():
 
 
 def test_a_travel_passing_a_side_corridor_or_a_crossing_visits_it_once():
-    from bootmap.logs.dstates import JunctionDetector, find_passes
+    from bootmap.ingest.dstates import JunctionDetector, find_passes
 
     left, right, distance, turns = _corridor_with_junctions()
     passes = find_passes(left, right, distance, turns, JunctionDetector())

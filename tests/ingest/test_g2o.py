@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from bootmap.errors import BadInput, LogError
-from bootmap.logs.g2o import read_g2o, read_g2o_text
-from bootmap.logs.scans import compose
+from bootmap.ingest.g2o import read_g2o, read_g2o_text
+from bootmap.ingest.scans import compose
 
 
 
@@ -95,7 +95,7 @@ def test_a_file_without_scans_is_bad_input(tmp_path):
 
 def test_the_whole_killian_log_from_rtb_data():
     pytest.importorskip("rtbdata")
-    from bootmap.logs.g2o import killian
+    from bootmap.ingest.g2o import killian
 
     scans = killian()
     assert len(scans) == 3873

@@ -1,17 +1,17 @@
 """From a robot's log to a tableau: images at the scans where a control law would have settled, and the
 actions odometry measured between them.
 
-1. :func:`read_log` reads any supported log into :class:`~bootmap.logs.scans.Scan` records (format by
+1. :func:`read_log` reads any supported log into :class:`~bootmap.ingest.scans.Scan` records (format by
    name: ``killian``, a ``.g2o`` or ``.zip``, a ROS bag (``.bag``, ``.db3``, ``.mcap`` or a ROS 2 bag
    directory), else a CARMEN log).
-2. :func:`~bootmap.logs.dstates.find_turns` cuts the odometry into travels and turns; each turn gives
-   two dstates, its start and its end. Where asked for, :func:`~bootmap.logs.dstates.find_passes` adds a
+2. :func:`~bootmap.ingest.dstates.find_turns` cuts the odometry into travels and turns; each turn gives
+   two dstates, its start and its end. Where asked for, :func:`~bootmap.ingest.dstates.find_passes` adds a
    dstate where a travel passes straight through a junction.
 3. :func:`log_tableau` writes one step per dstate: the scan as an image (the simulator's format), the
    action to the next dstate as odometry measured it (a turn: its angle; a travel: its length and net
    heading change), the odometry's pose as ``odometry`` (evidence: :mod:`bootmap.mapping.loops`), the
    true pose as ``pose`` and, when the log has true poses, the true dstate as ``truth``
-   (:mod:`bootmap.logs.truth`). The learning never reads ``pose`` or ``truth``. The tableau says
+   (:mod:`bootmap.ingest.truth`). The learning never reads ``pose`` or ``truth``. The tableau says
    ``passes_through``: the robot did not stop at its dstates, so a travel may have passed some.
 """
 
@@ -39,7 +39,7 @@ TRAJECTORY_TOLERANCE_M = 0.05
 
 def read_log(log: str | Path, progress: bool = False, **ros_options) -> list[Scan]:
     """Every scan of a log, in time order. ``log`` is a path, or ``killian`` for the MIT Killian Court
-    log of the ``rtb-data`` package. ``ros_options`` go to :func:`bootmap.logs.rosbag.read_rosbag`."""
+    log of the ``rtb-data`` package. ``ros_options`` go to :func:`bootmap.ingest.rosbag.read_rosbag`."""
     if str(log) == "killian" and not Path(log).exists():
         from .g2o import killian
 
@@ -78,7 +78,7 @@ def log_tableau(scans: list[Scan], detector: TurnDetector = TurnDetector(), max_
     scans : list of Scan
         The log, in time order.
     detector : TurnDetector
-        Where turns are found, hence where dstates are (:mod:`bootmap.logs.dstates`).
+        Where turns are found, hence where dstates are (:mod:`bootmap.ingest.dstates`).
     max_range : float
         Images are clipped at this range (m): beyond it a corridor's far end says little, and a long
         reading swings with small changes of heading.
@@ -147,7 +147,7 @@ def _rounded(pose) -> tuple[float, float, float]:
 def _meta(scans, chosen, turns, detector, max_range, radius_m, source, has_truth, junctions, passes) -> dict:
     # The robot drove on through dstates (a junction passed straight, a corner it only slowed at): a
     # travel may end at any dstate further on (causal.lp's travel_action_passing).
-    meta = {"generator": "bootmap.logs", "source": source, "scans": len(scans), "passes_through": True,
+    meta = {"generator": "bootmap.ingest", "source": source, "scans": len(scans), "passes_through": True,
             "laser": {"angle_min": IMAGE_ANGLE_MIN, "angle_max": IMAGE_ANGLE_MAX,
                       "angle_increment": (IMAGE_ANGLE_MAX - IMAGE_ANGLE_MIN) / (IMAGE_BEAMS - 1),
                       "range_max": max_range, "beams": IMAGE_BEAMS,

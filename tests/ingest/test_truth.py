@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from bootmap.logs.dstates import find_turns, odometry_track
-from bootmap.logs.truth import corner_recall, corners_in_poses, main_axis, place_labels, true_dstates
+from bootmap.ingest.dstates import find_turns, odometry_track
+from bootmap.ingest.truth import corner_recall, corners_in_poses, main_axis, place_labels, true_dstates
 
 
 def test_places_join_poses_within_the_radius_and_turn_ends():

@@ -3,7 +3,7 @@
 
 import pytest
 
-from bootmap.logs.g2o import read_g2o
+from bootmap.ingest.g2o import read_g2o
 
 from log_data import EXCERPT
 

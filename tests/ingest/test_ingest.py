@@ -6,8 +6,8 @@ from collections import Counter
 import pytest
 
 from bootmap.cli import main
-from bootmap.logs import ingest
-from bootmap.logs.ingest import log_tableau
+from bootmap.ingest import ingest
+from bootmap.ingest.ingest import log_tableau
 from bootmap.tableau import Tableau, Travel, Turn, load
 
 from log_data import EXCERPT
@@ -80,7 +80,7 @@ def _corridor_log():
 
     import numpy as np
 
-    from bootmap.logs.scans import Scan
+    from bootmap.ingest.scans import Scan
 
     angles = np.radians(np.arange(-90, 90, 1.0))
     poses = [(0.0, 0.0, math.radians(-90 + 15 * k)) for k in range(7)]  # a left turn on the spot
@@ -97,7 +97,7 @@ def _corridor_log():
 
 
 def test_junctions_passed_are_dstates_when_asked_for():
-    from bootmap.logs.dstates import JunctionDetector
+    from bootmap.ingest.dstates import JunctionDetector
 
     scans = _corridor_log()
     turns_only = log_tableau(scans)

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from bootmap.errors import LogError
-from bootmap.logs.carmen import read_carmen, read_carmen_text
+from bootmap.ingest.carmen import read_carmen, read_carmen_text
 
 
 def _robotlaser(s):
