@@ -10,7 +10,7 @@ import shutil
 from pathlib import Path
 
 import pytest
-from service_helpers import CHROMIUM, REPO, SESSION_SETTINGS, Server
+from service_helpers import CHROMIUM, PATIENT_SETTINGS, REPO, Server
 
 from bootmap import examples
 
@@ -24,7 +24,7 @@ def server_axioms(tmp_path_factory) -> Path:
 
 @pytest.fixture(scope="session")
 def server(tmp_path_factory, server_axioms):
-    s = Server(tmp_path_factory.mktemp("server"), axioms=server_axioms, **SESSION_SETTINGS).start()
+    s = Server(tmp_path_factory.mktemp("server"), axioms=server_axioms, **PATIENT_SETTINGS).start()
     yield s
     s.stop()
 

@@ -1,16 +1,40 @@
 """Hard solves end cleanly and never stall the server; over the bound of solves, a 503 with Retry-After.
 
-The session server has one solver, one waiting place and a 3 s time limit (kill at 4 s). A tableau of
-one view repeated 5,000 times (all travels) is a hard solve: it ends by the time limit, not by a map.
+This module's server has one solver, one waiting place and a 3 s time limit (kill at 4 s): the time limit
+is its subject. A tableau of one view repeated 5,000 times (all travels) is a hard solve: it ends by the
+time limit, not by a map.
 """
 
 import threading
 import time
 
+import pytest
+
 from bootmap.tableau import FORMAT
+from service_helpers import SESSION_SETTINGS, Server
 
 ONE_VIEW = {"format": FORMAT, "steps": [{"view": "V", "action": {"type": "travel", "distance_m": 1.0}}] * 4999
             + [{"view": "V"}]}
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    s = Server(tmp_path_factory.mktemp("limits_server"), **SESSION_SETTINGS).start()
+    yield s
+    s.stop()
+
+
+@pytest.fixture(scope="module")
+def client(server):
+    with server.client() as c:
+        yield c
+
+
+@pytest.fixture(scope="module")
+def paper_id(client, paper_doc) -> int:
+    r = client.post("/tableaux", json=paper_doc)
+    assert r.status_code == 201, r.text
+    return r.json()["id"]
 
 
 def test_hard_solves_time_out_cleanly_without_stalling_the_server(client, server, paper_doc, paper_id):
