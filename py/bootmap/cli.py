@@ -186,7 +186,7 @@ def _log_experiment(args: argparse.Namespace) -> int:
 
 
 def _print_summary(r: dict) -> None:
-    from .experiments.world import CHECK_TEXT
+    from .experiments.world import CHECK_TEXT, other_learner
 
     if r.get("error"):
         print(f"{r['world']} (seed {r['seed']}): FAILED: {r['error']}")
@@ -207,8 +207,8 @@ def _print_summary(r: dict) -> None:
         print("  the map could not tell apart: " +
               "; ".join(", ".join(ts) for ts in m["merged_true_dstates"].values()))
     if rec and rec["cv_at_90"] is not None:
-        beside = "" if rec.get("learner", "1-NN") == "1-NN" or rec.get("learner_cv_at_90") is None else \
-            f"; {rec['learner']} {rec['learner_cv_at_90']:.1%}"
+        other = other_learner(rec)
+        beside = "" if other is None else f"; {other[0]} {other[1]:.1%}"
         print(f"  recognition: nearest neighbour {rec['cv_at_90']:.1%} at 90 images (10-fold CV){beside}")
     print(f"  {verdict}")
 

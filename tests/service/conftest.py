@@ -10,7 +10,7 @@ import shutil
 from pathlib import Path
 
 import pytest
-from service_helpers import CHROMIUM, PATIENT_SETTINGS, REPO, Server
+from service_helpers import CHROMIUM, PATIENT_SETTINGS, REPO, serving
 
 from bootmap import examples
 
@@ -24,9 +24,7 @@ def server_axioms(tmp_path_factory) -> Path:
 
 @pytest.fixture(scope="session")
 def server(tmp_path_factory, server_axioms):
-    s = Server(tmp_path_factory.mktemp("server"), axioms=server_axioms, **PATIENT_SETTINGS).start()
-    yield s
-    s.stop()
+    yield from serving(tmp_path_factory.mktemp("server"), axioms=server_axioms, **PATIENT_SETTINGS)
 
 
 @pytest.fixture(scope="session")
@@ -40,9 +38,9 @@ def paper_doc() -> dict:
     return examples.notched_rectangle(circuits=50).to_dict()
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="module")
 def paper_id(client, paper_doc) -> int:
-    """The paper's tableau, stored once for the session."""
+    """The paper's tableau, stored once for each module (on the server its ``client`` talks to)."""
     r = client.post("/tableaux", json=paper_doc)
     assert r.status_code == 201, r.text
     return r.json()["id"]

@@ -68,6 +68,13 @@ class Server:
         return httpx.Client(base_url=self.url, timeout=timeout)
 
 
+def serving(root: Path, **settings):
+    """A server started for a fixture: yields it, and stops it when the fixture ends."""
+    s = Server(root, **settings).start()
+    yield s
+    s.stop()
+
+
 def make_token(name: str, *, admin: bool = False, data_dir: Path | None = None, db: str | None = None) -> str:
     """``bootmap token create NAME``: the token is the last line it prints."""
     where = ["--db", db] if db else ["--data-dir", str(data_dir)]

@@ -11,7 +11,7 @@ import time
 import pytest
 
 from bootmap.tableau import FORMAT
-from service_helpers import SESSION_SETTINGS, Server
+from service_helpers import SESSION_SETTINGS, serving
 
 ONE_VIEW = {"format": FORMAT, "steps": [{"view": "V", "action": {"type": "travel", "distance_m": 1.0}}] * 4999
             + [{"view": "V"}]}
@@ -19,22 +19,13 @@ ONE_VIEW = {"format": FORMAT, "steps": [{"view": "V", "action": {"type": "travel
 
 @pytest.fixture(scope="module")
 def server(tmp_path_factory):
-    s = Server(tmp_path_factory.mktemp("limits_server"), **SESSION_SETTINGS).start()
-    yield s
-    s.stop()
+    yield from serving(tmp_path_factory.mktemp("limits_server"), **SESSION_SETTINGS)
 
 
 @pytest.fixture(scope="module")
 def client(server):
     with server.client() as c:
         yield c
-
-
-@pytest.fixture(scope="module")
-def paper_id(client, paper_doc) -> int:
-    r = client.post("/tableaux", json=paper_doc)
-    assert r.status_code == 201, r.text
-    return r.json()["id"]
 
 
 def test_hard_solves_time_out_cleanly_without_stalling_the_server(client, server, paper_doc, paper_id):

@@ -377,11 +377,17 @@ def _report_text(r: dict) -> str:
     return "\n".join(lines)
 
 
-def _beside(rec: dict) -> str:
-    """The other learner's figure at 90 images, on the same folds (empty when it is nearest neighbour)."""
+def other_learner(rec: dict) -> tuple[str, float] | None:
+    """The learner reported beside nearest neighbour and its accuracy at 90 images, on the same folds;
+    None when it is nearest neighbour itself, or has no figure at 90."""
     if rec.get("learner", "1-NN") == "1-NN" or rec.get("learner_cv_at_90") is None:
-        return ""
-    return f" {rec['learner']} on the same folds: {rec['learner_cv_at_90']:.1%}."
+        return None
+    return rec["learner"], rec["learner_cv_at_90"]
+
+
+def _beside(rec: dict) -> str:
+    other = other_learner(rec)
+    return "" if other is None else f" {other[0]} on the same folds: {other[1]:.1%}."
 
 
 def _checks_text(runs: list[dict]) -> list[str]:

@@ -94,21 +94,22 @@ def tableau_facts(tableau: Tableau, quantum_deg: float | None = None,
 
 
 def travel_lengths(tableau: Tableau) -> dict[int, int]:
-    """The length type (decimetres) of each travel, by its time point (:class:`.motion.LengthTypes`, at
-    the resolution the tableau states, or the distances show)."""
-    travels, learned = _learned_lengths(tableau)
-    return dict(zip(travels, learned.labels_))
+    """The length type (decimetres) of each travel, by its time point (:func:`travel_length_types`)."""
+    return travel_length_types(tableau)[0]
 
 
 def length_types_of(tableau: Tableau) -> list[LengthType]:
     """The tableau's travel lengths as types (what the map reports beside its action types)."""
-    return _learned_lengths(tableau)[1].types_
+    return travel_length_types(tableau)[1]
 
 
-def _learned_lengths(tableau: Tableau) -> tuple[list[int], LengthTypes]:
+def travel_length_types(tableau: Tableau) -> tuple[dict[int, int], list[LengthType]]:
+    """The length type (decimetres) of each travel by its time point, and the types, learned once
+    (:class:`.motion.LengthTypes`, at the resolution the tableau states, or the distances show)."""
     travels = [t for t, s in enumerate(tableau.steps) if isinstance(s.action, Travel)]
     distances = [tableau.steps[t].action.distance_m for t in travels]  # type: ignore[union-attr]
-    return travels, LengthTypes(resolution_of(tableau.meta, "distance_m")).fit(distances)
+    learned = LengthTypes(resolution_of(tableau.meta, "distance_m")).fit(distances)
+    return dict(zip(travels, learned.labels_)), learned.types_
 
 
 def add_facts(ctl: clingo.Control, facts: Iterable[Symbol]) -> None:

@@ -205,9 +205,7 @@ class MotionPrimitives:
         for kind in ("turn", "travel"):
             idx = np.flatnonzero(kinds == kind)
             if idx.size:
-                step = reading_step(read[idx]) if self.resolution_deg is None else self.resolution_deg
-                self.resolution_[kind] = step
-                self.exact_[kind] = exact_readings(measured[idx], step, period=360.0)
+                self.resolution_[kind], self.exact_[kind] = _as_recorded(read[idx], self.resolution_deg)
                 clusters += [(kind, idx[members]) for members in _cluster(measured[idx], self.exact_[kind])]
         means = [_circular_mean(measured[i]) for _, i in clusters]
         spreads = [_circular_sd(measured[i], m) for m, (_, i) in zip(means, clusters)]
@@ -261,9 +259,15 @@ def action_types(actions: Sequence[Action], angles: Sequence[int], resolution_de
     resolution, exact = {}, {}
     for kind, mine in (("turn", is_turn), ("travel", ~is_turn)):
         if mine.any():
-            resolution[kind] = reading_step(read[mine]) if resolution_deg is None else resolution_deg
-            exact[kind] = exact_readings(_wrap(read[mine]), resolution[kind], period=360.0)
+            resolution[kind], exact[kind] = _as_recorded(read[mine], resolution_deg)
     return _types(is_turn, read, np.asarray(angles, dtype=int), resolution, exact)
+
+
+def _as_recorded(read: np.ndarray, resolution_deg: float | None) -> tuple[float, bool]:
+    """One kind's angles as recorded: the step they were recorded at (given, or read from them), and
+    whether they are exact at it (:func:`exact_readings`, on the circle)."""
+    step = reading_step(read) if resolution_deg is None else resolution_deg
+    return step, exact_readings(_wrap(read), step, period=360.0)
 
 
 def _readings(actions: Sequence[Action]) -> tuple[np.ndarray, np.ndarray]:

@@ -45,7 +45,8 @@ from clingo import Symbol
 
 from ..tableau import Tableau
 from .cogmap import CognitiveMap, SolveStats, Try, build_map, step_row
-from .facts import action_symbol, action_symbols, length_types_of, passes_through, tableau_facts, travel_lengths, typed_actions
+from .facts import (action_symbol, action_symbols, passes_through, tableau_facts, travel_length_types,
+                    travel_lengths, typed_actions)
 from .grounding import Deadline, check_fixed, prepass
 from .misreads import MIN_VISITS, find_suspects, has_images, rare_clustered_views
 from .motion import ActionType, type_suspects
@@ -140,7 +141,8 @@ class MapStream:
         replay = self._replay or Replay.of(old.steps, self._angles, length_labels(travel_lengths(old)), cmap,
                                            "metrical" in self.resolver.theory.levels, self.resolver.future_depth)
         self._replay = None  # stale unless all below holds
-        dstate_of = replay.extend(tableau.steps, angles, length_labels(travel_lengths(tableau)))
+        lengths, length_types = travel_length_types(tableau)
+        dstate_of = replay.extend(tableau.steps, angles, length_labels(lengths))
         if dstate_of is None:
             return None
         if self.resolver.misreads and self._images and replay.watch.rare:
@@ -155,7 +157,7 @@ class MapStream:
                            bounds=(Try("the last map extended by determinism (stock axioms replayed)", "sat",
                                        seconds),))
         return replace(cmap, steps=rows, dstate_of=list(dstate_of), action_types=types,
-                       length_types=length_types_of(tableau), stats=stats)
+                       length_types=length_types, stats=stats)
 
     def _suspect(self, tableau: Tableau, angles: list[int]) -> bool:
         actions = action_symbols(tableau, angles)
