@@ -25,6 +25,7 @@ Example
 
 from __future__ import annotations
 
+import gzip
 import math
 from pathlib import Path
 from typing import Iterable, Iterator
@@ -32,14 +33,21 @@ from typing import Iterable, Iterator
 import numpy as np
 
 from ..errors import LogError
-from .scans import Pose, Scan
+from .scans import Pose, Scan, between, compose, wrap
 
 # After a ROBOTLASER1's ranges and remissions: laser pose (3), robot pose (3), tv, rv, forward and side
 # safety distances, turn axis (5), timestamp, host, logger timestamp (3).
 _ROBOTLASER_TAIL = 14
 _ODOM_FIELDS = 10  # ODOM x y theta tv rv accel timestamp host logger_timestamp
 _TRUEPOS_FIELDS = 10
-
+GZIP_MAGIC = b"\x1f\x8b"
+#: A corrected log's layout: at least this share of its FLASER lines are followed by an ODOM restart.
+RESTART_SHARE = 0.9
+#: Poses this close (m, rad) are the same pose (a log prints six or so significant digits).
+POSE_TOLERANCE = 1e-4
+#: A corrected log may miss the wheel increments before this share of its scans (each is then read
+#: as no motion, and marked); more, and the odometry is not in the log.
+MAX_GAP_SHARE = 0.05
 
 
 def records(lines, source: str):
@@ -51,31 +59,55 @@ def records(lines, source: str):
             yield tokens, f"{source}: line {number}"
 
 def read_carmen(path: str | Path, corrected: bool = False) -> Iterator[Scan]:
-    """The scans of a CARMEN log file, in the file's order.
+    """The scans of a CARMEN log file (plain text, or gzip whatever its name), in the file's order.
 
     Parameters
     ----------
     path : str or Path
-        The log (plain text).
+        The log.
     corrected : bool
         The log's laser poses are corrected (optimised) poses: use them as the true pose of each scan.
-        Without it, only ``TRUEPOS`` lines give true poses.
+        Without it, only ``TRUEPOS`` lines give true poses, unless the log is laid out as a corrected
+        log with odometry restarts (see :func:`read_carmen_text`), which is recognised by itself.
     """
     path = Path(path)
     try:
-        with path.open("r", encoding="utf-8", errors="replace") as f:
-            yield from read_carmen_text(f, str(path), corrected)
+        with _open_text(path) as f:
+            lines = list(f)
     except OSError as e:
-        raise LogError(f"cannot read: {e.strerror}", str(path)) from None
+        raise LogError(f"cannot read: {e.strerror or e}", str(path)) from None
+    except EOFError:
+        raise LogError("the gzip stream ends early: a truncated file", str(path)) from None
+    yield from read_carmen_text(lines, str(path), corrected)
+
+
+def _open_text(path: Path):
+    """The file as text lines, through gzip when it starts with gzip's magic bytes."""
+    with path.open("rb") as f:
+        magic = f.read(2)
+    if magic == GZIP_MAGIC:
+        return gzip.open(path, "rt", encoding="utf-8", errors="replace")
+    return path.open("r", encoding="utf-8", errors="replace")
 
 
 def read_carmen_text(lines: Iterable[str] | str, source: str = "log", corrected: bool = False) -> Iterator[Scan]:
-    """The scans of CARMEN log text (a string or an iterable of lines); errors name ``source``."""
+    """The scans of CARMEN log text (a string or an iterable of lines); errors name ``source``.
+
+    A log corrected by a SLAM program (gmapping's ``*-corrected.log``) is recognised by its layout:
+    each ``FLASER`` holds the corrected pose in both its pose fields, and the ``ODOM`` line after it
+    restarts from that pose; the ``ODOM`` lines that follow add the raw wheel increments up to the next
+    scan. There the corrected poses are the truth and the odometry is rebuilt from those increments
+    (:func:`rebuilt_odometry`), never read from the scan's own fields.
+    """
     if isinstance(lines, str):
         lines = lines.splitlines()
+    rows = list(records(lines, source))
+    if not corrected and _has_odometry_restarts(rows):
+        yield from _corrected_with_restarts(rows, source)
+        return
     odometry: Pose | None = None
     truth: Pose | None = None
-    for tokens, where in records(lines, source):
+    for tokens, where in rows:
         kind = tokens[0]
         if kind == "ODOM":
             odometry = _pose(_fields(tokens, _ODOM_FIELDS, where), 1, where)
@@ -90,6 +122,75 @@ def read_carmen_text(lines: Iterable[str] | str, source: str = "log", corrected:
             if odometry is None:
                 raise LogError("RAWLASER1 before any ODOM line: the scan has no odometry pose", where)
             yield _with_truth(rawlaser(tokens, odometry, where), truth, corrected)
+
+
+def _has_odometry_restarts(rows: list[tuple[list[str], str]]) -> bool:
+    """Whether the log is a corrected log with odometry restarts: most ``FLASER`` lines hold one pose
+    twice and the next ``ODOM`` line starts from it."""
+    flasers = restarts = 0
+    pending: Pose | None = None
+    for tokens, where in rows:
+        if tokens[0] == "FLASER":
+            flasers += 1
+            scan = flaser(tokens, where)
+            pending = scan.truth if _same_pose(scan.truth, scan.odometry) else None
+        elif tokens[0] == "ODOM" and pending is not None:
+            restarts += _same_pose(_pose(_fields(tokens, _ODOM_FIELDS, where), 1, where), pending)
+            pending = None
+    return flasers >= 2 and restarts >= RESTART_SHARE * flasers
+
+
+def _corrected_with_restarts(rows: list[tuple[list[str], str]], source: str) -> Iterator[Scan]:
+    """The scans of a corrected log with odometry restarts: truth = the corrected pose, odometry =
+    rebuilt from the raw increments (see :func:`rebuilt_odometry`)."""
+    scans: list[Scan] = []
+    predicted: list[Pose | None] = []   # per scan: odometry's prediction of its pose (last ODOM before it)
+    last: Pose | None = None            # the latest ODOM since the previous scan's restart
+    restarting = False                  # the next ODOM is the restart after a scan
+    for tokens, where in rows:
+        if tokens[0] == "ODOM":
+            pose = _pose(_fields(tokens, _ODOM_FIELDS, where), 1, where)
+            if restarting:
+                restarting = False
+                if _same_pose(pose, scans[-1].truth):
+                    continue
+            last = pose
+        elif tokens[0] == "FLASER":
+            scan = flaser(tokens, where)
+            scans.append(Scan(scan.time, scan.ranges, scan.angle_min, scan.angle_increment, scan.range_max,
+                              scan.truth, scan.truth))
+            predicted.append(last)
+            last, restarting = None, True
+    gaps = [k for k, p in enumerate(predicted) if p is None and k > 0]
+    if len(gaps) > MAX_GAP_SHARE * len(scans):
+        raise LogError(
+            f"a corrected log whose odometry cannot be rebuilt: {len(gaps)} of {len(scans)} scans have no "
+            f"ODOM line between the previous scan's restart and themselves (the first is scan {gaps[0]}), "
+            "so the raw wheel increments are not in the log; the corrected poses are not odometry, and no "
+            "odometry is guessed", source)
+    odometry = rebuilt_odometry([s.truth for s in scans], predicted)
+    for k, (scan, pose) in enumerate(zip(scans, odometry)):
+        yield Scan(scan.time, scan.ranges, scan.angle_min, scan.angle_increment, scan.range_max, pose, scan.truth,
+                   odometry_gap=k in gaps)
+
+
+def rebuilt_odometry(corrected: list[Pose], predicted: list[Pose | None]) -> list[Pose]:
+    """The raw dead-reckoned track of a corrected log.
+
+    ``predicted[k]`` is odometry's prediction of scan ``k``: the last ``ODOM`` before it, which started
+    from scan ``k - 1``'s corrected pose. The raw increment from scan ``k - 1`` to scan ``k`` is
+    ``corrected[k-1]^-1 (+) predicted[k]``; chaining the increments from the first prediction (the raw
+    reading at the first scan, or the origin) gives the track the robot itself measured.
+
+    >>> rebuilt_odometry([(5, 5, 0), (6, 5, 0)], [None, (6.1, 5, 0.1)])
+    [(0.0, 0.0, 0.0), (1.1, 0.0, 0.1)]
+    """
+    start = predicted[0] if predicted and predicted[0] is not None else (0.0, 0.0, 0.0)
+    track = [tuple(float(v) for v in start)]
+    for before, prediction in zip(corrected, predicted[1:]):
+        step = (0.0, 0.0, 0.0) if prediction is None else between(before, prediction)
+        track.append(compose(track[-1], step))
+    return track
 
 
 def robotlaser(tokens: list[str], where: str) -> Scan:
@@ -164,6 +265,11 @@ def _after_remissions(rest: list[str], n: int, where: str) -> list[str]:
         raise LogError(f"after the {n} declared beams comes {rest[0]!r} where the number of remissions "
                        "should be: a wrong beam count", where) from None
     return rest[1 + count:]
+
+
+def _same_pose(a: Pose, b: Pose) -> bool:
+    return abs(a[0] - b[0]) <= POSE_TOLERANCE and abs(a[1] - b[1]) <= POSE_TOLERANCE and \
+        abs(wrap(a[2] - b[2])) <= POSE_TOLERANCE
 
 
 def _fields(tokens: list[str], n: int, where: str) -> list[str]:

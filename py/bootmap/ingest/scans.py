@@ -47,6 +47,9 @@ class Scan:
     truth : Pose, optional
         The log's best estimate of the true pose (optimised, or from a ground-truth topic); never used
         by the learning.
+    odometry_gap : bool
+        The log holds no odometry between the previous scan and this one: ``odometry`` carries the
+        previous scan's pose over unchanged.
     """
 
     time: float
@@ -56,6 +59,7 @@ class Scan:
     range_max: float
     odometry: Pose
     truth: Pose | None = None
+    odometry_gap: bool = False
 
     @property
     def angles(self) -> np.ndarray:
@@ -94,3 +98,11 @@ def compose(a: Pose, b: Pose) -> Pose:
     """Pose ``a`` followed by the motion ``b`` expressed in ``a``'s frame (SE(2) composition)."""
     c, s = math.cos(a[2]), math.sin(a[2])
     return (a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], wrap(a[2] + b[2]))
+
+
+def between(a: Pose, b: Pose) -> Pose:
+    """The motion from pose ``a`` to pose ``b``, in ``a``'s frame: ``a^-1 (+) b``, so that
+    ``compose(a, between(a, b)) == b``."""
+    c, s = math.cos(a[2]), math.sin(a[2])
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    return (c * dx + s * dy, -s * dx + c * dy, wrap(b[2] - a[2]))
