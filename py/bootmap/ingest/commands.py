@@ -72,7 +72,7 @@ def cmd_ingest(args: argparse.Namespace) -> int:
         return EXIT_FAILURE
     seconds = time.perf_counter() - start
     print(f"{args.output}: {len(tableau)} dstates from {len(scans)} scans ({len(scans) / seconds:.0f} scans/s)"
-          + _recall_note(tableau.meta), file=sys.stderr)
+          + _recall_note(tableau.meta) + _gap_note(tableau.meta), file=sys.stderr)
     return EXIT_OK
 
 
@@ -81,3 +81,11 @@ def _recall_note(meta: dict) -> str:
     if not recall:
         return ""
     return f"; turns found at {recall['found']} of {recall['corners']} corners seen in the true poses"
+
+
+def _gap_note(meta: dict) -> str:
+    gaps = meta.get("odometry_gaps")
+    if not gaps:
+        return ""
+    return (f"; the log holds no wheel odometry before {len(gaps)} scan(s) (first: scan {gaps[0]}), read as no "
+            "motion")
