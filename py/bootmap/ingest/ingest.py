@@ -30,7 +30,8 @@ from ..tableau import Step, Tableau, Travel, Turn
 from .dstates import (FoundTurn, JunctionDetector, TurnDetector, dstate_scans, find_passes, find_turns,
                       odometry_track, side_ranges)
 from .scans import IMAGE_ANGLE_MAX, IMAGE_ANGLE_MIN, IMAGE_BEAMS, Scan, to_image, wrap
-from .truth import corner_recall, corners_in_poses, main_axis, simplify, true_dstates
+from .places import PlaceDetector, find_visits
+from .truth import corner_recall, corners_in_poses, main_axis, sector_name, simplify, true_dstates, visit_places
 
 ROS_SUFFIXES = (".bag", ".db3", ".mcap")
 #: How far the drawn true path may stray from the log's poses (metres).
@@ -70,7 +71,8 @@ def _shown(scans: Iterable[Scan], progress: bool) -> Iterator[Scan]:
 
 
 def log_tableau(scans: list[Scan], detector: TurnDetector = TurnDetector(), max_range: float = 20.0,
-                radius_m: float = 3.0, source: str = "log", junctions: JunctionDetector | None = None) -> Tableau:
+                radius_m: float = 3.0, source: str = "log", junctions: JunctionDetector | None = None,
+                places: PlaceDetector | None = None) -> Tableau:
     """The tableau of a log: one step per dstate (see the module docstring).
 
     Parameters
@@ -88,24 +90,45 @@ def log_tableau(scans: list[Scan], detector: TurnDetector = TurnDetector(), max_
         What the log is called in messages and in ``meta.source``.
     junctions : JunctionDetector, optional
         Where travels pass junctions, which are dstates too; None: only turns give dstates.
+    places : PlaceDetector, optional
+        Choose dstates at the places the laser shows (:mod:`bootmap.ingest.places`: every pass through a
+        junction, corner or room is a visit) instead of at the turns odometry shows; ``detector`` and
+        ``junctions`` are then not used.
     """
     if len(scans) < 2:
         raise LogError(f"{len(scans)} scan(s): a log needs at least two to have any motion", source)
     distance, heading = odometry_track([s.odometry for s in scans])
-    turns = find_turns(distance, heading, detector)
-    if not turns:
-        raise LogError(f"the odometry turns nowhere (no heading change of {detector.turn_deg:g} degrees or "
-                       "more between travels): no dstate to choose", source)
-    passes = [] if junctions is None else find_passes(*side_ranges(scans), distance, turns, junctions)
+    visits = None
+    if places is None:
+        turns = find_turns(distance, heading, detector)
+        if not turns:
+            raise LogError(f"the odometry turns nowhere (no heading change of {detector.turn_deg:g} degrees or "
+                           "more between travels): no dstate to choose", source)
+        passes = [] if junctions is None else find_passes(*side_ranges(scans), distance, turns, junctions)
+    else:
+        visits = find_visits(scans, distance, heading, places)
+        if len(visits) < 2:
+            raise LogError(f"the laser shows {len(visits)} place(s) (a junction, corner or room): a map needs at "
+                           "least two", source)
+        turns = [FoundTurn(v.first, v.last, v.angle_deg) for v in visits if len(v.dstates(places.turn_deg)) == 2]
+        passes = [v.dstates(places.turn_deg)[0] for v in visits if len(v.dstates(places.turn_deg)) == 1]
     chosen = dstate_scans(turns, passes)
     actions = _actions(chosen, turns, distance, heading)
     has_truth = all(s.truth is not None for s in scans)
-    truth = _truth(scans, chosen, actions, radius_m) if has_truth else [None] * len(chosen)
+    if not has_truth:
+        truth = [None] * len(chosen)
+    elif visits is None:
+        truth = _truth(scans, chosen, actions, radius_m)
+    else:
+        truth = _visit_truth(scans, visits, places, radius_m)
     steps = tuple(Step(action=actions[k] if k < len(actions) else None,
                        image=to_image(scans[i], IMAGE_BEAMS, max_range), truth=truth[k],
                        pose=_rounded(scans[i].truth) if has_truth else None, odometry=_rounded(scans[i].odometry))
                   for k, i in enumerate(chosen))
     meta = _meta(scans, chosen, turns, detector, max_range, radius_m, source, has_truth, junctions, passes)
+    if visits is not None:
+        meta["dstates"].update(detector=None, junctions=None, places=asdict(places),
+                               visits=[[v.first, v.last] for v in visits])
     return Tableau(steps, None, meta)
 
 
@@ -138,6 +161,21 @@ def _truth(scans: list[Scan], chosen: list[int], actions: list, radius_m: float)
     poses within the radius, a turn's two ends in one, a travel's never."""
     axis = main_axis([s.truth for s in scans])
     return true_dstates([scans[i].truth for i in chosen], radius_m, axis, turn_ends(actions), travel_ends(actions))
+
+
+def _visit_truth(scans: list[Scan], visits: list, places: PlaceDetector, radius_m: float) -> list[str]:
+    """True dstates of the visits' dstates: one place per group of visits whose middles' true positions
+    all lie within ``radius_m`` of each other (complete linkage: no chain of visits stretches a place
+    along a corridor), both dstates of a turn in their visit's place; the heading's sector in the
+    building's frame."""
+    axis = main_axis([s.truth for s in scans])
+    middles = [scans[(v.first + v.last) // 2].truth for v in visits]
+    place_of = visit_places(middles, radius_m)
+    labels = []
+    for v, place in zip(visits, place_of):
+        for i in v.dstates(places.turn_deg):
+            labels.append(f"P{place}:{sector_name(scans[i].truth[2], axis)}")
+    return labels
 
 
 def _rounded(pose) -> tuple[float, float, float]:
