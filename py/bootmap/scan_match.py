@@ -1,0 +1,455 @@
+"""Scan matching: how alike two laser images are once the second is moved onto the first.
+
+Two visits to one place rarely stand on the same spot facing the same way, so their raw range vectors
+differ although they saw the same walls. This module aligns the two scans as point sets (a rigid motion of
+the plane: a shift and a turn) and scores how much of each scan the other explains once aligned. It reads
+images only (the tableau's 180 ranges from -90 to +90 degrees in the robot's frame), never poses.
+
+Method
+------
+1. **Points.** Every beam that saw something (range below ``max_range``) gives a return, a 2-D point in the
+   robot's frame.
+2. **Surfaces.** Consecutive returns are joined into one surface when they are no farther apart than a
+   wall seen at ``max_incidence_deg`` from its normal would space them (``r * beam step / cos(incidence)``,
+   plus the inlier distance for range noise); each joined piece is sampled every ``resolution_m`` (a map
+   cell). A scan's surface is its returns as an occupancy map would draw them, so a return of the other
+   scan that falls on the wall between two beams counts as explained, at any range.
+3. **Alignment.** Two visits may face any way and stand up to a place's radius apart, beyond what ICP
+   pulls in, so a global search comes first: a correlative search (as in Olson's and Cartographer's
+   scan matchers) scores every heading ``search_step_deg`` apart and every shift ``search_step_m`` apart
+   within ``place_radius_m``, by summing over ``b``'s returns (every ``search_stride``-th) a likelihood
+   field of ``a``'s surface (a Gaussian of the distance to it, as wide as the shift step). The ``refine``
+   best candidates are refined by point-to-point ICP (``small_gicp``, Koide's library; the 2-D points lie
+   at z = 0) of ``b``'s returns onto ``a``'s surface, with correspondences reaching ``coarse_m``, then
+   ``fine_m``, then ``inlier_m`` (which drops returns the other scan never saw). The candidate of highest
+   score wins.
+4. **Score.** Once aligned, a return *is explained* when it lies within ``inlier_m`` of the other scan's
+   surface, and *refuted* when it is not explained but lies nearer than what the other scan's beam towards
+   it (and both neighbouring beams) saw: the other visit's laser passed through that spot, so no wall can
+   be there. A beam that saw nothing refutes nothing (a drop-out reads the same as open space). The score
+   is the net share of the returns of both scans that the other visit confirms::
+
+       score = max(0, explained - refuted) / (returns of a + returns of b)
+
+   Its meaning in the domain: the part of what the robot saw on the two visits that can be one and the
+   same set of walls seen from two poses, less what one visit shows to be open space. It lies in [0, 1],
+   1 when every return of each scan lies on a surface the other saw; it is comparable across pairs because
+   it is a share, not a sum of squared residuals (which would favour scans with few returns). Refutations
+   matter in buildings: walls at right angles line up in many wrong ways, but a wrong alignment puts walls
+   where the other visit saw through. Parts a scan could not see (behind the robot:
+   the laser covers 180 degrees; occluded; beyond ``max_range``) lower it, so two visits of one place
+   facing opposite ways can score low: the laser did not see the same walls. An image with no return
+   scores 0 with anything.
+
+Parameters come from the sensor and the domain, not from fitting any log: a SICK-class laser's range noise
+is 1-3 cm; a map cell is 5 cm; a return is explained within 10 cm (two cells, about three standard
+deviations of the noise plus what is left of the alignment error); a place has a radius of about 3 m, which
+bounds the search's shifts; the search's steps (0.5 m, 10 degrees: 0.35 m at 4 m) leave the truth within
+ICP's 1 m first reach, then 30 cm.
+
+Matching is symmetric: :meth:`ScanMatcher.match` aligns the pair in one canonical order and inverts the
+motion when asked the other way round, so ``match(a, b)`` and ``match(b, a)`` have the same score and
+inverse transforms.
+
+Examples
+--------
+>>> import numpy as np
+>>> room = np.full(180, 20.0); room[40:140] = 4.0
+>>> m = ScanMatcher().match(room, room)
+>>> round(m.score, 2), [round(v, 3) + 0.0 for v in m.transform]
+(1.0, [0.0, 0.0, 0.0])
+>>> ScanMatcher().match(room, np.full(180, 20.0)).score
+0.0
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["Match", "ScanMatcher", "image_points", "surface_points"]
+
+
+@dataclass(frozen=True)
+class Match:
+    """The best alignment of image ``b`` onto image ``a``.
+
+    Attributes
+    ----------
+    score : float
+        Share of the returns of both images explained by the other once aligned, in [0, 1].
+    transform : tuple of float
+        ``(dx, dy, dtheta)``: the pose of ``b``'s robot frame in ``a``'s (metres, metres, radians in
+        [-pi, pi)); a point ``p`` seen by ``b`` is at ``R(dtheta) p + (dx, dy)`` in ``a``'s frame. For two
+        visits with poses ``pa`` and ``pb`` this estimates ``pa^-1 (+) pb``.
+    inliers : tuple of int
+        Returns of ``a`` explained by ``b``, returns of ``b`` explained by ``a``.
+    points : tuple of int
+        Returns of ``a`` and of ``b`` (beams that saw something).
+    """
+
+    score: float
+    transform: tuple[float, float, float]
+    inliers: tuple[int, int]
+    points: tuple[int, int]
+    refuted: tuple[int, int] = (0, 0)
+
+
+def image_points(image, max_range: float = 20.0) -> np.ndarray:
+    """The returns of a laser image as 2-D points in the robot's frame.
+
+    Parameters
+    ----------
+    image : array-like of shape (n_beams,)
+        Ranges (m) at ``linspace(-pi/2, pi/2, n_beams)`` from the robot's heading, counter-clockwise.
+    max_range : float
+        The reading that means nothing was seen (m); beams at or beyond it, or not positive, give no point.
+
+    Returns
+    -------
+    ndarray of shape (n_returns, 2)
+        The returns in beam order.
+
+    Examples
+    --------
+    >>> image_points([1.0, 20.0, 2.0]).round(6).tolist()
+    [[0.0, -1.0], [0.0, 2.0]]
+    """
+    r = np.asarray(image, dtype=float).ravel()
+    a = np.linspace(-math.pi / 2, math.pi / 2, len(r))
+    seen = np.isfinite(r) & (r > 0.0) & (r < max_range)
+    return np.column_stack([r[seen] * np.cos(a[seen]), r[seen] * np.sin(a[seen])])
+
+
+def surface_points(image, max_range: float = 20.0, resolution_m: float = 0.05, max_incidence_deg: float = 75.0,
+                   slack_m: float = 0.10) -> np.ndarray:
+    """The surfaces a laser image saw, sampled every ``resolution_m``: its returns, and points between
+    consecutive returns close enough to be one wall.
+
+    Parameters
+    ----------
+    image : array-like of shape (n_beams,)
+        Ranges (m), as for :func:`image_points`.
+    max_range : float
+        The reading that means nothing was seen (m).
+    resolution_m : float
+        Spacing of the samples along a surface (m): a map cell.
+    max_incidence_deg : float
+        Two consecutive returns are one wall when they are no farther apart than a wall seen at this angle
+        from its normal spaces them: ``r * beam step / cos(max_incidence_deg)`` at range ``r``.
+    slack_m : float
+        Added to that gap for the range noise of both returns (m).
+
+    Returns
+    -------
+    ndarray of shape (n_samples, 2)
+
+    Examples
+    --------
+    A wall face on at 2 m (returns 3.5 cm apart, kept as they are) and a gap where nothing was seen:
+
+    >>> len(surface_points(np.full(180, 2.0))), len(surface_points([2.0, 20.0, 2.0]))
+    (180, 2)
+    """
+    r = np.asarray(image, dtype=float).ravel()
+    n = len(r)
+    a = np.linspace(-math.pi / 2, math.pi / 2, n)
+    seen = np.isfinite(r) & (r > 0.0) & (r < max_range)
+    xy = np.column_stack([r * np.cos(a), r * np.sin(a)])
+    if n < 2:
+        return xy[seen]
+    step = math.pi / (n - 1)
+    gap = np.linalg.norm(np.diff(xy, axis=0), axis=1)
+    reach = np.minimum(r[:-1], r[1:]) * step / math.cos(math.radians(max_incidence_deg)) + slack_m
+    joined = seen[:-1] & seen[1:] & (gap <= reach)
+    parts = [xy[seen]]
+    k = np.flatnonzero(joined)
+    if len(k):
+        # Interior samples of every joined segment: ceil(gap / resolution) - 1 of them, evenly spaced.
+        count = np.maximum(np.ceil(gap[k] / resolution_m).astype(int) - 1, 0)
+        seg = np.repeat(k, count)
+        if len(seg):
+            within = np.arange(len(seg)) - np.repeat(np.cumsum(count) - count, count)
+            t = (within + 1) / np.repeat(count + 1, count)
+            parts.append(xy[seg] + t[:, None] * (xy[seg + 1] - xy[seg]))
+    return np.concatenate(parts)
+
+
+class _Scan:
+    """One image made ready for matching: its returns, its surface and the surface's k-d tree."""
+
+    __slots__ = ("ranges", "step", "points", "points3", "sparse", "surface_tree", "surface_cloud", "field",
+                 "origin")
+
+    def __init__(self, image, matcher: "ScanMatcher"):
+        import small_gicp
+
+        r = np.asarray(image, dtype=float).ravel()
+        # A beam that saw nothing is no evidence of free space (a drop-out reads the same): never refutes.
+        self.ranges = np.where(np.isfinite(r) & (r > 0.0) & (r < matcher.max_range), r, -np.inf)
+        self.step = math.pi / max(len(r) - 1, 1)
+        self.points = image_points(image, matcher.max_range)
+        self.points3 = np.column_stack([self.points, np.zeros(len(self.points))])
+        self.sparse = self.points[::matcher.search_stride]
+        surface = surface_points(image, matcher.max_range, matcher.resolution_m, matcher.max_incidence_deg,
+                                 matcher.inlier_m)
+        if len(surface):
+            surface3 = np.column_stack([surface, np.zeros(len(surface))])
+            self.surface_cloud = small_gicp.PointCloud(surface3)
+            self.surface_tree = small_gicp.KdTree(self.surface_cloud)
+            self.field, self.origin = _likelihood_field(surface, matcher.search_step_m, matcher.place_radius_m)
+        else:
+            self.surface_cloud = self.surface_tree = self.field = self.origin = None
+
+    def correlate(self, turned: np.ndarray, shifts: np.ndarray) -> np.ndarray:
+        """The summed likelihood field at points ``turned`` (R, P, 2), each set moved by every shift of
+        ``shifts`` (S, 2, whole cells away from the field's padding): an (R, S) array."""
+        h, w = self.field.shape
+        pad = int(np.abs(shifts).max() / _FIELD_CELL_M + 0.5) + 1
+        ij = np.rint((turned - self.origin) / _FIELD_CELL_M).astype(np.intp)
+        core = (ij[..., 0] >= pad) & (ij[..., 0] < h - pad) & (ij[..., 1] >= pad) & (ij[..., 1] < w - pad)
+        flat = np.where(core, ij[..., 0] * w + ij[..., 1], pad * w + pad)
+        step = np.rint(shifts / _FIELD_CELL_M).astype(np.intp)
+        values = self.field.ravel()[flat[:, None, :] + (step[:, 0] * w + step[:, 1])[None, :, None]]
+        return (values * core[:, None, :]).sum(axis=-1)
+
+    def judge(self, points3: np.ndarray, inlier_m: float) -> tuple[int, int]:
+        """Of ``points3`` (n x 3, in this scan's frame): how many this scan explains (within ``inlier_m`` of
+        its surface) and how many it refutes (not explained, and closer than what this scan's beams
+        towards them, and their neighbours', saw: the laser saw through them)."""
+        if self.surface_tree is None or len(points3) == 0:
+            return 0, 0
+        _, sq = self.surface_tree.batch_nearest_neighbor_search(points3)
+        explained = np.asarray(sq) <= inlier_m * inlier_m
+        rho = np.hypot(points3[:, 0], points3[:, 1])
+        beam = np.rint((np.arctan2(points3[:, 1], points3[:, 0]) + math.pi / 2) / self.step).astype(int)
+        n = len(self.ranges)
+        inside = (beam >= 0) & (beam < n)
+        b = np.clip(beam, 0, n - 1)
+        seen = np.minimum(np.minimum(self.ranges[b], self.ranges[np.maximum(b - 1, 0)]),
+                          self.ranges[np.minimum(b + 1, n - 1)])
+        refuted = inside & ~explained & (rho < seen - inlier_m)
+        return int(np.count_nonzero(explained)), int(np.count_nonzero(refuted))
+
+
+#: Cell of the likelihood field of the correlative search (m): a fifth of its 0.5 m translation step.
+_FIELD_CELL_M = 0.1
+
+
+def _likelihood_field(surface: np.ndarray, sigma_m: float, pad_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """A grid around ``surface`` holding ``exp(-d^2 / (2 sigma^2))`` of the distance ``d`` to it, padded by
+    ``pad_m`` more (the search's reach), and the grid's corner."""
+    from scipy.ndimage import distance_transform_edt
+
+    margin = 3 * sigma_m + pad_m + 2 * _FIELD_CELL_M
+    origin = surface.min(axis=0) - margin
+    shape = np.ceil((surface.max(axis=0) + margin - origin) / _FIELD_CELL_M).astype(int) + 1
+    occupied = np.ones(shape, dtype=bool)
+    ij = np.floor((surface - origin) / _FIELD_CELL_M).astype(int)
+    occupied[ij[:, 0], ij[:, 1]] = False
+    d = distance_transform_edt(occupied) * _FIELD_CELL_M
+    return np.exp(-0.5 * (d / sigma_m) ** 2).astype(np.float32), origin
+
+
+def _se2(x: float, y: float, theta: float) -> np.ndarray:
+    T = np.eye(4)
+    c, s = math.cos(theta), math.sin(theta)
+    T[:2, :2] = [[c, -s], [s, c]]
+    T[:2, 3] = x, y
+    return T
+
+
+def _planar(T: np.ndarray) -> tuple[float, float, float]:
+    """The plane motion of a 4 x 4 transform (its x, y shift and its heading)."""
+    theta = math.atan2(T[1, 0], T[0, 0])
+    return float(T[0, 3]), float(T[1, 3]), (theta + math.pi) % (2 * math.pi) - math.pi
+
+
+def _inverse(t: tuple[float, float, float]) -> tuple[float, float, float]:
+    x, y, theta = t
+    c, s = math.cos(theta), math.sin(theta)
+    return -c * x - s * y, s * x - c * y, (-theta + math.pi) % (2 * math.pi) - math.pi
+
+
+class ScanMatcher:
+    """Scan matching of laser images by multi-start ICP; see the module docstring for the method.
+
+    Parameters
+    ----------
+    max_range : float
+        The laser reading that means nothing was seen (m): the images' clip range.
+    inlier_m : float
+        A return is explained by the other scan when it lies within this distance of that scan's surface
+        (m): two 5 cm map cells, about three standard deviations of a laser's 1-3 cm range noise plus the
+        alignment's residual error.
+    resolution_m : float
+        Spacing of the samples along a surface (m): the resolution of an occupancy map.
+    max_incidence_deg : float
+        Steepest angle between a beam and a wall's normal at which consecutive returns still count as one
+        wall (degrees); at 75 degrees the returns are 3.9 times farther apart than face on.
+    coarse_m, fine_m : float
+        How far ICP looks for a return's counterpart (m) in its first two stages (the third uses
+        ``inlier_m``): about a third of a place's 3 m radius, then three inlier distances.
+    place_radius_m : float
+        Two visits of one place stand at most this far apart (m): the reach of the search's shifts.
+    search_step_m : float
+        Shift step of the correlative search (m), and the width of its likelihood field: half of it is
+        well within ICP's first reach.
+    search_step_deg : float
+        Heading step of the correlative search (degrees): half of it turns a return 4 m away by 0.35 m.
+    search_stride : int
+        The search uses every this-many-th return of ``b`` (45 of 180 beams: 4 degrees apart).
+    refine : int
+        How many of the search's best candidates ICP refines.
+    max_iterations : int
+        ICP iterations per stage.
+    n_jobs : int
+        Processes for :meth:`scores` (1: this one).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> images = np.full((3, 180), 20.0); images[0, 30:150] = 3.0; images[1, 30:150] = 3.0
+    >>> ScanMatcher().scores(images).round(2)[0].tolist()
+    [1.0, 1.0, 0.0]
+    """
+
+    def __init__(self, max_range: float = 20.0, inlier_m: float = 0.10, resolution_m: float = 0.05,
+                 max_incidence_deg: float = 75.0, coarse_m: float = 1.0, fine_m: float = 0.30,
+                 place_radius_m: float = 3.0, search_step_m: float = 0.5, search_step_deg: float = 10.0,
+                 search_stride: int = 4, refine: int = 3, max_iterations: int = 30, n_jobs: int = 1):
+        self.max_range = max_range
+        self.inlier_m = inlier_m
+        self.resolution_m = resolution_m
+        self.max_incidence_deg = max_incidence_deg
+        self.coarse_m = coarse_m
+        self.fine_m = fine_m
+        self.place_radius_m = place_radius_m
+        self.search_step_m = search_step_m
+        self.search_step_deg = search_step_deg
+        self.search_stride = search_stride
+        self.refine = refine
+        self.max_iterations = max_iterations
+        self.n_jobs = n_jobs
+
+    def prepare(self, image) -> _Scan:
+        """An image made ready for matching (its returns, surface and k-d tree), to match many times."""
+        return _Scan(image, self)
+
+    def match(self, image_a, image_b) -> Match:
+        """The best alignment of ``image_b`` onto ``image_a`` and its score.
+
+        Parameters
+        ----------
+        image_a, image_b : array-like of shape (n_beams,)
+            Laser images: ranges (m) from -90 to +90 degrees, ``max_range`` where nothing was seen.
+
+        Returns
+        -------
+        Match
+        """
+        a, b = np.asarray(image_a, dtype=float).ravel(), np.asarray(image_b, dtype=float).ravel()
+        if _canonical_first(b, a):
+            m = self._match(self.prepare(b), self.prepare(a))
+            return Match(m.score, _inverse(m.transform), m.inliers[::-1], m.points[::-1], m.refuted[::-1])
+        return self._match(self.prepare(a), self.prepare(b))
+
+    def _match(self, a: _Scan, b: _Scan) -> Match:
+        """Align ``b``'s returns onto ``a``'s surface from every start; the best start's match."""
+        import small_gicp
+
+        na, nb = len(a.points), len(b.points)
+        if na == 0 or nb == 0 or a.surface_tree is None or b.surface_tree is None:
+            return Match(0.0, (0.0, 0.0, 0.0), (0, 0), (na, nb))
+        # Global: a correlative search of b's (thinned) returns over a's likelihood field, every
+        # search_step_deg of heading and every search_step_m of shift within a place's radius.
+        rot = np.radians(np.arange(0.0, 360.0, self.search_step_deg))
+        c, s_ = np.cos(rot), np.sin(rot)
+        turned = np.stack([c[:, None] * b.sparse[:, 0] - s_[:, None] * b.sparse[:, 1],
+                           s_[:, None] * b.sparse[:, 0] + c[:, None] * b.sparse[:, 1]], axis=-1)  # (R, P, 2)
+        
+        k = int(self.place_radius_m // self.search_step_m)
+        g = np.arange(-k, k + 1) * self.search_step_m
+        shifts = np.stack(np.meshgrid(g, g, indexing="ij"), axis=-1).reshape(-1, 2)
+        shifts = shifts[np.hypot(shifts[:, 0], shifts[:, 1]) <= self.place_radius_m + 1e-9]  # (S, 2)
+        fit = a.correlate(turned, shifts)  # (R, S)
+        top = np.argsort(fit, axis=None)[::-1][:self.refine]
+        coarse = [(0, _se2(*shifts[j], rot[i])) for i, j in zip(*np.unravel_index(top, fit.shape))]
+        # Refine: the best candidates by ICP on all returns; the best by the symmetric score.
+        best = None
+        source = small_gicp.PointCloud(b.points3)
+        for _, T in coarse:
+            for reach in (self.coarse_m, self.fine_m, self.inlier_m):
+                T = small_gicp.align(a.surface_cloud, source, a.surface_tree, init_T_target_source=T,
+                                     registration_type="ICP", max_correspondence_distance=reach,
+                                     max_iterations=self.max_iterations).T_target_source
+            Ti = np.linalg.inv(T)
+            exp_b, ref_b = a.judge(b.points3 @ T[:3, :3].T + T[:3, 3], self.inlier_m)
+            exp_a, ref_a = b.judge(a.points3 @ Ti[:3, :3].T + Ti[:3, 3], self.inlier_m)
+            net = max(0, exp_a + exp_b - ref_a - ref_b) / (na + nb)
+            if best is None or net > best[0]:
+                best = (net, T, (exp_a, exp_b), (ref_a, ref_b))
+        net, T, explained, refuted = best
+        return Match(net, _planar(T), explained, (na, nb), refuted)
+
+    def scores(self, images) -> np.ndarray:
+        """Scores of all pairs of images.
+
+        Parameters
+        ----------
+        images : array-like of shape (n_images, n_beams)
+
+        Returns
+        -------
+        ndarray of shape (n_images, n_images)
+            ``scores[i, j]``: the score of :meth:`match` of images ``i`` and ``j`` (symmetric; higher is
+            more alike). The diagonal is 1 where an image has returns, else 0, and means nothing.
+        """
+        X = np.asarray(images, dtype=float)
+        if X.ndim != 2:
+            raise ValueError(f"images must be a 2-D array (n_images, n_beams), got shape {X.shape}")
+        n = len(X)
+        pairs = [(i, j) for i in range(n) for j in range(i + 1, n)]
+        if self.n_jobs == 1 or len(pairs) < 2:
+            values = _pair_scores(self, X, pairs)
+        else:
+            from concurrent.futures import ProcessPoolExecutor
+
+            chunks = [pairs[k::self.n_jobs * 4] for k in range(self.n_jobs * 4)]
+            with ProcessPoolExecutor(self.n_jobs) as pool:
+                parts = list(pool.map(_pair_scores, [self] * len(chunks), [X] * len(chunks), chunks))
+            values = np.empty(len(pairs))
+            for k, part in enumerate(parts):
+                values[k::self.n_jobs * 4] = part
+        S = np.zeros((n, n))
+        if pairs:
+            i, j = np.array(pairs).T
+            S[i, j] = S[j, i] = values
+        S[np.diag_indices(n)] = [1.0 if len(image_points(x, self.max_range)) else 0.0 for x in X]
+        return S
+
+
+def _canonical_first(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether ``a`` comes before ``b`` in a fixed order of images (so a pair is matched one way only)."""
+    if len(a) != len(b):
+        return len(a) < len(b)
+    differ = np.flatnonzero(a != b)
+    return bool(len(differ)) and bool(a[differ[0]] < b[differ[0]])
+
+
+def _pair_scores(matcher: ScanMatcher, X: np.ndarray, pairs: list[tuple[int, int]]) -> np.ndarray:
+    """Scores of the given pairs of rows of ``X`` (one process's share of :meth:`ScanMatcher.scores`)."""
+    prepared: dict[int, _Scan] = {}
+
+    def get(i: int) -> _Scan:
+        if i not in prepared:
+            prepared[i] = matcher.prepare(X[i])
+        return prepared[i]
+
+    out = np.empty(len(pairs))
+    for k, (i, j) in enumerate(pairs):
+        a, b = (j, i) if _canonical_first(X[j], X[i]) else (i, j)
+        out[k] = matcher._match(get(a), get(b)).score
+    return out

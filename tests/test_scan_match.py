@@ -1,0 +1,117 @@
+"""Scan matching of laser images (bootmap.scan_match) with the real small_gicp, on hand ray-cast rooms."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from bootmap.scan_match import Match, ScanMatcher, image_points, surface_points
+from support.raycast import CORRIDOR, ROOM, cast
+
+MATCHER = ScanMatcher()
+
+
+def relative(pa, pb):
+    """The pose of ``pb`` in ``pa``'s frame."""
+    c, s = math.cos(pa[2]), math.sin(pa[2])
+    dx, dy = pb[0] - pa[0], pb[1] - pa[1]
+    return c * dx + s * dy, -s * dx + c * dy, (pb[2] - pa[2] + math.pi) % (2 * math.pi) - math.pi
+
+
+def angle_error(a, b):
+    return abs((a - b + math.pi) % (2 * math.pi) - math.pi)
+
+
+@pytest.mark.parametrize("shift", [(0.6, -0.3, math.radians(25)), (1.5, 0.8, math.radians(-70)),
+                                   (-0.4, 0.5, math.radians(40))])
+def test_a_scan_against_itself_moved_recovers_the_motion(shift):
+    # The room seen again from a pose turned and shifted (views that overlap: the laser covers 180 degrees).
+    pa = (2.5, 2.5, 0.3)
+    c, s = math.cos(pa[2]), math.sin(pa[2])
+    pb = (pa[0] + c * shift[0] - s * shift[1], pa[1] + s * shift[0] + c * shift[1], pa[2] + shift[2])
+    a, b = cast(ROOM, pa), cast(ROOM, pb)
+    m = MATCHER.match(a, b)
+    want = relative(pa, pb)
+    assert math.dist(m.transform[:2], want[:2]) < 0.05
+    assert angle_error(m.transform[2], want[2]) < math.radians(1)
+    # The same walls from a pose turned and shifted: what both saw lies on the other's surface.
+    assert m.score > 0.5 and sum(m.refuted) <= 2
+
+
+def test_a_scan_against_itself_scores_one():
+    a = cast(ROOM, (3.0, 3.5, -0.4), noise_m=0.02)
+    m = MATCHER.match(a, a)
+    assert m.score > 0.98
+    assert math.dist(m.transform[:2], (0, 0)) < 0.02 and angle_error(m.transform[2], 0) < math.radians(0.5)
+
+
+def test_a_noisy_shifted_copy_scores_near_one():
+    rng = np.random.default_rng(3)
+    pa, pb = (2.0, 2.5, 0.0), (2.3, 2.6, 0.05)
+    m = MATCHER.match(cast(ROOM, pa, noise_m=0.02, rng=rng), cast(ROOM, pb, noise_m=0.02, rng=rng))
+    assert m.score > 0.9
+    want = relative(pa, pb)
+    assert math.dist(m.transform[:2], want[:2]) < 0.05 and angle_error(m.transform[2], want[2]) < math.radians(1)
+
+
+def test_different_rooms_score_clearly_lower_than_a_shifted_copy():
+    room, room_moved = cast(ROOM, (2.0, 3.0, 0.2)), cast(ROOM, (2.8, 3.4, 0.5))
+    corridor = cast(CORRIDOR, (11.0, 4.0, math.pi / 2))
+    same = MATCHER.match(room, room_moved).score
+    other = max(MATCHER.match(room, corridor).score, MATCHER.match(corridor, room).score)
+    assert same > 0.6
+    assert other < same - 0.3
+
+
+def test_scores_is_symmetric_with_the_matches_scores():
+    images = np.array([cast(ROOM, (2.0, 3.0, 0.2)), cast(ROOM, (2.8, 3.4, 0.5)), cast(CORRIDOR, (11, 4, 1.5)),
+                       np.full(180, 20.0)])
+    S = MATCHER.scores(images)
+    assert S.shape == (4, 4) and np.allclose(S, S.T)
+    assert S[0, 1] == pytest.approx(MATCHER.match(images[0], images[1]).score)
+    assert S[0, 1] > S[0, 2]
+    assert (S[3] == 0).all()
+    assert np.allclose(ScanMatcher(n_jobs=2).scores(images), S)
+
+
+@pytest.mark.parametrize("empty", [np.full(180, 20.0), np.zeros(180), np.full(180, 25.0)])
+def test_an_image_that_saw_nothing_scores_zero(empty):
+    room = cast(ROOM, (2.0, 3.0, 0.2))
+    for m in (MATCHER.match(room, empty), MATCHER.match(empty, room), MATCHER.match(empty, empty)):
+        assert isinstance(m, Match) and m.score == 0.0
+    assert MATCHER.scores([empty, empty]).tolist() == [[0.0, 0.0], [0.0, 0.0]]
+
+
+def test_points_are_the_beams_that_saw_something():
+    image = np.full(180, 20.0)
+    image[0], image[90], image[179] = 1.0, 2.0, 3.0
+    pts = image_points(image)
+    assert pts.shape == (3, 2)
+    assert np.allclose(pts[0], (0, -1), atol=1e-9) and np.allclose(pts[2], (0, 3), atol=1e-9)
+    # A wall face on at 2 m: consecutive returns 3.5 cm apart are joined and sampled every 5 cm at most.
+    wall = surface_points(np.full(180, 2.0))
+    gaps = np.linalg.norm(np.diff(wall[np.argsort(np.arctan2(wall[:, 1], wall[:, 0]))], axis=0), axis=1)
+    assert gaps.max() <= 0.05 + 1e-9
+
+
+poses = st.tuples(st.floats(0.8, 7.2), st.floats(0.8, 4.2), st.floats(-math.pi, math.pi))
+
+
+@settings(max_examples=15, deadline=None)
+@given(pa=poses, pb=poses, noise=st.sampled_from([0.0, 0.02]))
+def test_score_in_unit_interval_and_matching_symmetric(pa, pb, noise):
+    rng = np.random.default_rng(0)
+    a, b = cast(ROOM, pa, noise_m=noise, rng=rng), cast(ROOM, pb, noise_m=noise, rng=rng)
+    ab, ba = MATCHER.match(a, b), MATCHER.match(b, a)
+    assert 0.0 <= ab.score <= 1.0
+    assert ab.score == pytest.approx(ba.score, abs=1e-9)
+    assert ab.inliers == ba.inliers[::-1] and ab.points == ba.points[::-1]
+    # The two transforms are each other's inverse: composing them is no motion.
+    x, y, t = ab.transform
+    c, s = math.cos(t), math.sin(t)
+    u, v, w = ba.transform
+    assert math.hypot(x + c * u - s * v, y + s * u + c * v) < 1e-6 and angle_error(t + w, 0.0) < 1e-6
