@@ -6,6 +6,7 @@ import pytest
 
 from bootmap.cli import main
 from bootmap.errors import BadInput, LogError
+from bootmap.experiments.evaluate import DESCRIPTORS
 from bootmap.experiments.log import run_log_experiment
 
 from log_data import EXCERPT
@@ -58,6 +59,38 @@ def test_the_square_meets_every_target_and_says_so(square_run):
         assert (n["revisited"], n["ceiling"], n["revisited_visits"]) == (1.0, 1.0, 16)
 
 
+def test_the_square_is_judged_as_slam_papers_judge_a_map(square_run):
+    r, out = square_run
+    b = r["baselines"]
+    assert (b["map"], b["odometry_alone"], b["own_dstate"]) == (1.0, 1.0, 0.5)
+    # Exact odometry ties the map: it beats a dstate per visit, not odometry alone, yet makes no error.
+    assert not b["beats_baselines"] and b["error_ratio"] == 0.0 and b["target_met"]
+    # Lap two closes every true dstate of lap one (8 pairs); each place's 4 visits make 4 closing pairs
+    # (a turn's two ends, left in between by nothing, are not a closure).
+    exact = {"precision": 1.0, "recall": 1.0}
+    assert r["loop_closure"]["map"]["dstates"] == {"joins": 8, "true_joins": 8, "should_join": 8, **exact}
+    assert r["loop_closure"]["map"]["places"] == {"joins": 16, "true_joins": 16, "should_join": 16, **exact}
+    for d in DESCRIPTORS:  # a revisit reads its first visit's scan exactly
+        p = r["place_recognition"][d]
+        assert (p["visits"], p["revisits"], p["best_correct"]) == (16, 8, 8)
+        assert p["recall_at_95_precision"] == p["recall_at_99_precision"] == 1.0
+    perfect = r["perfect_odometry"]
+    assert perfect["images"] == 16 and perfect["map"]["dstate_accuracy"] == 1.0
+    for name in ("map_accuracy", "error_over_better_baseline", "loop_closure_precision",
+                 "place_recognition_recall_at_95_precision", "perfect_odometry_map_accuracy"):
+        assert r["targets"][name]["met"], name
+    saved = json.loads((out / "results.json").read_text())
+    assert {"baselines", "loop_closure", "place_recognition", "perfect_odometry"} <= saved.keys()
+    report = (out / "report.md").read_text()
+    assert "beats both: no" in report and "recall 100.0% at 95% precision" in report
+
+
+def test_without_the_perfect_odometry_run_its_target_is_left_out(square):
+    r = run_log_experiment(square, perfect_odometry=False)
+    assert r["perfect_odometry"] is None and "perfect_odometry_map_accuracy" not in r["targets"]
+    assert r["targets"]["loop_closure_precision"]["met"]
+
+
 def test_views_beat_shuffled_truth_on_the_square(square_run):
     v = square_run[0]["views"]
     assert (v["k"], v["k_by_M"], v["criterion"]) == (8, 8, "M") and not v["M_degenerate"]
@@ -67,7 +100,7 @@ def test_views_beat_shuffled_truth_on_the_square(square_run):
 def test_the_report_has_its_figures(square_run):
     r, out = square_run
     for name in ("results.json", "report.md", "views_M_U.png", "trajectory.png", "topological_map.png",
-                 "learning_curves.png"):
+                 "learning_curves.png", "precision_recall.png"):
         assert (out / name).stat().st_size > 0, name
     assert json.loads((out / "results.json").read_text())["map"]["dstates"] == 8
     assert "visits in their true dstate: 100.0%" in (out / "report.md").read_text()

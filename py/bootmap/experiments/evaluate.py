@@ -17,6 +17,16 @@ never saw them.
   or a shift-tolerant distance (:func:`shift_tolerant_distances`), on the visits whose true dstate is
   seen more than once; a visit to a dstate seen once has nothing to be recognised by (the ceiling).
 
+The evaluation SLAM papers report, judged against the corrected poses:
+
+- :func:`against_baselines`: the map's share of visits in their true dstate beside both baselines on
+  the same visits (odometry alone, a dstate per visit), and whether it beats them.
+- :func:`loop_closure`: precision and recall of the pairs of visits a map joins (puts in one dstate,
+  or one place).
+- :func:`place_recognition`: each visit's best match among the earlier visits under any score matrix,
+  a threshold swept over the scores: precision-recall, recall at 95% and 99% precision, average
+  precision. :func:`descriptor_scores` gives the scans' scores (negated distances).
+
 Example
 -------
 A scan and the same scan turned by four beams are far apart beam by beam, and the same scan to a
@@ -51,6 +61,11 @@ MAX_SHIFT = 10
 def place_of_truth(label: str) -> str:
     """The place of a true dstate label (``P3:N`` -> ``P3``)."""
     return str(label).split(":")[0]
+
+
+def sector_of_truth(label: str) -> str:
+    """The heading sector of a true dstate label (``P3:N`` -> ``N``)."""
+    return str(label).split(":")[-1]
 
 
 def map_against_truth(truth: Sequence[str], cmap) -> dict:
@@ -147,3 +162,184 @@ def nn_on_revisits(images, truth: Sequence[str], descriptor: str = "raw", max_sh
             "revisited": float(hit[again].mean()) if again.any() else None,
             "all_visits": float(hit.mean()) if len(x) else None,
             "ceiling": float(again.mean()) if len(x) else None}
+
+
+#: The target against the baselines: this share of visits in their true dstate at least, and at most
+#: this share of the better baseline's error.
+BASELINE_TARGET = {"accuracy": 0.90, "error_ratio": 0.5}
+
+
+def against_baselines(accuracy: float, odometry_alone: float, own_dstate: float) -> dict:
+    """The map's share of visits in their true dstate beside the baselines' on the same visits.
+
+    ``beats_baselines`` is true when the map is strictly better than both; ``error_ratio`` is the map's
+    error over the better baseline's (0 when the map makes none, None when the baseline makes none and
+    the map does); the target is met at ``BASELINE_TARGET``'s accuracy or more with at most its share of
+    the better baseline's error.
+
+    >>> r = against_baselines(0.95, 0.8, 0.9)
+    >>> r["beats_baselines"], r["better_baseline"], round(r["error_ratio"], 2), r["target_met"]
+    (True, 'own_dstate', 0.5, True)
+    """
+    better = "odometry_alone" if odometry_alone >= own_dstate else "own_dstate"
+    best = max(odometry_alone, own_dstate)
+    error, best_error = 1.0 - accuracy, 1.0 - best
+    ratio = 0.0 if error <= 1e-12 else (None if best_error <= 1e-12 else error / best_error)
+    close = ratio is not None and ratio <= BASELINE_TARGET["error_ratio"] + 1e-9
+    met = accuracy >= BASELINE_TARGET["accuracy"] and close
+    return {"map": accuracy, "odometry_alone": odometry_alone, "own_dstate": own_dstate,
+            "better_baseline": better, "beats_baselines": bool(accuracy > best), "error_ratio": ratio,
+            "target": dict(BASELINE_TARGET), "target_met": bool(met)}
+
+
+def _xy(poses) -> np.ndarray:
+    return np.asarray(poses, dtype=float).reshape(len(poses), -1)[:, :2]
+
+
+def loop_closure(labels: Sequence[Hashable], poses, radius_m: float = 3.0,
+                 sectors: Sequence[Hashable] | None = None) -> dict:
+    """Precision and recall of the pairs of visits a map joins.
+
+    Only pairs that could close a loop count: a visit and an earlier one the robot has left since
+    (:func:`revisit_candidates`; a turn's two ends are one place by construction, not a closure). A
+    *join* is such a pair the map gives one label (one dstate, or one place). A pair is *true* (should
+    be joined) when the corrected poses of its two visits lie within ``radius_m`` of each other and,
+    given ``sectors`` (the true heading sector of each visit, :func:`sector_of_truth`: for dstates),
+    their sectors are the same.
+
+    Parameters
+    ----------
+    labels : sequence
+        The map's label of each visit, in time order.
+    poses : array-like (n, 2 or 3)
+        The corrected pose of each visit (only x and y are read).
+    radius_m : float
+        The place radius.
+    sectors : sequence, optional
+        The true heading sector of each visit; a dstate join must keep the sector.
+
+    Returns
+    -------
+    dict
+        ``joins``, ``true_joins``, ``should_join`` (true pairs), ``precision`` (true joins / joins, None
+        without joins) and ``recall`` (true joins / true pairs, None without true pairs).
+
+    Examples
+    --------
+    >>> r = loop_closure(["a", "b", "a", "a"], [(0, 0), (9, 0), (1, 0), (20, 0)])
+    >>> r["joins"], r["true_joins"], r["should_join"], r["precision"], r["recall"]
+    (2, 1, 1, 0.5, 1.0)
+    """
+    label = np.asarray([str(x) for x in labels])
+    pairs = revisit_candidates(poses, radius_m)  # [j, i]: i earlier than j, left since
+    joined = (label[:, None] == label[None, :]) & pairs
+    true = (cdist(_xy(poses), _xy(poses)) <= radius_m) & pairs if len(label) else pairs
+    if sectors is not None:
+        sector = np.asarray([str(x) for x in sectors])
+        true &= sector[:, None] == sector[None, :]
+    joins, should, hits = int(joined.sum()), int(true.sum()), int((joined & true).sum())
+    return {"joins": joins, "true_joins": hits, "should_join": should,
+            "precision": hits / joins if joins else None, "recall": hits / should if should else None}
+
+
+def revisit_candidates(poses, radius_m: float = 3.0) -> np.ndarray:
+    """Which earlier visits each visit may be matched with: ``c[j, i]`` is true when ``i < j`` and the
+    robot has left visit ``i``'s place since (some visit between ``i`` and ``j`` lies beyond
+    ``radius_m`` of it). The visit just before at the same place (a turn's other end) is not a revisit."""
+    xy = _xy(poses)
+    n = len(xy)
+    far = cdist(xy, xy) > radius_m if n else np.zeros((0, 0), dtype=bool)
+    later = np.triu(far, 1)
+    left = np.where(later.any(axis=1), np.argmax(later, axis=1), n)  # the first visit beyond i's radius
+    return np.arange(n)[:, None] > left[None, :]
+
+
+def place_recognition(scores: np.ndarray, poses, radius_m: float = 3.0) -> dict:
+    """Place recognition as precision-recall, for any descriptor.
+
+    Each visit ``j`` takes its best match among the earlier visits it may be matched with
+    (:func:`revisit_candidates`): the ``i`` of the highest ``scores[j, i]``. A threshold is swept over
+    those best scores: a visit whose best score reaches it is a detection, a true positive when its match
+    lies within ``radius_m`` of it (corrected poses); a visit with a candidate within ``radius_m`` (a true
+    revisit) counts in recall's denominator.
+
+    Parameters
+    ----------
+    scores : numpy.ndarray (n, n)
+        ``scores[j, i]``: how alike visits ``j`` and ``i`` are (higher = more alike), visits in time
+        order; only ``i < j`` is read.
+    poses : array-like (n, 2 or 3)
+        The corrected pose of each visit.
+    radius_m : float
+        The place radius.
+
+    Returns
+    -------
+    dict
+        ``visits``, ``queries`` (visits with an earlier candidate), ``revisits`` (recall's denominator),
+        ``best_correct`` (revisits whose best match is right: the highest recall),
+        ``recall_at_95_precision`` and ``recall_at_99_precision`` (the highest recall at that precision
+        or more; 0 when none reaches it, None without revisits), ``average_precision`` (the sum of
+        precision times the rise in recall) and ``curve`` (threshold, precision, recall at each distinct
+        best score, highest first).
+
+    Examples
+    --------
+    >>> poses = [(0, 0), (10, 0), (20, 0), (0.5, 0), (20, 1)]
+    >>> near = np.array([[float(np.hypot(a[0] - b[0], a[1] - b[1]) <= 3) for b in poses] for a in poses])
+    >>> r = place_recognition(near, poses)
+    >>> r["revisits"], r["recall_at_99_precision"], r["average_precision"]
+    (2, 1.0, 1.0)
+    """
+    s = np.asarray(scores, dtype=float)
+    xy = _xy(poses)
+    if s.shape != (len(xy), len(xy)):
+        raise ValueError(f"scores of shape {s.shape} for {len(xy)} visits")
+    near = cdist(xy, xy) <= radius_m if len(xy) else np.zeros((0, 0), dtype=bool)
+    candidates = revisit_candidates(xy, radius_m)
+    best, correct, revisit = [], [], 0
+    for j in np.flatnonzero(candidates.any(axis=1)):
+        cand = np.flatnonzero(candidates[j])
+        i = cand[np.argmax(s[j, cand])]
+        best.append(s[j, i])
+        correct.append(bool(near[j, i]))
+        revisit += bool(near[j, cand].any())
+    curve = _pr_curve(np.asarray(best), np.asarray(correct, dtype=bool), revisit)
+    return {"visits": len(xy), "queries": len(best), "revisits": revisit, "best_correct": int(sum(correct)),
+            "recall_at_95_precision": recall_at_precision(curve, 0.95, revisit),
+            "recall_at_99_precision": recall_at_precision(curve, 0.99, revisit),
+            "average_precision": average_precision(curve, revisit), "curve": curve}
+
+
+def _pr_curve(best: np.ndarray, correct: np.ndarray, positives: int) -> list[dict]:
+    """Precision and recall at each distinct best score taken as the threshold, highest first."""
+    if not len(best):
+        return []
+    order = np.argsort(-best, kind="stable")
+    best, correct = best[order], correct[order]
+    hits = np.cumsum(correct)
+    last = np.flatnonzero(np.append(best[1:] != best[:-1], True))  # a tie is one threshold
+    return [{"threshold": float(best[k]), "precision": float(hits[k] / (k + 1)),
+             "recall": float(hits[k] / positives) if positives else 0.0} for k in last]
+
+
+def recall_at_precision(curve: list[dict], precision: float, positives: int = 1) -> float | None:
+    """The highest recall on ``curve`` at ``precision`` or more (0 when no point reaches it; None
+    without positives)."""
+    if not positives:
+        return None
+    return max((p["recall"] for p in curve if p["precision"] >= precision - 1e-12), default=0.0)
+
+
+def average_precision(curve: list[dict], positives: int = 1) -> float | None:
+    """Precision summed over the curve, each point weighted by the recall it adds (None without
+    positives)."""
+    if not positives:
+        return None
+    recall = np.array([0.0] + [p["recall"] for p in curve])
+    return float(sum(np.diff(recall) * np.array([p["precision"] for p in curve])))
+
+
+def descriptor_scores(images, descriptor: str = "raw", max_shift: int = MAX_SHIFT) -> np.ndarray:
+    """How alike each pair of scans is by a descriptor of :data:`DESCRIPTORS`: the negated distance."""
+    return -_distances(np.asarray(images, dtype=float), descriptor, max_shift)

@@ -2,6 +2,7 @@
 
 - :func:`trajectory_figure`: the true path in grey, each chosen dstate at its true pose, coloured by
   the place the map put it in (black crosses where there is no map).
+- :func:`precision_recall_figure`: place recognition's precision-recall curve, one per descriptor.
 - :func:`topological_figure`: the learned topological map, each place drawn at the mean true position
   of the dstates the map put in it, its paths as lines through their places in order.
 """
@@ -81,5 +82,26 @@ def topological_figure(results: dict, tableau, cmap, path: Path) -> None:
     m = results["map"]
     ax.set_title(f"{results['world']}: learned map, {m['places']} places and {m['paths']} paths "
                  "at their mean true positions", fontsize=9)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def precision_recall_figure(results: dict, path: Path) -> None:
+    """Place recognition's precision against recall, a curve per descriptor (a point per threshold),
+    the 95% precision line dashed."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6, 4.5))
+    for name, p in results["place_recognition"].items():
+        recall = [c["recall"] for c in p["curve"]]
+        precision = [c["precision"] for c in p["curve"]]
+        at95 = "-" if p["recall_at_95_precision"] is None else f"{p['recall_at_95_precision']:.2f}"
+        ax.plot(recall, precision, "-o", ms=3, label=f"{name} (recall at 95% precision {at95})")
+    ax.axhline(0.95, color="0.6", ls="--", lw=0.8)
+    ax.set_xlim(0, 1.02)
+    ax.set_ylim(0, 1.02)
+    ax.set_xlabel("recall (visits with a true revisit)")
+    ax.set_ylabel("precision")
+    ax.legend(loc="upper right", fontsize=8)
+    ax.set_title(f"{results['world']}: place recognition, best earlier match", fontsize=9)
     fig.savefig(path, dpi=110)
     plt.close(fig)

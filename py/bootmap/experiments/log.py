@@ -14,14 +14,24 @@
 5. Recognition as the paper's (images labelled by the map), and nearest neighbour on the true dstates
    seen more than once, with raw scans and with a shift-tolerant distance (:mod:`bootmap.experiments.evaluate`).
 
+6. The evaluation SLAM papers report, against the corrected poses (:mod:`bootmap.experiments.evaluate`):
+   the map beside both baselines on the same visits (``baselines``: odometry alone, a dstate per visit;
+   does it beat both?), loop-closure precision and recall of the map's and odometry alone's joins
+   (``loop_closure``), and place recognition as precision-recall for each scan descriptor
+   (``place_recognition``).
+7. The upper bound: the same experiment with each scan's odometry replaced by its corrected pose
+   (``perfect_odometry``): what the method gets wrong without any drift.
+
 Results use the simulated experiment's keys where the meaning is the same (``views``, ``map``,
-``recognition``, ``timings``), and add ``truth`` (corner recall), ``nn_revisited`` and ``targets``
-(the targets this project set itself for a real log, measured, never assumed).
+``recognition``, ``timings``), and add ``truth`` (corner recall), ``nn_revisited``, the keys of 6 and 7,
+and ``targets`` (the targets this project set itself for a real log, measured, never assumed).
 """
 
 from __future__ import annotations
 
 import json
+import operator
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -33,7 +43,9 @@ from ..mapping.loops import MAPPERS
 from ..metrics import dstate_accuracy
 from ..views import ViewClusterer, davies_bouldin_k, view_labels, view_table
 from ..ingest.dstates import JunctionDetector, TurnDetector
-from .evaluate import DESCRIPTORS, dead_reckoned_dstates, map_against_truth, nn_on_revisits, views_against_truth
+from .evaluate import (DESCRIPTORS, against_baselines, dead_reckoned_dstates, descriptor_scores, loop_closure,
+                       map_against_truth, nn_on_revisits, place_of_truth, place_recognition, sector_of_truth,
+                       views_against_truth)
 from ..ingest.ingest import log_tableau, read_log, travel_ends, turn_ends
 
 #: How k is chosen for the map's views: "auto" takes M's k unless M degenerates (k <= 2), then
@@ -43,33 +55,54 @@ VIEW_CRITERIA = ("auto", "M", "davies-bouldin")
 #: ambitious).
 TARGETS = {"corner_recall": 0.95, "angles_within_10_deg": 1.0, "visits_in_true_dstate": 0.80,
            "nn_revisited": 0.60}
+#: The targets on every real log, judged against the corrected poses as SLAM papers judge theirs:
+#: name -> (comparison, bound). The map's share of visits in their true dstate with at most half the better
+#: baseline's error; loop-closure precision of the map's dstates; place recognition's recall at 95%
+#: precision (the best descriptor); the map with the corrected poses as odometry.
+EVALUATION_TARGETS = {"map_accuracy": (">=", 0.90), "error_over_better_baseline": ("<=", 0.5),
+                      "loop_closure_precision": (">=", 0.95),
+                      "place_recognition_recall_at_95_precision": (">=", 0.80),
+                      "perfect_odometry_map_accuracy": (">=", 0.97)}
+_OPS = {">=": operator.ge, "<=": operator.le}
 
 
 def run_log_experiment(log: str | Path, out_dir: str | Path | None = None, seed: int = 0, k_max: int = 12,
                        time_limit: float = 60.0, quantum_deg: float | None = None,
                        view_criterion: str = "auto", detector: TurnDetector = TurnDetector(),
                        max_range: float = 20.0, radius_m: float = 3.0, progress: bool = False,
-                       junctions: JunctionDetector | None = None, mapper: str = "loops") -> dict:
+                       junctions: JunctionDetector | None = None, mapper: str = "loops",
+                       perfect_odometry: bool = True) -> dict:
     """Run the experiment on a log (a path any of :func:`~bootmap.ingest.ingest.read_log`'s formats, or
     ``killian``); see the module docstring. Returns the results and, given ``out_dir``, writes
     ``results.json``, ``report.md`` and figures there. The robot's action types are learned, as in the
-    simulated experiment, unless ``quantum_deg`` rounds the angles instead."""
+    simulated experiment, unless ``quantum_deg`` rounds the angles instead. With ``perfect_odometry``
+    the experiment is run again on the scans with their odometry replaced by their corrected poses
+    (``perfect_odometry`` in the results: the method's errors without the drift)."""
     if view_criterion not in VIEW_CRITERIA:
         raise BadInput(f"unknown view criterion {view_criterion!r}; known: {', '.join(VIEW_CRITERIA)}")
     if mapper not in MAPPERS:
         raise BadInput(f"unknown mapper {mapper!r}; known: {', '.join(MAPPERS)}")
     from threadpoolctl import threadpool_limits
 
+    settings = dict(seed=seed, k_max=k_max, time_limit=time_limit, quantum_deg=quantum_deg,
+                    view_criterion=view_criterion, detector=detector, max_range=max_range, radius_m=radius_m,
+                    junctions=junctions, mapper=mapper)
     with threadpool_limits(limits=1):  # small arrays: threads only wait on each other (see run_experiment)
-        return _run(log, out_dir, seed, k_max, time_limit, quantum_deg, view_criterion, detector, max_range,
-                    radius_m, progress, junctions, mapper)
+        lap = Laps()
+        scans = read_log(log, progress=progress)
+        results, tableau, cmap = _experiment(scans, log, lap, **settings)
+        results["perfect_odometry"] = _perfect_odometry(scans, log, settings) if perfect_odometry else None
+        lap("perfect_odometry_s")
+    results["targets"] = targets(results)
+    if out_dir is not None:
+        write_log_report(results, Path(out_dir), tableau, cmap)
+    return results
 
 
-def _run(log, out_dir, seed, k_max, time_limit, quantum_deg, view_criterion, detector, max_range, radius_m,
-         progress, junctions, mapper) -> dict:
-    lap = Laps()
+def _experiment(scans, log, lap, seed, k_max, time_limit, quantum_deg, view_criterion, detector, max_range,
+                radius_m, junctions, mapper) -> tuple[dict, object, object]:
+    """The experiment on scans already read: results (without targets), the tableau and the map."""
     timings = lap.timings
-    scans = read_log(log, progress=progress)
     tableau = log_tableau(scans, detector, max_range=max_range, radius_m=radius_m, source=str(log),
                           junctions=junctions)
     if any(s.truth is None for s in tableau.steps):
@@ -94,6 +127,7 @@ def _run(log, out_dir, seed, k_max, time_limit, quantum_deg, view_criterion, det
                                  turn_ends(tableau.actions), travel_ends(tableau.actions))
     recognition = None if cmap is None else recognition_section(images, cmap.dstate_of, "1-NN", seed)
     lap("recognise_s")
+    poses = [s.pose for s in tableau.steps]
     results = {
         "world": _name(log), "log": str(log), "seed": seed, "scans": len(scans), "images": len(images),
         "clusterer": "kmeans", "quantum_deg": quantum_deg,
@@ -105,10 +139,39 @@ def _run(log, out_dir, seed, k_max, time_limit, quantum_deg, view_criterion, det
                 "retyped_steps": cmap.retyped_steps},
         "dead_reckoning": {"dstates": len(set(dead)), "dstate_accuracy": dstate_accuracy(truth, dead)},
         "recognition": recognition, "nn_revisited": nn, "timings": timings}
-    results["targets"] = targets(results)
-    if out_dir is not None:
-        write_log_report(results, Path(out_dir), tableau, cmap)
-    return results
+    results.update(_slam_evaluation(results, images, poses, truth, cmap, dead, radius_m))
+    lap("evaluate_s")
+    return results, tableau, cmap
+
+
+def _slam_evaluation(r: dict, images, poses, truth, cmap, dead, radius_m) -> dict:
+    """The figures SLAM papers report, against the corrected poses: the map beside both baselines,
+    loop closures (the map's and odometry alone's) and place recognition by each descriptor."""
+    sectors = [sector_of_truth(t) for t in truth]
+    odometry_alone = r["dead_reckoning"]["dstate_accuracy"]
+    own = dstate_accuracy(truth, [str(i) for i in range(len(truth))])
+    loops = {"odometry_alone": {"dstates": loop_closure(dead, poses, radius_m, sectors),
+                                "places": loop_closure([place_of_truth(d) for d in dead], poses, radius_m)}}
+    baselines = None
+    if cmap is not None:
+        baselines = against_baselines(r["map"]["dstate_accuracy"], odometry_alone, own)
+        places = [cmap.place_of.get(d, d) for d in cmap.dstate_of]
+        loops["map"] = {"dstates": loop_closure(cmap.dstate_of, poses, radius_m, sectors),
+                        "places": loop_closure(places, poses, radius_m)}
+    recognition = {d: place_recognition(descriptor_scores(images, d), poses, radius_m) for d in DESCRIPTORS}
+    return {"baselines": baselines, "loop_closure": loops, "place_recognition": recognition}
+
+
+def _perfect_odometry(scans, log, settings: dict) -> dict:
+    """The experiment again with each scan's odometry replaced by its corrected pose: an upper bound
+    that separates the method's errors from the odometry's drift."""
+    perfect = [replace(s, odometry=s.truth, odometry_gap=False) for s in scans]
+    r, _, _ = _experiment(perfect, log, Laps(), **settings)
+    keep = ("images", "truth", "map", "dead_reckoning", "baselines", "loop_closure")
+    out = {k: r[k] for k in keep}
+    out["truth"] = {"true_dstates": r["truth"]["true_dstates"], "corner_recall": r["truth"]["corner_recall"]}
+    out["map"] = {k: v for k, v in r["map"].items() if k not in ("merged_true_dstates", "split_true_dstates")}
+    return out
 
 
 def _name(log) -> str:
@@ -132,16 +195,41 @@ def _views(images, truth, k_max, seed, max_range, criterion) -> tuple[ViewCluste
 
 
 def targets(r: dict) -> dict:
-    """The targets, each with what was measured and whether it is met."""
+    """The targets, each with what was measured, how it is compared (``op``) and whether it is met."""
     recall = r["truth"]["corner_recall"]
     m = r["map"]
     measured = {"corner_recall": recall["recall"], "angles_within_10_deg": recall["angles_within_10_deg"],
                 "visits_in_true_dstate": m.get("dstate_accuracy"),
                 "nn_revisited": max((n["revisited"] for n in r["nn_revisited"].values()
                                      if n["revisited"] is not None), default=None)}
-    return {name: {"target": goal, "measured": measured[name],
-                   "met": measured[name] is not None and measured[name] >= goal}
-            for name, goal in TARGETS.items()}
+    goals = {name: (">=", goal) for name, goal in TARGETS.items()}
+    if "place_recognition" in r:
+        measured.update(evaluation_figures(r))
+        goals.update(EVALUATION_TARGETS)
+        if r.get("perfect_odometry") is None:
+            del goals["perfect_odometry_map_accuracy"]
+    return {name: {"target": goal, "op": op, "measured": measured[name],
+                   "met": measured[name] is not None and bool(_OPS[op](measured[name], goal))}
+            for name, (op, goal) in goals.items()}
+
+
+def evaluation_figures(r: dict) -> dict:
+    """The figures :data:`EVALUATION_TARGETS` judge (None where not measured)."""
+    baselines, perfect = r.get("baselines"), r.get("perfect_odometry")
+    loops = r["loop_closure"].get("map")
+    return {"map_accuracy": r["map"].get("dstate_accuracy"),
+            "error_over_better_baseline": None if baselines is None else baselines["error_ratio"],
+            "loop_closure_precision": None if loops is None else loops["dstates"]["precision"],
+            "place_recognition_recall_at_95_precision": best_place_recognition(r)[1]["recall_at_95_precision"],
+            "perfect_odometry_map_accuracy": None if perfect is None else perfect["map"].get("dstate_accuracy")}
+
+
+def best_place_recognition(r: dict) -> tuple[str, dict]:
+    """The descriptor with the highest recall at 95% precision, and its figures."""
+    def key(item):
+        return item[1]["recall_at_95_precision"] if item[1]["recall_at_95_precision"] is not None else -1.0
+
+    return max(r["place_recognition"].items(), key=key)
 
 
 def headline(r: dict) -> list[str]:
@@ -170,17 +258,64 @@ def headline(r: dict) -> list[str]:
         lines.append(f"  nearest neighbour ({d} scans) on revisited dstates: {n['revisited']:.1%} of "
                      f"{n['revisited_visits']} visits; on all visits {n['all_visits']:.1%} (ceiling "
                      f"{n['ceiling']:.1%})")
+    if "place_recognition" in r:
+        lines += evaluation_lines(r)
+    return lines
+
+
+def _pct(x) -> str:
+    return "-" if x is None else f"{x:.1%}"
+
+
+def _ratio(x) -> str:
+    return "-" if x is None else f"{x:.2f}"
+
+
+def _joins(loops: dict) -> str:
+    return (f"precision {_pct(loops['precision'])} ({loops['true_joins']} of {loops['joins']} joins), "
+            f"recall {_pct(loops['recall'])} (of {loops['should_join']} pairs)")
+
+
+def evaluation_lines(r: dict) -> list[str]:
+    """The headline's lines on the evaluation against the corrected poses."""
+    lines, b, loops = [], r["baselines"], r["loop_closure"]
+    if b is not None:
+        lines.append(f"  against the baselines on the same visits: map {_pct(b['map'])}, odometry alone "
+                     f"{_pct(b['odometry_alone'])}, a dstate per visit {_pct(b['own_dstate'])}; beats both: "
+                     f"{'yes' if b['beats_baselines'] else 'no'}; error {_ratio(b['error_ratio'])} of the better "
+                     f"baseline's (target >= {b['target']['accuracy']:.0%} with at most "
+                     f"{b['target']['error_ratio']:.0%} of it: {'met' if b['target_met'] else 'missed'})")
+    radius = r["truth"]["radius_m"]
+    lines.append(f"  loop closures (a join: two visits in one dstate; true when their corrected poses lie within "
+                 f"{radius:g} m and, for dstates, in one heading sector):")
+    for who, name in (("map", "map"), ("odometry_alone", "odometry alone")):
+        if who in loops:
+            lines.append(f"    {name}, dstates: {_joins(loops[who]['dstates'])}; places: "
+                         f"{_joins(loops[who]['places'])}")
+    for d, p in r["place_recognition"].items():
+        lines.append(f"  place recognition ({d} scans; each visit's best earlier match, {p['revisits']} of "
+                     f"{p['queries']} visits with a true revisit): recall {_pct(p['recall_at_95_precision'])} at "
+                     f"95% precision, {_pct(p['recall_at_99_precision'])} at 99%; average precision "
+                     f"{_pct(p['average_precision'])}")
+    perfect = r.get("perfect_odometry")
+    if perfect is not None:
+        pm = perfect["map"]
+        found = "no map" if "error" in pm else f"map {_pct(pm['dstate_accuracy'])} of visits in their true dstate"
+        lines.append(f"  perfect odometry (corrected poses as odometry): {perfect['images']} dstates chosen, "
+                     f"{perfect['truth']['true_dstates']} true; {found} (odometry alone "
+                     f"{_pct(perfect['dead_reckoning']['dstate_accuracy'])})")
     return lines
 
 
 def write_log_report(results: dict, out: Path, tableau, cmap) -> None:
     """results.json, report.md and the figures of a log experiment."""
-    from .figures import topological_figure, trajectory_figure
+    from .figures import precision_recall_figure, topological_figure, trajectory_figure
 
     out.mkdir(parents=True, exist_ok=True)
     (out / "results.json").write_text(json.dumps(jsonable(results), indent=1))
     views_figure(results, out / "views_M_U.png")
     trajectory_figure(results, tableau, cmap, out / "trajectory.png")
+    precision_recall_figure(results, out / "precision_recall.png")
     if cmap is not None:
         topological_figure(results, tableau, cmap, out / "topological_map.png")
         curves_figure(results, out / "learning_curves.png")
@@ -192,8 +327,13 @@ def _report_text(r: dict, has_map: bool) -> str:
     lines += ["## Targets", "", "| figure | target | measured | met |", "|---|---|---|---|"]
     for name, t in r["targets"].items():
         measured = "-" if t["measured"] is None else f"{t['measured']:.1%}"
-        lines.append(f"| {name} | {t['target']:.0%} | {measured} | {'yes' if t['met'] else 'no'} |")
+        lines.append(f"| {name} | {t.get('op', '>=')} {t['target']:.0%} | {measured} | "
+                     f"{'yes' if t['met'] else 'no'} |")
     lines += ["", "![M and U against k](views_M_U.png)", "", "![trajectory](trajectory.png)", ""]
+    if "place_recognition" in r:
+        lines += ["## Place recognition", "", "Each visit's best match among the earlier visits it has left; a "
+                  "match is right when the two corrected poses lie within the place radius.", "",
+                  "![precision-recall](precision_recall.png)", ""]
     if has_map:
         lines += ["![topological map](topological_map.png)", "", "![learning curves](learning_curves.png)", ""]
     lines += [f"Timings (s): {r['timings']}", ""]

@@ -1,0 +1,114 @@
+"""The evaluation SLAM papers report, on hand-made cases with known answers: the map beside its baselines,
+loop-closure precision and recall, place recognition as precision-recall."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.spatial.distance import cdist
+
+from bootmap.experiments.evaluate import (against_baselines, loop_closure, place_recognition,
+                                          revisit_candidates, sector_of_truth)
+
+# Five visits on a line: 0 and 3 at one pose, 4 back near 2, 1 alone; the robot leaves each place between,
+# so visit 1 has no earlier candidate (it is the first the robot reaches after leaving 0), 2 has 0, 3 has 0
+# and 1, 4 has 0, 1 and 2.
+POSES = [(0.0, 0.0, 0.0), (10.0, 0.0, 0.0), (20.0, 0.0, 0.0), (0.0, 0.0, 3.1), (20.5, 0.0, 0.0)]
+
+
+def _near(poses, radius_m=3.0) -> np.ndarray:
+    xy = np.asarray(poses, dtype=float)[:, :2]
+    return cdist(xy, xy) <= radius_m
+
+
+def test_only_earlier_visits_the_robot_has_left_are_candidates():
+    # A turn's two ends (0 and 1 at one pose) are not a revisit; 3 comes back to 0 after leaving it.
+    c = revisit_candidates([(0, 0), (0, 0), (10, 0), (0, 0)])
+    assert [np.flatnonzero(row).tolist() for row in c] == [[], [], [], [0, 1]]
+
+
+def test_a_perfect_score_matrix_recalls_every_revisit_at_full_precision():
+    r = place_recognition(_near(POSES).astype(float), POSES)
+    assert (r["visits"], r["queries"], r["revisits"], r["best_correct"]) == (5, 3, 2, 2)
+    assert r["recall_at_95_precision"] == r["recall_at_99_precision"] == r["average_precision"] == 1.0
+
+
+def test_a_reversed_score_matrix_recalls_nothing():
+    r = place_recognition(-_near(POSES).astype(float), POSES)
+    assert r["best_correct"] == 0
+    assert r["recall_at_95_precision"] == r["recall_at_99_precision"] == r["average_precision"] == 0.0
+
+
+def test_a_confident_wrong_match_costs_precision_at_its_threshold():
+    scores = _near(POSES).astype(float)
+    scores[2, 0] = 5.0  # visit 2 has no true revisit, yet matches visit 0 above everything else
+    r = place_recognition(scores, POSES)
+    assert r["curve"][0] == {"threshold": 5.0, "precision": 0.0, "recall": 0.0}
+    assert r["curve"][-1]["recall"] == 1.0 and r["curve"][-1]["precision"] == pytest.approx(2 / 3)
+    assert r["recall_at_95_precision"] == 0.0
+
+
+def test_without_revisits_recall_is_not_measured():
+    line = [(10.0 * k, 0.0) for k in range(4)]
+    r = place_recognition(np.zeros((4, 4)), line)
+    assert r["revisits"] == 0 and r["recall_at_95_precision"] is None and r["average_precision"] is None
+
+
+def test_a_score_matrix_of_the_wrong_shape_is_refused():
+    with pytest.raises(ValueError, match="scores of shape"):
+        place_recognition(np.zeros((3, 3)), POSES)
+
+
+def test_loop_closure_counts_the_joins_against_the_corrected_poses():
+    truth = ["P0:E", "P1:E", "P2:E", "P0:W", "P2:E"]
+    sectors = [sector_of_truth(t) for t in truth]
+    # The map joins 0 with 3 (one place, but facing the other way) and 2 with 4 (right).
+    labels = ["S0", "S1", "S2", "S0", "S2"]
+    places = loop_closure(labels, POSES)
+    assert places == {"joins": 2, "true_joins": 2, "should_join": 2, "precision": 1.0, "recall": 1.0}
+    dstates = loop_closure(labels, POSES, sectors=sectors)
+    assert dstates == {"joins": 2, "true_joins": 1, "should_join": 1, "precision": 0.5, "recall": 1.0}
+
+
+def test_a_map_that_joins_nothing_has_no_precision_and_no_recall():
+    r = loop_closure([str(k) for k in range(5)], POSES)
+    assert r == {"joins": 0, "true_joins": 0, "should_join": 2, "precision": None, "recall": 0.0}
+
+
+def test_the_map_beside_its_baselines():
+    r = against_baselines(0.95, odometry_alone=0.9, own_dstate=0.8)
+    assert r["beats_baselines"] and r["better_baseline"] == "odometry_alone" and r["target_met"]
+    tie = against_baselines(1.0, odometry_alone=1.0, own_dstate=0.5)
+    assert not tie["beats_baselines"] and tie["error_ratio"] == 0.0 and tie["target_met"]
+    worse = against_baselines(0.92, odometry_alone=1.0, own_dstate=0.5)
+    assert worse["error_ratio"] is None and not worse["target_met"]
+    short = against_baselines(0.85, odometry_alone=0.6, own_dstate=0.7)
+    assert short["beats_baselines"] and short["error_ratio"] == pytest.approx(0.5) and not short["target_met"]
+
+
+_poses = st.lists(st.tuples(st.floats(0, 30), st.floats(0, 30)), min_size=2, max_size=25)
+
+
+@settings(max_examples=40, deadline=None)
+@given(poses=_poses, seed=st.integers(0, 2**16))
+def test_precision_and_recall_lie_in_0_1_and_recall_only_grows(poses, seed):
+    scores = np.random.default_rng(seed).normal(size=(len(poses), len(poses)))
+    r = place_recognition(scores, poses)
+    recall = [p["recall"] for p in r["curve"]]
+    assert all(0.0 <= p["precision"] <= 1.0 and 0.0 <= p["recall"] <= 1.0 for p in r["curve"])
+    assert recall == sorted(recall)
+    thresholds = [p["threshold"] for p in r["curve"]]
+    assert thresholds == sorted(set(thresholds), reverse=True)
+    labels = np.random.default_rng(seed).integers(0, 4, len(poses)).tolist()
+    loops = loop_closure(labels, poses)
+    assert all(x is None or 0.0 <= x <= 1.0 for x in (loops["precision"], loops["recall"]))
+
+
+@settings(max_examples=40, deadline=None)
+@given(poses=_poses)
+def test_scores_that_rank_every_true_match_first_recall_everything_at_99_precision(poses):
+    xy = np.asarray(poses, dtype=float)
+    # The negated distance ranks every match within the radius above every match beyond it.
+    r = place_recognition(-cdist(xy, xy), poses)
+    assert r["recall_at_99_precision"] in (None, 1.0)
+    assert r["best_correct"] == r["revisits"]
