@@ -10,7 +10,8 @@ from hypothesis import strategies as st
 
 from bootmap.cli import main
 from bootmap.mapping import Resolver
-from bootmap.mapping.motion import LengthTypes, MotionPrimitives, exact_readings, length_types, reading_step
+from bootmap.mapping.motion import (LENGTH_RATIO, LengthTypes, MotionPrimitives, exact_readings, length_types,
+                                   reading_step)
 from bootmap.metrics import dstate_accuracy
 from bootmap.tableau import Step, Tableau, Travel, Turn
 from support.check import true_partition
@@ -231,6 +232,26 @@ def test_rounded_lengths_of_one_corridor_are_one_type(corridors, reads, error, s
     # happens to lie on a coarser step; exact only where each corridor was read as one value.
     learned = LengthTypes().fit(read)
     assert learned.resolution_m_ >= step and (not learned.exact_ or len(set(read)) == len(corridors))
+
+
+@settings(max_examples=80, deadline=None)
+@given(lengths=st.lists(st.floats(0.3, 40.0), min_size=2, max_size=120), step=st.sampled_from([0.01, 0.0]))
+def test_no_length_type_spans_lengths_odometry_tells_apart(lengths, step):
+    # A log's travels come in every length, each a small step from the next, so that splitting only where
+    # one length is 25% longer than the one before chained 1.4 m and 22.9 m into one type (a log's whole
+    # drive one action, and determinism then joined every place to every other). Whatever the lengths, no
+    # type of readings that are not exact spans more than LENGTH_RATIO, and each type is a run of the
+    # sorted lengths.
+    read = [round(round(d / step) * step, 3) if step else d for d in lengths]
+    learned = LengthTypes().fit(read)
+    if learned.exact_:
+        return
+    groups: dict[int, list[float]] = {}
+    for d, label in zip(read, learned.labels_):
+        groups.setdefault(label, []).append(d)
+    assert all(max(g) <= LENGTH_RATIO * min(g) + 1e-9 for g in groups.values())
+    spans = sorted((min(g), max(g)) for g in groups.values())
+    assert all(a[1] < b[0] for a, b in zip(spans, spans[1:]))
 
 
 @settings(max_examples=80, deadline=None)

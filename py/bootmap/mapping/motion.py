@@ -436,8 +436,10 @@ LENGTH_RATIO = 1.25
 
 def length_types(distances: Sequence[float], resolution_m: float | None = None) -> list[int]:
     """The length type of each travel, in decimetres (the mean of its type): travels are sorted by length
-    and split wherever the next is more than :data:`LENGTH_RATIO` times longer; exact lengths (clean
-    experience, :func:`exact_readings` at the distances' resolution, given or read) are each a type.
+    and split wherever the next is more than :data:`LENGTH_RATIO` times longer, and a group whose
+    longest is still more than that times its shortest (travels of every length, chained by small steps,
+    as a log's are) is split again at its widest step until none is; exact lengths (clean experience,
+    :func:`exact_readings` at the distances' resolution, given or read) are each a type.
 
     >>> length_types([4.02, 1.98, 3.95, 2.03, 12.1, 4.0])
     [40, 20, 40, 20, 121, 40]
@@ -445,6 +447,8 @@ def length_types(distances: Sequence[float], resolution_m: float | None = None) 
     [20, 22, 20, 22]
     >>> length_types([3.95, 3.96, 4.06, 3.95, 4.05, 3.96])  # one corridor, read to the centimetre
     [40, 40, 40, 40, 40, 40]
+    >>> length_types([1.0, 1.2, 1.4, 1.7, 2.0, 2.4])  # no step of 25%, yet 2.4 m is no 1 m travel
+    [10, 13, 13, 18, 18, 24]
     """
     return LengthTypes(resolution_m).fit(distances).labels_
 
@@ -484,13 +488,26 @@ class LengthTypes:
         v = np.log(np.maximum(d[order], 1e-3))
         splits = np.flatnonzero(np.diff(v) > (1e-6 if self.exact_ else np.log(LENGTH_RATIO))) + 1
         out = np.empty(len(d), dtype=int)
-        for part in np.split(order, splits):
+        parts = np.split(order, splits)
+        if not self.exact_:
+            parts = [p for part in parts for p in _within_ratio(part, d, np.log(LENGTH_RATIO))]
+        for part in parts:
             mine = d[part]
             out[part] = label = int(round(float(mine.mean()) * 10))
             self.types_.append(LengthType(label, len(mine), float(mine.mean()), float(mine.std()),
                                           self.resolution_m_, self.exact_))
         self.labels_ = out.tolist()
         return self
+
+
+def _within_ratio(part: np.ndarray, d: np.ndarray, log_ratio: float) -> list[np.ndarray]:
+    """``part`` (indices into ``d``, sorted by length) split at its widest steps (in log length) until
+    no piece's longest is more than ``exp(log_ratio)`` times its shortest."""
+    v = np.log(np.maximum(d[part], 1e-3))
+    if len(part) < 2 or v[-1] - v[0] <= log_ratio:
+        return [part]
+    cut = int(np.argmax(np.diff(v))) + 1
+    return _within_ratio(part[:cut], d, log_ratio) + _within_ratio(part[cut:], d, log_ratio)
 
 
 # -------------------------------------------------------------------------------------------------
