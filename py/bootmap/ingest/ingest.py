@@ -90,12 +90,13 @@ def log_tableau(scans: list[Scan], detector: TurnDetector = TurnDetector(), max_
         Where travels pass junctions, which are dstates too; None: only turns give dstates.
     """
     if len(scans) < 2:
-        raise LogError(f"{len(scans)} scan(s): a log needs at least two to have any motion", source)
+        raise LogError(f"{len(scans)} scan{'' if len(scans) == 1 else 's'}: a log needs at least 2 to have any "
+                       "motion", source)
     distance, heading = odometry_track([s.odometry for s in scans])
     turns = find_turns(distance, heading, detector)
     if not turns:
-        raise LogError(f"the odometry turns nowhere (no heading change of {detector.turn_deg:g} degrees or "
-                       "more between travels): no dstate to choose", source)
+        raise LogError(f"the odometry turns nowhere in {len(scans)} scans (no heading change of "
+                       f"{detector.turn_deg:g} degrees or more between travels): no dstate to choose", source)
     passes = [] if junctions is None else find_passes(*side_ranges(scans), distance, turns, junctions)
     chosen = dstate_scans(turns, passes)
     actions = _actions(chosen, turns, distance, heading)
