@@ -57,6 +57,7 @@ __all__ = [
     "compare_clusterers",
     "compare_learners",
     "default_learners",
+    "fitting_sizes",
     "learning_curve_cv",
     "online_curve",
     "online_hits",
@@ -273,10 +274,10 @@ def fitting_sizes(n_images: int, sizes: Sequence[int] | None = None, n_splits: i
     --------
     >>> fitting_sizes(25).tolist()
     [10, 20]
-    >>> fitting_sizes(11)
+    >>> fitting_sizes(11)  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    bootmap.recognise.TooFewImages: 11 images: the training folds of 10-fold cross-validation hold 9, fewer than the smallest training size, 10
+    bootmap.recognise.TooFewImages: 11 images: the training folds of 10-fold cross-validation hold 9, ...
     """
     if n_splits < 2:
         raise ValueError(f"cross-validation needs at least 2 folds, got {n_splits}")
