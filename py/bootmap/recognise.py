@@ -44,7 +44,7 @@ from sklearn.preprocessing import StandardScaler
 from sklearn.svm import SVC
 from sklearn.utils.validation import check_is_fitted
 
-from .errors import BootmapError
+from .errors import BadInput, BootmapError
 from .images import as_images
 from .tableau import Tableau
 
@@ -53,9 +53,11 @@ __all__ = [
     "LearningCurve",
     "NoImages",
     "Recogniser",
+    "TooFewImages",
     "compare_clusterers",
     "compare_learners",
     "default_learners",
+    "fitting_sizes",
     "learning_curve_cv",
     "online_curve",
     "online_hits",
@@ -237,6 +239,62 @@ class LearningCurve:
         return float(self.mean[hit[0]])
 
 
+class TooFewImages(BadInput, ValueError):
+    """Too few images for a cross-validated curve: ``images`` were given, ``needed`` are the fewest
+    that would do."""
+
+    def __init__(self, message: str, images: int, needed: int):
+        self.images, self.needed = images, needed
+        super().__init__(message)
+
+
+def fitting_sizes(n_images: int, sizes: Sequence[int] | None = None, n_splits: int = 10) -> np.ndarray:
+    """The training-set sizes of ``sizes`` that every training fold of ``n_splits``-fold
+    cross-validation on ``n_images`` images can hold (default 10, 20, 30, ... up to that).
+
+    Parameters
+    ----------
+    n_images : int
+    sizes : sequence of int, optional
+    n_splits : int
+
+    Returns
+    -------
+    ndarray of int
+        The sizes that fit, sorted, without repeats; never empty.
+
+    Raises
+    ------
+    ValueError
+        ``n_splits`` below 2.
+    TooFewImages
+        Fewer images than folds, or no size fits in the smallest training fold.
+
+    Examples
+    --------
+    >>> fitting_sizes(25).tolist()
+    [10, 20]
+    >>> fitting_sizes(11)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    bootmap.recognise.TooFewImages: 11 images: the training folds of 10-fold cross-validation hold 9, ...
+    """
+    if n_splits < 2:
+        raise ValueError(f"cross-validation needs at least 2 folds, got {n_splits}")
+    if n_images < n_splits:
+        raise TooFewImages(f"{n_images} images: {n_splits}-fold cross-validation needs at least {n_splits}",
+                           n_images, n_splits)
+    n_train = n_images - -(-n_images // n_splits)  # the smallest training set over the folds
+    wanted = range(10, n_train + 1, 10) if sizes is None else [int(s) for s in sizes]
+    fits = np.unique([s for s in wanted if 0 < s <= n_train]).astype(int)
+    if not fits.size:
+        smallest = min((s for s in wanted if s > 0), default=10)
+        needed = -(-smallest * n_splits // (n_splits - 1))  # the fewest images whose folds hold it
+        raise TooFewImages(f"{n_images} images: the training folds of {n_splits}-fold cross-validation hold "
+                           f"{n_train}, fewer than the smallest training size, {smallest}", n_images, needed)
+    return fits
+
+
 def learning_curve_cv(images, dstates, sizes: Sequence[int] | None = None, learner=None,
                       n_splits: int = 10, random_state: int = 0) -> LearningCurve:
     """k-fold cross-validated learning curve, with shuffled folds and shuffled training subsets.
@@ -266,6 +324,12 @@ def learning_curve_cv(images, dstates, sizes: Sequence[int] | None = None, learn
     -------
     LearningCurve
 
+    Raises
+    ------
+    TooFewImages
+        Fewer images than folds, or training folds too small for every size
+        (:func:`fitting_sizes`).
+
     Examples
     --------
     >>> rng = np.random.default_rng(0)
@@ -277,12 +341,7 @@ def learning_curve_cv(images, dstates, sizes: Sequence[int] | None = None, learn
     X = as_images(images)
     y = _as_labels(dstates, len(X))
     learner = KNeighborsClassifier(n_neighbors=1) if learner is None else learner
-    n_train = len(X) - -(-len(X) // n_splits)  # the smallest training set over the folds
-    if sizes is None:
-        sizes = range(10, n_train + 1, 10)
-    sizes = np.unique([int(s) for s in sizes if 0 < int(s) <= n_train])
-    if not sizes.size:
-        raise ValueError(f"no training size fits in training folds of {n_train} images")
+    sizes = fitting_sizes(len(X), sizes, n_splits)
     cv = KFold(n_splits=n_splits, shuffle=True, random_state=random_state)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)

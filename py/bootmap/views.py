@@ -412,22 +412,52 @@ class ViewClusterer:
 
 def davies_bouldin_k(clusterer: "ViewClusterer", images) -> tuple[int | None, list[float | None]]:
     """The k whose clustering (of a fitted :class:`ViewClusterer`) has the lowest Davies-Bouldin index
-    (scikit-learn), and the index at every k (None at k = 1, where it is undefined).
+    (scikit-learn), and the index at every k tried.
 
     M = 1/(k * SSE) can fall steadily with k on real scans, where no k gives tight clusters, and then
     picks k = 1 or 2. The Davies-Bouldin index compares each cluster's spread with its distance to the
     nearest other cluster, so it does not reward fewer clusters for their own sake: a criterion that does
-    not degenerate there. Returns ``(None, ...)`` when only k = 1 was tried.
-    """
-    from sklearn.metrics import davies_bouldin_score
+    not degenerate there.
 
+    Parameters
+    ----------
+    clusterer : ViewClusterer
+        Fitted on ``images``.
+    images : array-like of shape (n_images, n_values)
+
+    Returns
+    -------
+    k : int or None
+        The k of the lowest index; None when the index is defined at no k tried (fewer than three
+        images, or only k = 1 tried).
+    scores : list of float or None
+        The index at every k of ``clusterer.ks_``; None where it is undefined: fewer than two clusters,
+        or a cluster per image (the index needs 2 <= clusters <= images - 1), as with ``k_max`` at or
+        above the number of images.
+
+    Examples
+    --------
+    Three images, k_max above their number: at k = 3 each image is a cluster of its own.
+
+    >>> x = np.array([[0.0], [0.1], [5.0]])
+    >>> k, scores = davies_bouldin_k(ViewClusterer(k_max=12).fit(x), x)
+    >>> k, [None if s is None else round(s, 3) for s in scores]
+    (2, [None, 0.01, None])
+    """
     x = clusterer.prepare(images)
-    scores: list[float | None] = []
-    for k in clusterer.ks_:
-        labels = clusterer.labels_per_k_[int(k)]
-        scores.append(float(davies_bouldin_score(x, labels)) if len(np.unique(labels)) > 1 else None)
+    scores = [_davies_bouldin(x, clusterer.labels_per_k_[int(k)]) for k in clusterer.ks_]
     known = [(s, int(k)) for s, k in zip(scores, clusterer.ks_) if s is not None]
     return (min(known)[1] if known else None), scores
+
+
+def _davies_bouldin(x: np.ndarray, labels: np.ndarray) -> float | None:
+    """scikit-learn's Davies-Bouldin index of one clustering, None where it is undefined."""
+    from sklearn.metrics import davies_bouldin_score
+
+    clusters = len(np.unique(labels))
+    if not 2 <= clusters <= len(x) - 1:
+        return None
+    return float(davies_bouldin_score(x, labels))
 
 
 def view_labels(labels: Sequence[Hashable]) -> list[str]:

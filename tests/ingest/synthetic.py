@@ -52,3 +52,37 @@ def write_square_log(path: Path, laps: int = 2, side: float = 10.0) -> Path:
                   f"RAWLASER1 0 -1.5708 3.1416 0.017453 50 0.01 0 {BEAMS} {ranges} 0 {t:.2f} h {t:.2f}"]
     path.write_text("\n".join(lines) + "\n")
     return path
+
+
+def corrected_lines(poses: list[tuple], side: float = 10.0) -> list[str]:
+    """The square's scans at ``poses`` as a gmapping-corrected CARMEN log: a ``FLASER`` with the
+    corrected pose in both pose fields, an ``ODOM`` restarting from it, and an ``ODOM`` at the next
+    scan's pose (odometry's exact prediction of it); ``PARAM`` lines first, as in the real logs."""
+    corners = np.array([(side, 0.0), (side, side), (0.0, side), (0.0, 0.0)])
+    lines = ["PARAM robot_front_laser_max 80.0 nohost 0"]
+    for i, (x, y, h) in enumerate(poses):
+        corner = int(np.argmin(np.hypot(*(corners - (x, y)).T)))
+        sector = int(np.rint(h / (np.pi / 2))) % 4
+        ranges = " ".join(f"{r:.3f}" for r in pattern(corner, sector))
+        pose, t = f"{x:.6f} {y:.6f} {h:.6f}", 0.1 * i
+        if i:
+            lines.append(f"ODOM {pose} 0 0 0 {t - 0.01:.2f} h {t - 0.01:.2f}")
+        lines += [f"FLASER {BEAMS} {ranges} {pose} {pose} {t:.2f} h {t:.2f}",
+                  f"ODOM {pose} 0 0 0 {t:.2f} h {t:.2f}"]
+    return lines
+
+
+def write_corrected_log(path: Path, scans: int, start: int = 16, side: float = 10.0) -> Path:
+    """``scans`` scans of laps of the square, from scan ``start`` of :func:`square_poses` on, as a
+    corrected CARMEN log, gzip compressed when ``path`` ends in ``.gz``; returns ``path``. From the
+    default start, the first corner's turn runs from the 5th scan to the 11th, 15 degrees a scan."""
+    import gzip
+
+    poses = square_poses(laps=2, side=side)[start:start + scans]
+    text = "\n".join(corrected_lines(poses, side)) + "\n"
+    if path.suffix == ".gz":
+        with gzip.open(path, "wt") as f:
+            f.write(text)
+    else:
+        path.write_text(text)
+    return path

@@ -118,7 +118,7 @@ def test_a_log_with_fewer_than_two_places_is_refused():
     from bootmap.errors import LogError
 
     scans = [scan_at(_with_doors(), (x, 0.0, 0.0)) for x in np.arange(3.0, 20.0, 0.5)]
-    with pytest.raises(LogError, match=r"corridor: the laser shows 0 place\(s\)"):
+    with pytest.raises(LogError, match=r"corridor: the laser shows 0 place\(s\) in 34 scans"):
         log_tableau(scans, places=PlaceDetector(), source="corridor")
 
 

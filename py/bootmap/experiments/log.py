@@ -179,19 +179,33 @@ def _name(log) -> str:
 
 
 def _views(images, truth, k_max, seed, max_range, criterion) -> tuple[ViewClusterer, dict]:
-    """Views by M and by Davies-Bouldin; ``k`` is the one the map uses."""
+    """Views by M and by Davies-Bouldin; ``k`` is the one the map uses. ``k_note`` says where the data
+    allowed less than asked: k capped below ``k_max``, or the Davies-Bouldin index defined at no k."""
     clusterer = ViewClusterer(k_max=k_max, random_state=seed, max_range=max_range).fit(images, truth)
     k_db, db = davies_bouldin_k(clusterer, images)
     degenerate = clusterer.k_ <= 2
     use_db = k_db is not None and (criterion == "davies-bouldin" or (criterion == "auto" and degenerate))
     k = k_db if use_db else clusterer.k_
     section = {"k": int(k), "criterion": "davies-bouldin" if use_db else "M", "k_by_M": int(clusterer.k_),
+               "k_max": int(k_max), "k_note": _k_note(len(images), int(clusterer.ks_[-1]), k_max, k_db),
                "M_degenerate": degenerate, "k_by_davies_bouldin": k_db, "davies_bouldin": db,
                "ks": [int(x) for x in clusterer.ks_], "M": [float(x) for x in clusterer.internal_],
                "U": [float(x) for x in clusterer.uncertainty_],
                "largest_k_with_U_1": clusterer.largest_k_with_u1_,
                **views_against_truth(clusterer, truth, seed), "truth": list(truth)}
     return clusterer, section
+
+
+def _k_note(n_images: int, k_tried: int, k_max: int, k_db: int | None) -> str | None:
+    """What the images allowed of the k sweep, when less than asked; None when it ran as asked."""
+    notes = []
+    if k_tried < k_max:
+        notes.append(f"k capped at {k_tried}, below k_max {k_max}: {n_images} images, {k_tried} of them "
+                     "distinct")
+    if k_db is None:
+        notes.append(f"no k by Davies-Bouldin: its index needs 2 to (images - 1) views, none of the k tried "
+                     f"(1..{k_tried}) on {n_images} images")
+    return "; ".join(notes) or None
 
 
 def targets(r: dict) -> dict:
@@ -242,12 +256,16 @@ def headline(r: dict) -> list[str]:
     lines.append(f"  views: k = {v['k_by_M']} by M, {v['k_by_davies_bouldin']} by Davies-Bouldin; "
                  f"map uses k = {v['k']}{note}; U(V|S) {v['U'][v['k'] - 1]:.3f} against "
                  f"{v['U_shuffled'][v['k'] - 1]:.3f} with dstates shuffled")
+    if v.get("k_note"):
+        lines.append(f"  views: {v['k_note']}")
     if "error" in m:
         lines.append(f"  map: none ({m['error']})")
     else:
         lines.append(f"  map ({m['found_by']}): {m['dstates']} dstates, {m['places']} places, {m['paths']} paths (truth "
                      f"{m['true_dstates']} dstates, {m['true_places']} places); visits in their true dstate: "
                      f"{m['dstate_accuracy']:.1%} (a dstate per visit: {m['every_visit_own_dstate_accuracy']:.1%})")
+    if (r["recognition"] or {}).get("cv_note"):
+        lines.append(f"  recognition: {r['recognition']['cv_note']}")
     dead = r["dead_reckoning"]
     lines.append(f"  odometry alone (dead-reckoned places within the radius, no image): {dead['dstates']} dstates, "
                  f"{dead['dstate_accuracy']:.1%} of visits in their true dstate")

@@ -28,7 +28,8 @@ import numpy as np
 from ..errors import BadInput, BootmapError, SolveTimeout
 from ..mapping.resolver import Resolver
 from ..metrics import dstate_accuracy
-from ..recognise import default_learners, learning_curve_cv, online_curve, online_hits
+from ..recognise import (TooFewImages, default_learners, fitting_sizes, learning_curve_cv, online_curve,
+                         online_hits)
 from ..sim import simulate
 from ..agent import POLICIES, make_policy
 from ..sim.world import World, load_world
@@ -153,22 +154,29 @@ def _run(world, circuits, steps, seed, out_dir, k_max, progress, time_limit, lev
 
 def recognition_section(images: np.ndarray, labels, learner: str = "1-NN", seed: int = 0) -> dict:
     """The paper's recognition, images labelled by their *resolved* dstates: the online curve and 10-fold
-    cross-validated learning curves (nearest neighbour's, and ``learner``'s on the same folds)."""
+    cross-validated learning curves (nearest neighbour's, and ``learner``'s on the same folds).
+
+    The online curve takes any number of images. With too few images for the cross-validated curves
+    (fewer than 12: the training folds then hold fewer than 10), their figures are empty lists and None,
+    and ``cv_note`` says why; otherwise ``cv_note`` is None.
+    """
     online = online_curve(images, labels)
     hits = online_hits(images, labels)
-    n_train = len(images) - -(-len(images) // 10)  # the smallest training set of 10-fold CV: 90 of 100
-    sizes = [n for n in CURVE_SIZES if n <= n_train]
+    section = {"online_accuracy": [float(x) for x in np.asarray(online)],
+               "online_after_90": float(np.mean(hits[90:])) if len(hits) > 90 else None, "learner": learner}
+    try:
+        sizes = fitting_sizes(len(images), CURVE_SIZES)
+    except TooFewImages as e:
+        return {**section, "cv_sizes": [], "cv_mean": [], "cv_std": [], "cv_at_90": None,
+                "learner_cv_mean": [], "learner_cv_at_90": None, "cv_note": f"no learning curve: {e}"}
     cv = learning_curve_cv(images, labels, sizes=sizes, random_state=seed)
     # Another learner on the same folds (the paper's future work); nearest neighbour's curve is the paper's.
     other = cv if learner == "1-NN" else learning_curve_cv(images, labels, sizes=sizes, random_state=seed,
                                                            learner=default_learners(seed)[learner])
-    return {"online_accuracy": [float(x) for x in np.asarray(online)],
-            "online_after_90": float(np.mean(hits[90:])) if len(hits) > 90 else None,
-            "cv_sizes": [int(n) for n in cv.sizes], "cv_mean": [float(x) for x in cv.mean],
-            "cv_std": [float(x) for x in cv.std],
-            "cv_at_90": cv.at(90) if 90 in cv.sizes else None,
-            "learner": learner, "learner_cv_mean": [float(x) for x in other.mean],
-            "learner_cv_at_90": other.at(90) if 90 in other.sizes else None}
+    return {**section, "cv_sizes": [int(n) for n in cv.sizes], "cv_mean": [float(x) for x in cv.mean],
+            "cv_std": [float(x) for x in cv.std], "cv_at_90": cv.at(90) if 90 in cv.sizes else None,
+            "learner_cv_mean": [float(x) for x in other.mean],
+            "learner_cv_at_90": other.at(90) if 90 in other.sizes else None, "cv_note": None}
 
 
 @dataclass(frozen=True)
@@ -372,6 +380,8 @@ def _report_text(r: dict) -> str:
         lines += [f"Nearest neighbour, images labelled by the resolved dstates: {rec['cv_at_90']:.1%} at 90 "
                   f"images (10-fold cross-validation); online, once 90 images are stored: "
                   f"{rec['online_after_90']:.1%}." + _beside(rec), "", "![learning curves](learning_curves.png)", ""]
+    elif rec is not None and rec.get("cv_note"):
+        lines += [f"Recognition: {rec['cv_note']}.", ""]
     lines += _checks_text([r])
     lines += ["![the run](world_map.png)", "", f"Timings (s): {r['timings']}", ""]
     return "\n".join(lines)

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import gzip
 import math
+import zlib
 from pathlib import Path
 from typing import Iterable, Iterator
 
@@ -78,7 +79,30 @@ def read_carmen(path: str | Path, corrected: bool = False) -> Iterator[Scan]:
         raise LogError(f"cannot read: {e.strerror or e}", str(path)) from None
     except EOFError:
         raise LogError("the gzip stream ends early: a truncated file", str(path)) from None
-    yield from read_carmen_text(lines, str(path), corrected)
+    except zlib.error as e:
+        raise LogError(f"corrupt gzip data ({e}): a damaged file", str(path)) from None
+    scans = read_carmen_text(lines, str(path), corrected)
+    first = next(scans, None)
+    if first is None:
+        raise LogError(no_scans_reason(lines), str(path))
+    yield first
+    yield from scans
+
+
+def no_scans_reason(lines: list[str]) -> str:
+    """Why text with no laser scan is not a log: empty, binary, or without scan lines.
+
+    >>> no_scans_reason(["# a comment", "ODOM 1 2 0 0 0 0 5.0 h 5.0"])
+    'no laser scan: none of its 1 records is a FLASER, ROBOTLASER1 or RAWLASER1 line'
+    """
+    if not lines:
+        return "the file is empty: no laser scan"
+    if any("\x00" in line or "\ufffd" in line for line in lines[:1000]):
+        return "binary data, not a CARMEN log (text, or text compressed by gzip): no laser scan"
+    n = sum(1 for _ in records(lines, ""))
+    if n == 0:
+        return "no laser scan: the file holds only blank lines and comments"
+    return f"no laser scan: none of its {n} records is a FLASER, ROBOTLASER1 or RAWLASER1 line"
 
 
 def _open_text(path: Path):
@@ -182,7 +206,8 @@ def rebuilt_odometry(corrected: list[Pose], predicted: list[Pose | None]) -> lis
     ``corrected[k-1]^-1 (+) predicted[k]``; chaining the increments from the first prediction (the raw
     reading at the first scan, or the origin) gives the track the robot itself measured.
 
-    >>> rebuilt_odometry([(5, 5, 0), (6, 5, 0)], [None, (6.1, 5, 0.1)])
+    >>> track = rebuilt_odometry([(5, 5, 0), (6, 5, 0)], [None, (6.1, 5, 0.1)])
+    >>> [tuple(round(v, 9) for v in pose) for pose in track]
     [(0.0, 0.0, 0.0), (1.1, 0.0, 0.1)]
     """
     start = predicted[0] if predicted and predicted[0] is not None else (0.0, 0.0, 0.0)

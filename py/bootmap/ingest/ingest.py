@@ -96,20 +96,21 @@ def log_tableau(scans: list[Scan], detector: TurnDetector = TurnDetector(), max_
         ``junctions`` are then not used.
     """
     if len(scans) < 2:
-        raise LogError(f"{len(scans)} scan(s): a log needs at least two to have any motion", source)
+        raise LogError(f"{len(scans)} scan{'' if len(scans) == 1 else 's'}: a log needs at least 2 to have any "
+                       "motion", source)
     distance, heading = odometry_track([s.odometry for s in scans])
     visits = None
     if places is None:
         turns = find_turns(distance, heading, detector)
         if not turns:
-            raise LogError(f"the odometry turns nowhere (no heading change of {detector.turn_deg:g} degrees or "
-                           "more between travels): no dstate to choose", source)
+            raise LogError(f"the odometry turns nowhere in {len(scans)} scans (no heading change of "
+                           f"{detector.turn_deg:g} degrees or more between travels): no dstate to choose", source)
         passes = [] if junctions is None else find_passes(*side_ranges(scans), distance, turns, junctions)
     else:
         visits = find_visits(scans, distance, heading, places)
         if len(visits) < 2:
-            raise LogError(f"the laser shows {len(visits)} place(s) (a junction, corner or room): a map needs at "
-                           "least two", source)
+            raise LogError(f"the laser shows {len(visits)} place(s) in {len(scans)} scans (a junction, corner or "
+                           "room): a map needs at least two", source)
         turns = [FoundTurn(v.first, v.last, v.angle_deg) for v in visits if len(v.dstates(places.turn_deg)) == 2]
         passes = [v.dstates(places.turn_deg)[0] for v in visits if len(v.dstates(places.turn_deg)) == 1]
     chosen = dstate_scans(turns, passes)

@@ -21,7 +21,7 @@ is always one more, behind it:
   a dead end (none).
 
 Consecutive place scans make one **visit**; visits less than ``min_path_m`` of travel apart are one (a
-path is at least that long; a scan that flickers to "path" between two place scans is no path). A visit
+place's radius: a junction whose side opening is lost for a scan or two is still one place). A visit
 whose odometry turns by ``turn_deg`` or more from its first scan to its last holds a turn: its two
 dstates are the scan it arrives at and the scan it leaves from. Otherwise the robot passed through, and
 the visit's dstate is its middle scan.
@@ -70,7 +70,9 @@ class PlaceDetector:
         A single gateway within this of straight ahead is the path going on (a corridor's far end seen
         from anywhere along it lies well within it).
     min_path_m : float
-        Visits closer than this (metres of travel) are one: no path is shorter.
+        Visits closer than this (metres of travel) are one: a place's radius (the truth's, 3 m), so that
+        one junction seen, lost and seen again over a few metres is one visit, and two places are never
+        closer than a place is wide.
     turn_deg : float
         A visit whose heading changes this much holds a turn (the SSH's turns are between paths; the
         smallest angle between two corridors of a building is about 45 degrees).
@@ -79,7 +81,7 @@ class PlaceDetector:
     open_m: float = 3.0
     gateway_m: float = 1.2
     ahead_deg: float = 35.0
-    min_path_m: float = 1.0
+    min_path_m: float = 3.0
     turn_deg: float = 45.0
 
 
