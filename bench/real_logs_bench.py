@@ -10,7 +10,7 @@ Targets, on every log: visits in their true dstate >= 90% with at most half the 
 error; loop-closure precision >= 95%; place recognition recall at 95% precision >= 80%; perfect
 odometry >= 97%; a whole log in under 60 s. Published anchors are printed beside them.
 
-Run: nice -n 10 .venv/bin/python bench/real_logs_bench.py [--logs DIR] [--no-killian]
+Run: nice -n 10 .venv/bin/python bench/real_logs_bench.py [--logs DIR] [--no-killian] [--dstates places]
 """
 
 from __future__ import annotations
@@ -21,6 +21,7 @@ import time
 from pathlib import Path
 
 from bootmap.experiments.log import best_place_recognition, run_log_experiment
+from bootmap.ingest.places import PlaceDetector
 from targets import Targets
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -79,12 +80,15 @@ def main(argv=None) -> int:
     p.add_argument("--logs", type=Path, default=ROOT.parent / "shared" / "logs",
                    help="a folder of logs (default ../shared/logs beside the repository)")
     p.add_argument("--no-killian", action="store_true", help="leave the MIT Killian Court log out")
+    p.add_argument("--dstates", choices=("turns", "places"), default="turns",
+                   help="where dstates are chosen: at odometry's turns (default) or the places the laser shows")
     args = p.parse_args(argv)
+    places = PlaceDetector() if args.dstates == "places" else None
     logs = logs_in(args.logs) + ([] if args.no_killian else ["killian"])
     rows, runs = [], []
     for log in logs:
         start = time.perf_counter()
-        r = run_log_experiment(log)
+        r = run_log_experiment(log, places=places)
         seconds = time.perf_counter() - start
         name = "killian" if log == "killian" else Path(log).name.removesuffix(".log.gz").removesuffix("-corrected")
         rows.append(row(name, r, seconds))

@@ -5,6 +5,9 @@ from __future__ import annotations
 
 import argparse
 
+#: Where a log's dstates are chosen (``--dstates``): at odometry's turns, or at the places the laser shows.
+DSTATE_CHOICES = ("turns", "places")
+
 
 def levels(text: str) -> list[str]:
     """'causal,topological' -> the level names (checked against the axiom directory when it is loaded)."""

@@ -136,8 +136,11 @@ def cmd_experiment(args: argparse.Namespace) -> int:
         return _log_experiment(args)
     if args.world is None:
         raise BadInput("give a world (e.g. taylor_hall) or a robot's log (--log LOG, or killian)")
-    if args.junctions:
-        raise BadInput(f"--junctions: for an experiment on a robot's log (--log LOG), not for the world {args.world}")
+    log_only = [flag for flag, used in (("--junctions", args.junctions), ("--dstates", args.dstates != "turns"),
+                                        ("--no-scan-match", args.no_scan_match)) if used]
+    if log_only:
+        raise BadInput(f"{', '.join(log_only)}: for an experiment on a robot's log (--log LOG), not for the world "
+                       f"{args.world}")
     world = args.world
     if args.set:
         from .sim.world import load_world
@@ -175,11 +178,13 @@ def _log_experiment(args: argparse.Namespace) -> int:
     if sim_only:
         raise BadInput(f"{', '.join(sim_only)}: for the simulated experiment, not for --log {args.log}")
     from .ingest.dstates import JunctionDetector
+    from .ingest.places import PlaceDetector
 
     r = run_log_experiment(args.log, out_dir=args.output, seed=args.seed, k_max=args.k_max,
                            time_limit=args.time_limit, quantum_deg=args.quantum, view_criterion=args.views,
                            progress=True, junctions=JunctionDetector() if args.junctions else None,
-                           mapper=args.map)
+                           mapper=args.map, places=PlaceDetector() if args.dstates == "places" else None,
+                           scan_match=not args.no_scan_match)
     print("\n".join(headline(r)))
     print(f"report: {args.output}/report.md")
     return EXIT_FAILURE if "error" in r["map"] else EXIT_OK
@@ -344,6 +349,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--junctions", action="store_true",
                    help="--log: a junction passed straight through (a side corridor's opening, mid-travel) is "
                         "a dstate too, not only a turn's two ends (bootmap.ingest.dstates.JunctionDetector)")
+    p.add_argument("--dstates", choices=arguments.DSTATE_CHOICES, default="turns",
+                   help="--log: where dstates are chosen: turns (default: each end of a turn odometry shows) or "
+                        "places (every pass through a junction, corner or room the laser shows; "
+                        "bootmap.ingest.places)")
+    p.add_argument("--no-scan-match", action="store_true",
+                   help="--log: measure place recognition by the scans' distances only, without scan matching "
+                        "(which takes seconds to a minute on a long log)")
     runs = p.add_mutually_exclusive_group()
     runs.add_argument("--circuits", type=arguments.count("circuits"), metavar="N",
                       help="circuits of a room (worlds of the circuits policy; default 50)")

@@ -86,3 +86,54 @@ def write_corrected_log(path: Path, scans: int, start: int = 16, side: float = 1
     else:
         path.write_text(text)
     return path
+
+
+#: A ring corridor round a block: the outer walls (x, y from 0 to these) and the corridor's width along
+#: its south, east, north and west sides, all different, so that no two corners look alike.
+RING_SIZE, RING_WIDTHS = (24.0, 16.0), (1.6, 3.0, 2.6, 2.4)
+
+
+def ring_walls(size=RING_SIZE, widths=RING_WIDTHS) -> np.ndarray:
+    """The ring corridor's walls: the outer rectangle and the block inside it."""
+    from support.raycast import polygon_walls
+
+    (w, h), (south, east, north, west) = size, widths
+    outer = polygon_walls([(0, 0), (w, 0), (w, h), (0, h)])
+    inner = polygon_walls([(west, south), (w - east, south), (w - east, h - north), (west, h - north)])
+    return np.vstack([outer, inner])
+
+
+def ring_poses(laps: int = 2, size=RING_SIZE, widths=RING_WIDTHS, step: float = 0.5) -> list[tuple]:
+    """Laps of the ring corridor along its centre lines, counter-clockwise, turning on the spot at the
+    corners."""
+    (w, h), (south, east, north, west) = size, widths
+    corners = [(w - east / 2, south / 2), (w - east / 2, h - north / 2), (west / 2, h - north / 2),
+               (west / 2, south / 2)]
+    start = (w / 2, south / 2)
+    points = [start] + corners * laps + [start]
+    poses = []
+    for a, b in zip(points, points[1:]):
+        a, b = np.asarray(a, float), np.asarray(b, float)
+        heading = float(np.arctan2(*(b - a)[::-1]))
+        n = max(int(round(np.hypot(*(b - a)) / step)), 1)
+        poses += [(*(a + (b - a) * k / n), heading) for k in range(n)]
+    return [(float(x), float(y), float(t)) for x, y, t in poses] + [(*map(float, points[-1]), poses[-1][2])]
+
+
+def write_drive_log(path: Path, walls: np.ndarray, poses: list[tuple]) -> Path:
+    """A drive through a building drawn as walls, as a gmapping-corrected CARMEN log: per pose a ``FLASER``
+    of 180 beams ray-cast from it (the pose in both pose fields), an ``ODOM`` restarting from it and one at
+    the next pose (exact odometry)."""
+    from support.raycast import cast
+
+    lines = []
+    for i, pose in enumerate(poses):
+        ranges = " ".join(f"{r:.3f}" for r in cast(walls, pose, beams=180, max_range=81.9))
+        p = " ".join(repr(v) for v in pose)
+        t = float(i)
+        lines += [f"FLASER 180 {ranges} {p} {p} {t} h {t}", f"ODOM {p} 0 0 0 0 h 0"]
+        if i + 1 < len(poses):
+            n = " ".join(repr(v) for v in poses[i + 1])
+            lines.append(f"ODOM {n} 0 0 0 {t + 1} h {t + 1}")
+    path.write_text("\n".join(lines) + "\n")
+    return path

@@ -7,10 +7,11 @@ import pytest
 from bootmap.cli import main
 from bootmap.errors import BadInput, LogError
 from bootmap.experiments.evaluate import DESCRIPTORS
-from bootmap.experiments.log import run_log_experiment
+from bootmap.experiments.log import SCAN_MATCH, run_log_experiment
+from bootmap.ingest.places import PlaceDetector
 
 from log_data import EXCERPT
-from synthetic import write_square_log
+from synthetic import ring_poses, ring_walls, write_drive_log, write_square_log
 
 
 @pytest.fixture(scope="module")
@@ -159,3 +160,24 @@ def test_the_whole_killian_log_in_under_two_minutes(tmp_path, capsys):
     assert nn["shift"]["revisited"] > nn["raw"]["revisited"]
     assert r["dead_reckoning"]["dstate_accuracy"] > 0.8
     assert "visits in their true dstate" in capsys.readouterr().out
+
+
+def test_places_the_laser_shows_are_revisited_lap_after_lap_and_scan_matching_recognises_them(tmp_path):
+    """Two laps of a ring corridor, ray-cast: its four corners are the places the laser shows (the way
+    ahead closes, one opens to the side), each turned at on both laps; exact odometry closes the loop,
+    and scan matching finds each corner's first visit from its second."""
+    log = write_drive_log(tmp_path / "ring.log", ring_walls(), ring_poses(laps=2))
+    r = run_log_experiment(log, places=PlaceDetector(), perfect_odometry=False)
+    assert r["dstates_at"] == "places"
+    # 4 corners x 2 laps, a turn each: 16 dstates chosen, 8 true (a corner and a heading).
+    assert (r["images"], r["truth"]["true_dstates"]) == (16, 8)
+    assert r["map"]["dstate_accuracy"] == 1.0 and r["loop_closure"]["map"]["dstates"]["precision"] == 1.0
+    matched = r["place_recognition"][SCAN_MATCH]
+    assert matched["revisits"] == 8 and matched["recall_at_95_precision"] >= 0.75
+    # The raw scans of a corner's two visits, a few centimetres apart, are told apart less well.
+    assert matched["average_precision"] >= max(r["place_recognition"][d]["average_precision"] for d in DESCRIPTORS)
+
+
+def test_dstates_at_places_is_for_logs_only(capsys):
+    assert main(["experiment", "notched_rectangle", "--dstates", "places"]) == 2
+    assert "--dstates: for an experiment on a robot's log" in capsys.readouterr().err

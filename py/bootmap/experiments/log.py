@@ -43,6 +43,7 @@ from ..mapping.loops import MAPPERS
 from ..metrics import dstate_accuracy
 from ..views import ViewClusterer, davies_bouldin_k, view_labels, view_table
 from ..ingest.dstates import JunctionDetector, TurnDetector
+from ..ingest.places import PlaceDetector
 from .evaluate import (DESCRIPTORS, against_baselines, dead_reckoned_dstates, descriptor_scores, loop_closure,
                        map_against_truth, nn_on_revisits, place_of_truth, place_recognition, sector_of_truth,
                        views_against_truth)
@@ -51,6 +52,10 @@ from ..ingest.ingest import log_tableau, read_log, travel_ends, turn_ends
 #: How k is chosen for the map's views: "auto" takes M's k unless M degenerates (k <= 2), then
 #: Davies-Bouldin's.
 VIEW_CRITERIA = ("auto", "M", "davies-bouldin")
+#: The name place recognition by scan matching is reported under, beside the scan descriptors.
+SCAN_MATCH = "scan match"
+#: Processes scan matching runs in (its pairs are independent; the result does not depend on how many).
+SCAN_MATCH_JOBS = 2
 #: The targets this project set itself for a real log (set from an outside probe of the Killian log;
 #: ambitious).
 TARGETS = {"corner_recall": 0.95, "angles_within_10_deg": 1.0, "visits_in_true_dstate": 0.80,
@@ -71,13 +76,17 @@ def run_log_experiment(log: str | Path, out_dir: str | Path | None = None, seed:
                        view_criterion: str = "auto", detector: TurnDetector = TurnDetector(),
                        max_range: float = 20.0, radius_m: float = 3.0, progress: bool = False,
                        junctions: JunctionDetector | None = None, mapper: str = "loops",
-                       perfect_odometry: bool = True) -> dict:
+                       perfect_odometry: bool = True, places: PlaceDetector | None = None,
+                       scan_match: bool = True) -> dict:
     """Run the experiment on a log (a path any of :func:`~bootmap.ingest.ingest.read_log`'s formats, or
     ``killian``); see the module docstring. Returns the results and, given ``out_dir``, writes
     ``results.json``, ``report.md`` and figures there. The robot's action types are learned, as in the
     simulated experiment, unless ``quantum_deg`` rounds the angles instead. With ``perfect_odometry``
     the experiment is run again on the scans with their odometry replaced by their corrected poses
-    (``perfect_odometry`` in the results: the method's errors without the drift)."""
+    (``perfect_odometry`` in the results: the method's errors without the drift). ``places`` chooses
+    dstates at the places the laser shows (:mod:`bootmap.ingest.places`) instead of at odometry's turns;
+    ``scan_match`` adds scan matching (:class:`~bootmap.scan_match.ScanMatcher`) to the descriptors place
+    recognition is measured with."""
     if view_criterion not in VIEW_CRITERIA:
         raise BadInput(f"unknown view criterion {view_criterion!r}; known: {', '.join(VIEW_CRITERIA)}")
     if mapper not in MAPPERS:
@@ -86,11 +95,11 @@ def run_log_experiment(log: str | Path, out_dir: str | Path | None = None, seed:
 
     settings = dict(seed=seed, k_max=k_max, time_limit=time_limit, quantum_deg=quantum_deg,
                     view_criterion=view_criterion, detector=detector, max_range=max_range, radius_m=radius_m,
-                    junctions=junctions, mapper=mapper)
+                    junctions=junctions, mapper=mapper, places=places)
     with threadpool_limits(limits=1):  # small arrays: threads only wait on each other (see run_experiment)
         lap = Laps()
         scans = read_log(log, progress=progress)
-        results, tableau, cmap = _experiment(scans, log, lap, **settings)
+        results, tableau, cmap = _experiment(scans, log, lap, **settings, scan_match=scan_match)
         results["perfect_odometry"] = _perfect_odometry(scans, log, settings) if perfect_odometry else None
         lap("perfect_odometry_s")
     results["targets"] = targets(results)
@@ -100,11 +109,12 @@ def run_log_experiment(log: str | Path, out_dir: str | Path | None = None, seed:
 
 
 def _experiment(scans, log, lap, seed, k_max, time_limit, quantum_deg, view_criterion, detector, max_range,
-                radius_m, junctions, mapper) -> tuple[dict, object, object]:
+                radius_m, junctions, mapper, places, scan_match=False,
+                recognise_places=True) -> tuple[dict, object, object]:
     """The experiment on scans already read: results (without targets), the tableau and the map."""
     timings = lap.timings
     tableau = log_tableau(scans, detector, max_range=max_range, radius_m=radius_m, source=str(log),
-                          junctions=junctions)
+                          junctions=junctions, places=places)
     if any(s.truth is None for s in tableau.steps):
         raise LogError("the log has no true poses (g2o vertices, CARMEN robot poses or a ROS --truth-topic): "
                        "nothing to evaluate the map against", str(log))
@@ -130,7 +140,7 @@ def _experiment(scans, log, lap, seed, k_max, time_limit, quantum_deg, view_crit
     poses = [s.pose for s in tableau.steps]
     results = {
         "world": _name(log), "log": str(log), "seed": seed, "scans": len(scans), "images": len(images),
-        "clusterer": "kmeans", "quantum_deg": quantum_deg,
+        "clusterer": "kmeans", "quantum_deg": quantum_deg, "dstates_at": "turns" if places is None else "places",
         "truth": {**tableau.meta["truth"], "true_dstates": len(set(truth))},
         "views": views_section,
         "map": {"error": map_note} if cmap is None else
@@ -139,14 +149,17 @@ def _experiment(scans, log, lap, seed, k_max, time_limit, quantum_deg, view_crit
                 "retyped_steps": cmap.retyped_steps},
         "dead_reckoning": {"dstates": len(set(dead)), "dstate_accuracy": dstate_accuracy(truth, dead)},
         "recognition": recognition, "nn_revisited": nn, "timings": timings}
-    results.update(_slam_evaluation(results, images, poses, truth, cmap, dead, radius_m))
+    results.update(_slam_evaluation(results, images, poses, truth, cmap, dead, radius_m, recognise_places,
+                                    max_range if scan_match else None))
     lap("evaluate_s")
     return results, tableau, cmap
 
 
-def _slam_evaluation(r: dict, images, poses, truth, cmap, dead, radius_m) -> dict:
+def _slam_evaluation(r: dict, images, poses, truth, cmap, dead, radius_m, recognise_places: bool = True,
+                     scan_match_range: float | None = None) -> dict:
     """The figures SLAM papers report, against the corrected poses: the map beside both baselines,
-    loop closures (the map's and odometry alone's) and place recognition by each descriptor."""
+    loop closures (the map's and odometry alone's) and place recognition by each descriptor (and by
+    scan matching images clipped at ``scan_match_range``, when given)."""
     sectors = [sector_of_truth(t) for t in truth]
     odometry_alone = r["dead_reckoning"]["dstate_accuracy"]
     own = dstate_accuracy(truth, [str(i) for i in range(len(truth))])
@@ -158,7 +171,14 @@ def _slam_evaluation(r: dict, images, poses, truth, cmap, dead, radius_m) -> dic
         places = [cmap.place_of.get(d, d) for d in cmap.dstate_of]
         loops["map"] = {"dstates": loop_closure(cmap.dstate_of, poses, radius_m, sectors),
                         "places": loop_closure(places, poses, radius_m)}
-    recognition = {d: place_recognition(descriptor_scores(images, d), poses, radius_m) for d in DESCRIPTORS}
+    recognition = None
+    if recognise_places:
+        recognition = {d: place_recognition(descriptor_scores(images, d), poses, radius_m) for d in DESCRIPTORS}
+        if scan_match_range is not None:
+            from ..scan_match import ScanMatcher
+
+            matcher = ScanMatcher(max_range=scan_match_range, place_radius_m=radius_m, n_jobs=SCAN_MATCH_JOBS)
+            recognition[SCAN_MATCH] = place_recognition(matcher.scores(images), poses, radius_m)
     return {"baselines": baselines, "loop_closure": loops, "place_recognition": recognition}
 
 
@@ -166,7 +186,7 @@ def _perfect_odometry(scans, log, settings: dict) -> dict:
     """The experiment again with each scan's odometry replaced by its corrected pose: an upper bound
     that separates the method's errors from the odometry's drift."""
     perfect = [replace(s, odometry=s.truth, odometry_gap=False) for s in scans]
-    r, _, _ = _experiment(perfect, log, Laps(), **settings)
+    r, _, _ = _experiment(perfect, log, Laps(), **settings, recognise_places=False)
     keep = ("images", "truth", "map", "dead_reckoning", "baselines", "loop_closure")
     out = {k: r[k] for k in keep}
     out["truth"] = {"true_dstates": r["truth"]["true_dstates"], "corner_recall": r["truth"]["corner_recall"]}
@@ -311,7 +331,8 @@ def evaluation_lines(r: dict) -> list[str]:
             lines.append(f"    {name}, dstates: {_joins(loops[who]['dstates'])}; places: "
                          f"{_joins(loops[who]['places'])}")
     for d, p in r["place_recognition"].items():
-        lines.append(f"  place recognition ({d} scans; each visit's best earlier match, {p['revisits']} of "
+        what = d if d == SCAN_MATCH else f"{d} scans"
+        lines.append(f"  place recognition ({what}; each visit's best earlier match, {p['revisits']} of "
                      f"{p['queries']} visits with a true revisit): recall {_pct(p['recall_at_95_precision'])} at "
                      f"95% precision, {_pct(p['recall_at_99_precision'])} at 99%; average precision "
                      f"{_pct(p['average_precision'])}")

@@ -14,6 +14,7 @@ from pathlib import Path
 from .. import arguments
 from ..errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_OK, BadInput
 from .dstates import JunctionDetector, TurnDetector
+from .places import PlaceDetector
 
 
 def register(subparsers) -> None:
@@ -39,6 +40,9 @@ def register(subparsers) -> None:
     p.add_argument("--junctions", action="store_true",
                    help="a junction passed straight through (a side opening 1.5-5 m wide mid-travel) is a "
                         "dstate too, not only a turn's two ends")
+    p.add_argument("--dstates", choices=arguments.DSTATE_CHOICES, default="turns",
+                   help="where dstates are chosen: turns (default: each end of a turn odometry shows) or places "
+                        "(every pass through a junction, corner or room the laser shows: its gateways)")
     p.add_argument("--scan-topic", help="ROS: the LaserScan topic (when the bag has several)")
     p.add_argument("--odom-topic", help="ROS: the Odometry topic (when the bag has several)")
     p.add_argument("--truth-topic", help="ROS: an Odometry topic of true poses")
@@ -56,8 +60,9 @@ def cmd_ingest(args: argparse.Namespace) -> int:
         scans = read_log(args.log, progress=not args.no_progress, **ros)
         detector = TurnDetector(window_m=args.window, turn_deg=args.turn)
         junctions = JunctionDetector() if args.junctions else None
+        places = PlaceDetector() if args.dstates == "places" else None
         tableau = log_tableau(scans, detector, max_range=args.max_range, radius_m=args.radius, source=args.log,
-                              junctions=junctions)
+                              junctions=junctions, places=places)
     except BadInput as e:
         print(f"bootmap ingest: error: {e}", file=sys.stderr)
         return EXIT_BAD_INPUT
