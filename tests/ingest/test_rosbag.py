@@ -63,3 +63,12 @@ def test_several_odometry_topics_must_be_named(tmp_path, excerpt_scans):
     with pytest.raises(LogError, match=r"several nav_msgs/Odometry topics \(/ground_truth, /odom\): say which"):
         read_log(path)
     assert len(read_log(path, odom_topic="/odom")) == 3
+
+
+@pytest.mark.parametrize("data", [bytes(range(256)) * 8, b"garbage\xff\xfe text" * 40])
+def test_a_file_of_other_bytes_named_bag_is_refused_as_no_bag(tmp_path, data):
+    path = tmp_path / "junk.bag"
+    path.write_bytes(data)
+    with pytest.raises(LogError, match=r"junk\.bag: (not a ROS bag|cannot read the bag)") as e:
+        list(read_rosbag(path))
+    assert "UnicodeDecodeError" not in str(e.value)

@@ -67,6 +67,10 @@ def read_rosbag(path: str | Path, scan_topic: str | None = None, odom_topic: str
             yield from _scans(reader, str(path), scan_topic, odom_topic, truth_topic)
     except LogError:
         raise
+    except UnicodeDecodeError:  # a header of bytes that no bag writes: some other binary file
+        raise LogError("not a ROS bag: its header does not read as a bag's (another kind of file, or a damaged "
+                       "one); bootmap ingest reads ROS 1 .bag files and ROS 2 bags (.db3, .mcap, or their "
+                       "directory)", str(path)) from None
     except Exception as e:  # rosbags' own errors (unreadable, unknown storage, truncated): say which bag
         raise LogError(f"cannot read the bag: {type(e).__name__}: {e}", str(path)) from None
 
