@@ -88,6 +88,37 @@ def test_broken_documents_are_refused(text, what):
         Tableau.loads(text)
 
 
+@pytest.mark.parametrize("data, where", [
+    ('{"format": "bootmap.tableau/1",\n "steps": [{"view": "caf\xe9"}]}'.encode("latin-1"), "line 2 column 25"),
+    (b"\x89PNG\r\n\x1a\n" + bytes(range(256)), "line 1 column 1"),
+])
+def test_bytes_that_are_not_utf8_are_refused_saying_where(tmp_path, data, where):
+    path = tmp_path / "run.json"
+    path.write_bytes(data)
+    with pytest.raises(TableauError, match=rf"run\.json: not UTF-8 text \(JSON is\): byte 0x[0-9a-f]{{2}} at {where}"):
+        load(path)
+
+
+@pytest.mark.parametrize("name, data", [("run.bag", bytes(range(256))), ("run.g2o", b"VERTEX_SE2 0 0 0 0\n"),
+                                        ("run.log.gz", b"\x1f\x8b\x08\x00")])
+def test_a_robots_log_given_as_a_tableau_says_which_command_reads_it(tmp_path, name, data):
+    path = tmp_path / name
+    path.write_bytes(data)
+    with pytest.raises(TableauError, match=rf"a robot's log is read into a tableau by `bootmap ingest {name}"):
+        load(path)
+
+
+def test_the_command_line_exits_2_on_a_log_or_a_binary_file(tmp_path, capsys):
+    from bootmap.cli import main
+
+    for name in ("run.mcap", "picture.png"):
+        (tmp_path / name).write_bytes(bytes(range(200, 256)) * 4)
+        assert main(["map", str(tmp_path / name)]) == 2
+        err = capsys.readouterr().err
+        assert f"{name}: not UTF-8 text" in err and "Traceback" not in err
+        assert ("bootmap ingest" in err) == name.endswith(".mcap")
+
+
 def test_missing_file_is_named(tmp_path):
     with pytest.raises(TableauError, match="nope.json: cannot read"):
         load(tmp_path / "nope.json")

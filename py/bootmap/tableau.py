@@ -177,7 +177,10 @@ class Tableau:
 
     @classmethod
     def loads(cls, text: str | bytes, source: str = "tableau") -> "Tableau":
-        """Parse JSON text. NaN and Infinity, which Python's json accepts but JSON forbids, are rejected."""
+        """Parse JSON text (bytes must be UTF-8, as JSON is). NaN and Infinity, which Python's json accepts
+        but JSON forbids, are rejected."""
+        if isinstance(text, bytes):
+            text = _utf8(text, source)
         try:
             data = json.loads(text, parse_constant=_reject_constant)
         except _NonFinite as e:
@@ -198,14 +201,36 @@ class Tableau:
         return cls(steps, data.get("world"), dict(data.get("meta", {})))
 
 
+#: Files a robot's log comes in, which ``bootmap ingest`` reads into a tableau.
+LOG_SUFFIXES = (".bag", ".db3", ".mcap", ".g2o", ".log", ".gz", ".zip", ".clf", ".carmen")
+
+
 def load(path: str | Path) -> Tableau:
-    """Read and validate a tableau file; errors name the file."""
+    """Read and validate a tableau file; errors name the file (and, for a robot's log, the command that
+    reads one)."""
     path = Path(path)
     try:
         text = path.read_bytes()
     except OSError as e:
         raise TableauError(f"cannot read: {e.strerror}", str(path)) from None
-    return Tableau.loads(text, str(path))
+    try:
+        return Tableau.loads(text, str(path))
+    except TableauError as e:
+        if path.suffix.lower() in LOG_SUFFIXES or path.is_dir():
+            raise TableauError(f"{e.reason}; a robot's log is read into a tableau by `bootmap ingest "
+                               f"{path.name} -o run.json`", str(path)) from None
+        raise
+
+
+def _utf8(data: bytes, source: str) -> str:
+    """The text of JSON bytes, or an error naming where they stop being UTF-8."""
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        line = data.count(b"\n", 0, e.start) + 1
+        column = e.start - (data.rfind(b"\n", 0, e.start) + 1) + 1
+        raise TableauError(f"not UTF-8 text (JSON is): byte 0x{data[e.start]:02x} at line {line} column {column}"
+                           " (a binary file, or text saved in another encoding such as Latin-1)", source) from None
 
 
 @lru_cache(maxsize=1)
