@@ -2,12 +2,14 @@
 
 import json
 import math
+import signal
 import subprocess
 import sys
 
 import pytest
 
 from bootmap import examples
+from bootmap.errors import EXIT_INTERRUPTED
 
 
 def bootmap(*args, cwd=None):
@@ -187,3 +189,27 @@ def test_why_explains_the_loop_closed_map_of_a_log(tmp_path):
     assert "proposed (near): dead reckoning puts them 0.0 m apart after 24 m driven (within 3.2 m)" in out.stdout
     one = bootmap("why", path, "t3")
     assert one.returncode == 2 and "ask why about two time points" in one.stderr
+
+
+def _interrupted(args, ready: bytes, cwd) -> tuple[int, str]:
+    """Start ``bootmap args``, wait until it has written ``ready`` to stderr (it is at work), press Ctrl-C
+    (SIGINT), and return its exit code and everything it wrote to stderr."""
+    proc = subprocess.Popen([sys.executable, "-m", "bootmap.cli", *map(str, args)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, cwd=cwd)
+    seen = b""
+    while ready not in seen:
+        chunk = proc.stderr.read1(4096)
+        if not chunk:
+            break
+        seen += chunk
+    proc.send_signal(signal.SIGINT)
+    _, rest = proc.communicate(timeout=120)
+    return proc.returncode, (seen + rest).decode(errors="replace")
+
+
+@pytest.mark.parametrize("command", [["simulate", "notched_rectangle", "--circuits", "3000", "-o", "run.json"],
+                                     ["experiment", "notched_rectangle", "--circuits", "3000", "-o", "out"]])
+def test_ctrl_c_stops_a_long_run_saying_so_without_a_traceback(tmp_path, command):
+    code, err = _interrupted(command, b"dstate/s", tmp_path)
+    assert code == EXIT_INTERRUPTED, err[-2000:]
+    assert "bootmap: interrupted" in err and "Traceback" not in err and "KeyboardInterrupt" not in err

@@ -5,13 +5,14 @@ import csv
 import json
 import os
 import shutil
+import signal
 import subprocess
 import sys
 import time
 from pathlib import Path
 
 import pytest
-from bootmap.errors import SweepError
+from bootmap.errors import EXIT_INTERRUPTED, SweepError
 from bootmap.experiments.world import run_experiment
 from bootmap.proc import in_child
 from bootmap.sim.world import load_world
@@ -242,3 +243,48 @@ def test_a_log_that_is_not_there_is_refused_naming_the_key(tmp_path):
     text = TINY.format(seeds="[1]").replace('worlds = ["notched_rectangle"]', 'logs = ["nowhere.log"]')
     with pytest.raises(SweepError, match=r"grid\.logs\[0\] \(nowhere\.log\): no such log"):
         loads_spec(text, "logs.toml")
+
+
+def _session(sid: int) -> list[int]:
+    """The processes of a session (Linux /proc): a command, its workers and their children."""
+    pids = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            if int(fields[3]) == sid and fields[0] != "Z":
+                pids.append(int(entry.name))
+    return pids
+
+
+def _until(condition, seconds: float) -> bool:
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        if condition():
+            return True
+        time.sleep(0.2)
+    return condition()
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads processes from Linux's /proc")
+def test_ctrl_c_stops_a_sweep_and_its_workers_and_says_how_to_resume(tmp_path):
+    spec = tmp_path / "long.toml"
+    spec.write_text(TINY.format(seeds="[1, 2, 3, 4, 5, 6]").replace("circuits = 3", "circuits = 400"))
+    proc = subprocess.Popen([sys.executable, "-m", "bootmap.cli", "sweep", str(spec), "-o", str(tmp_path / "out"),
+                             "--workers", "2", "--no-progress"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            start_new_session=True)
+    try:
+        # At work: the command, its two workers and a forked child for each cell they run.
+        assert _until(lambda: len(_session(proc.pid)) >= 5, 120), _session(proc.pid)
+        os.killpg(proc.pid, signal.SIGINT)  # as a terminal sends Ctrl-C: to every process of the command
+        _, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    err = err.decode(errors="replace")
+    assert proc.returncode == EXIT_INTERRUPTED, err[-3000:]
+    assert "interrupted" in err and "--resume" in err
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err
+    assert _until(lambda: not _session(proc.pid), 15), f"left running: {_session(proc.pid)}"

@@ -14,7 +14,7 @@ import time
 from typing import Callable, Sequence
 
 from . import __version__, arguments
-from .errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_OK, BadInput, BootmapError, SolveTimeout
+from .errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_INTERRUPTED, EXIT_OK, BadInput, BootmapError, SolveTimeout
 
 
 def _add_theory_options(p: argparse.ArgumentParser) -> None:
@@ -408,12 +408,15 @@ def _register_optional(sub) -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    args.started = time.monotonic()
-    handler: Callable[[argparse.Namespace], int] = args.handler
     try:
+        parser = build_parser()
+        args = parser.parse_args(argv)
+        args.started = time.monotonic()
+        handler: Callable[[argparse.Namespace], int] = args.handler
         return handler(args)
+    except KeyboardInterrupt:  # Ctrl-C: stop, say so, no traceback
+        print("bootmap: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
     except BootmapError as e:
         prefix = "error: " if e.exit_code == EXIT_BAD_INPUT else ""
         print(f"bootmap: {prefix}{e}", file=sys.stderr)

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 #: The ``bootmap`` command's exit codes (every sub-command, the simulator's and the service's included).
 EXIT_OK, EXIT_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
+#: Stopped by Ctrl-C (SIGINT): the shell's code for a command a signal ended, 128 + 2.
+EXIT_INTERRUPTED = 130
 
 
 class BootmapError(Exception):

@@ -32,6 +32,7 @@ def in_child(work: Callable[[], object], timeout: float) -> tuple:
     pid = os.fork()
     if pid == 0:  # the child: do the work, send the outcome, leave without running the parent's exit code
         os.close(read_fd)
+        _die_with_parent()
         _child(work, write_fd)
     os.close(write_fd)
     finished = False
@@ -48,6 +49,19 @@ def in_child(work: Callable[[], object], timeout: float) -> tuple:
     if not data:
         return "failed", "the process died without a result (killed for memory, or a crash in C code)"
     return pickle.loads(data)
+
+
+def _die_with_parent() -> None:
+    """Where Linux allows it, have the kernel kill this process when the one that forked it dies (a sweep's
+    worker terminated at Ctrl-C, or killed): no orphan goes on grounding for nobody."""
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        PR_SET_PDEATHSIG = 1
+        libc.prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
+    except (OSError, AttributeError):  # not Linux, or no prctl: the deadline still ends the child
+        pass
 
 
 def _child(work: Callable[[], object], write_fd: int) -> None:

@@ -9,9 +9,10 @@ cannot be reached, 2 a bad sweep file or an output directory that holds another 
 from __future__ import annotations
 
 import argparse
+import sys
 
 from ... import arguments
-from ...errors import EXIT_FAILURE, EXIT_OK
+from ...errors import EXIT_FAILURE, EXIT_INTERRUPTED, EXIT_OK
 
 
 def register(subparsers) -> None:
@@ -42,9 +43,14 @@ def register(subparsers) -> None:
 def cmd_sweep(args: argparse.Namespace) -> int:
     from . import run_sweep
 
-    result = run_sweep(args.spec, args.output, workers=args.workers, scheduler=args.scheduler,
-                       resume=args.resume or args.retry_failed, retry_failed=args.retry_failed,
-                       progress=not args.no_progress)
+    try:
+        result = run_sweep(args.spec, args.output, workers=args.workers, scheduler=args.scheduler,
+                           resume=args.resume or args.retry_failed, retry_failed=args.retry_failed,
+                           progress=not args.no_progress)
+    except KeyboardInterrupt:
+        print(f"bootmap sweep: interrupted; the cells that finished are in {args.output}/results.jsonl, and "
+              f"`bootmap sweep {args.spec} -o {args.output} --resume` goes on", file=sys.stderr)
+        return EXIT_INTERRUPTED
     table = result.table
     exact = sum(bool(r["map_exact"]) for r in table)
     print(f"{len(table)} cells ({result.ran} run now, {result.skipped} done before) in {result.seconds:.1f} s; "

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import signal
 from collections.abc import Iterable, Iterator
 from concurrent.futures import ProcessPoolExecutor, as_completed
 
@@ -24,11 +25,13 @@ DASK_HINT = "pip install 'bootmap[dask]'"
 
 def one_thread_per_worker() -> None:
     """A worker's initializer: BLAS and OpenMP pools of one thread, set before numpy is imported (spawned
-    workers import it after this runs); then one tiny experiment, so that what the first experiment of
-    a process pays once (lazy imports, reading the axioms) is paid here and inherited by every cell's
-    forked child, rather than paid again in each (about 0.2 s a cell)."""
+    workers import it after this runs); Ctrl-C left to the sweep (a terminal sends it to every process
+    of the command, and the sweep stops its workers itself); then one tiny experiment, so that what the
+    first experiment of a process pays once (lazy imports, reading the axioms) is paid here and
+    inherited by every cell's forked child, rather than paid again in each (about 0.2 s a cell)."""
     for var in THREAD_VARIABLES:
         os.environ[var] = "1"
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     from ..world import run_experiment
 
     run_experiment("notched_rectangle", circuits=2, seed=0, time_limit=10.0)
@@ -53,9 +56,19 @@ class LocalPool:
             try:
                 for future in as_completed(futures):
                     yield _row(future, futures[future])
-            finally:  # interrupted (Ctrl-C, or the caller stopped reading): drop what has not started
+            finally:  # interrupted (Ctrl-C, or the caller stopped reading): drop what has not started ...
                 for future in futures:
                     future.cancel()
+                if not all(f.done() for f in futures):
+                    _stop_workers(pool)  # ... and stop the cells at work, rather than wait for them
+
+
+def _stop_workers(pool: ProcessPoolExecutor) -> None:
+    """Terminate the pool's worker processes (a cell's forked child dies with its worker:
+    :func:`bootmap.proc.in_child`)."""
+    for process in list(getattr(pool, "_processes", {}).values()):  # the executor keeps no public list
+        if process.is_alive():
+            process.terminate()
 
 
 class DaskCluster:
