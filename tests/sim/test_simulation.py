@@ -1,6 +1,7 @@
 """The simulated robot: the paper's runs, physical honesty (free space, no bumps, no getting stuck),
 determinism, and exploration of every world."""
 
+import json
 import math
 from collections import defaultdict
 
@@ -189,3 +190,20 @@ def test_the_explorer_counts_a_turn_as_asked_however_odometry_read_it():
     assert after.kind == "travel"  # it faces back down the corridor, as the turn law left it
     explorer.decide(Observation(corridor, Travel(10.0, 0.5), front_open=True))
     assert [round(float(v), 3) for v in explorer.places_[1].position] == [-10.0, 0.0]
+
+
+def test_the_recorded_path_is_thin_yet_never_strays_from_where_the_robot_was(paper_run):
+    """The path in ``meta`` (to draw) keeps every position of the run within 2 cm of its polyline, and a
+    50-circuit run's meta fits what the service takes as a tableau's meta."""
+    from bootmap.service.settings import Settings
+
+    drawn = np.asarray(paper_run.tableau.meta["trajectory"])
+    truth = paper_run.trajectory[:, :2]
+    a, b = drawn[:-1], drawn[1:]
+    ab = b - a
+    span = np.maximum((ab * ab).sum(axis=1), 1e-12)
+    t = np.clip(((truth[:, None, :] - a[None]) * ab[None]).sum(axis=2) / span, 0.0, 1.0)
+    nearest = np.hypot(*(truth[:, None, :] - a[None] - t[..., None] * ab[None]).transpose(2, 0, 1)).min(axis=1)
+    assert nearest.max() <= 0.02 + 1e-3
+    assert len(drawn) < len(truth) / 10
+    assert len(json.dumps(paper_run.tableau.meta)) < Settings().max_meta_bytes

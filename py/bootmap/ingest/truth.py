@@ -29,6 +29,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .dstates import FoundTurn, odometry_track
+from ..paths import simplify
 from .scans import Pose, wrap
 
 SECTORS = "ENWS"  # as bootmap.sim.world.heading_sector names them, here in the building's frame
@@ -115,30 +116,6 @@ def visit_places(poses: list[Pose] | np.ndarray, radius_m: float = 3.0) -> list[
     clusters = fcluster(linkage(xy, method="complete"), t=radius_m, criterion="distance")
     names: dict[int, int] = {}
     return [names.setdefault(int(c), len(names)) for c in clusters]
-
-
-def simplify(xy: np.ndarray, tolerance_m: float) -> np.ndarray:
-    """Indices of the Ramer-Douglas-Peucker simplification of a path (first and last kept)."""
-    keep = np.zeros(len(xy), dtype=bool)
-    keep[[0, -1]] = True
-    stack = [(0, len(xy) - 1)]
-    while stack:  # iterative: a 4,000-point path would overflow Python's recursion
-        a, b = stack.pop()
-        if b - a < 2:
-            continue
-        offset = _distance_to_segment(xy[a + 1:b], xy[a], xy[b])
-        k = int(np.argmax(offset))
-        if offset[k] > tolerance_m:
-            keep[a + 1 + k] = True
-            stack += [(a, a + 1 + k), (a + 1 + k, b)]
-    return np.flatnonzero(keep)
-
-
-def _distance_to_segment(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    ab = b - a
-    span = float(ab @ ab)
-    t = np.zeros(len(points)) if span == 0 else np.clip((points - a) @ ab / span, 0.0, 1.0)
-    return np.hypot(*(points - a - t[:, None] * ab).T)
 
 
 @dataclass(frozen=True)

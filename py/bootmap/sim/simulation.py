@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import BootmapError
+from ..paths import simplify
 from ..tableau import Action, Step, Tableau
 from .control import ControlLaw, Limits, Travel, Turn
 from .laser import Laser, Scene
@@ -259,15 +260,18 @@ class Simulation:
         return Tableau(steps, self.world.name, meta)
 
 
-def _thin(traj: np.ndarray, spacing: float = 0.1, turn: float = math.radians(20)) -> list[list[float]]:
-    """The trajectory as [x, y] points about ``spacing`` metres apart, and wherever the robot turned
-    (so a turn in place stays a corner of the drawn path, not a chord across it)."""
-    keep = [0]
-    for i in range(1, len(traj)):
-        moved = math.hypot(*(traj[i, :2] - traj[keep[-1], :2]))
-        if moved >= spacing or (moved > 1e-3 and abs(traj[i, 2] - traj[keep[-1], 2]) >= turn):
-            keep.append(i)
-    return np.round(traj[keep, :2], 3).tolist()
+#: How far the drawn path may stray from where the robot was (metres): a tenth of the robot's width.
+TRAJECTORY_TOLERANCE_M = 0.02
+
+
+def _thin(traj: np.ndarray, tolerance_m: float = TRAJECTORY_TOLERANCE_M) -> list[list[float]]:
+    """The trajectory as the fewest [x, y] points that keep the drawn path within ``tolerance_m`` of every
+    position (Ramer-Douglas-Peucker, :func:`bootmap.paths.simplify`): a straight travel is its two ends,
+    so a long run stays within what the service takes as a tableau's ``meta``."""
+    xy = np.asarray(traj, dtype=float)[:, :2]
+    if len(xy) < 3:
+        return np.round(xy, 3).tolist()
+    return np.round(xy[simplify(xy, tolerance_m)], 3).tolist()
 
 
 class _NoBar:
