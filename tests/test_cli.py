@@ -213,3 +213,29 @@ def test_ctrl_c_stops_a_long_run_saying_so_without_a_traceback(tmp_path, command
     code, err = _interrupted(command, b"dstate/s", tmp_path)
     assert code == EXIT_INTERRUPTED, err[-2000:]
     assert "bootmap: interrupted" in err and "Traceback" not in err and "KeyboardInterrupt" not in err
+
+
+@pytest.mark.parametrize("command", [["map", "{paper}"], ["why", "{paper}", "S0", "S4"], ["rehearse", "{paper}"]])
+def test_answers_go_to_a_file_with_o_as_they_would_to_stdout(tmp_path, paper_file, command):
+    args = [a.format(paper=paper_file) for a in command]
+    printed = bootmap(*args, "--format", "json")
+    assert printed.returncode == 0, printed.stderr
+    out = tmp_path / "answer.json"
+    written = bootmap(*args, "--format", "json", "-o", out)
+    assert written.returncode == 0 and written.stdout == ""
+    strip = lambda d: {k: v for k, v in d.items() if k not in ("seconds", "stats")}  # noqa: E731
+    assert strip(json.loads(out.read_text())) == strip(json.loads(printed.stdout))
+
+
+def test_o_into_a_missing_folder_fails_with_exit_1_and_bad_input_writes_nothing(tmp_path, paper_file):
+    r = bootmap("map", paper_file, "-o", tmp_path / "no" / "such" / "map.txt")
+    assert r.returncode == 1 and "cannot write" in r.stderr and "Traceback" not in r.stderr
+    bad = tmp_path / "bad.json"
+    bad.write_text("{")
+    r = bootmap("map", bad, "-o", tmp_path / "map.txt")
+    assert r.returncode == 2 and not (tmp_path / "map.txt").exists()
+
+
+def test_no_progress_leaves_stderr_quiet(tmp_path):
+    r = bootmap("experiment", "notched_rectangle", "--circuits", "3", "--no-progress", "-o", tmp_path / "out")
+    assert "dstate/s" not in r.stderr and "%|" not in r.stderr

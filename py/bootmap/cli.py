@@ -148,7 +148,7 @@ def cmd_experiment(args: argparse.Namespace) -> int:
         world = load_world(args.world, dict(args.set))  # a bad setting is a WorldError: exit 2
     if args.seeds:
         out = run_seeds(world, args.seeds, out_dir=args.output, circuits=args.circuits, steps=args.steps,
-                        k_max=args.k_max, time_limit=args.time_limit, quantum_deg=args.quantum, progress=True,
+                        k_max=args.k_max, time_limit=args.time_limit, quantum_deg=args.quantum, progress=not args.no_progress,
                         policy=args.policy)
         runs = out["runs"]
         for r in runs:
@@ -156,7 +156,7 @@ def cmd_experiment(args: argparse.Namespace) -> int:
         print(f"summary over seeds: {args.output}/summary.md")
     else:
         runs = [run_experiment(world, circuits=args.circuits, steps=args.steps, seed=args.seed,
-                               out_dir=args.output, k_max=args.k_max, progress=True, time_limit=args.time_limit,
+                               out_dir=args.output, k_max=args.k_max, progress=not args.no_progress, time_limit=args.time_limit,
                                quantum_deg=args.quantum, policy=args.policy)]
         _print_summary(runs[0])
         print(f"report: {args.output}/report.md")
@@ -182,7 +182,7 @@ def _log_experiment(args: argparse.Namespace) -> int:
 
     r = run_log_experiment(args.log, out_dir=args.output, seed=args.seed, k_max=args.k_max,
                            time_limit=args.time_limit, quantum_deg=args.quantum, view_criterion=args.views,
-                           progress=True, junctions=JunctionDetector() if args.junctions else None,
+                           progress=not args.no_progress, junctions=JunctionDetector() if args.junctions else None,
                            mapper=args.map, places=PlaceDetector() if args.dstates == "places" else None,
                            scan_match=not args.no_scan_match)
     print("\n".join(headline(r)))
@@ -264,7 +264,7 @@ def build_parser() -> argparse.ArgumentParser:
                                    "paths with the ASP axioms, and print the map: text shows the tableau annotated "
                                    "like the paper's table (t, view, dstate, place, path, dir, action).")
     p.add_argument("tableau", help="tableau JSON file")
-    p.add_argument("--format", choices=["text", "json"], default="text")
+    _add_output_options(p)
     p.add_argument("--all", action="store_true", help="also print every other minimal map found")
     p.add_argument("--time-limit", type=arguments.seconds, default=60.0, metavar="S", help="seconds for the search (default 60); it ends within 2 s more whatever the tableau")
     p.add_argument("--max-models", type=arguments.count("maps"), default=10, metavar="N",
@@ -280,7 +280,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "it; views count as soft evidence; bootmap.mapping.loops), or auto (the default: loops "
                         "for a log's tableau, which says the robot drove through dstates, else fewest)")
     _add_theory_options(p)
-    p.set_defaults(handler=cmd_map)
+    p.set_defaults(handler=_written(cmd_map))
 
     p = sub.add_parser("axioms", help="list the axiom files and their named rules",
                        description="List the levels (.lp files) of the axiom directory and every rule named by a "
@@ -299,14 +299,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("a", help="a time point (t0 or 0) or a dstate name (S0)")
     p.add_argument("b", nargs="?", help="a time point or a dstate name; without it, say whether the view seen "
                                         "at time point a is read as seen or as a misread, and why")
-    p.add_argument("--format", choices=["text", "json"], default="text")
+    _add_output_options(p)
     p.add_argument("--time-limit", type=arguments.seconds, default=60.0, metavar="S", help="seconds for the map (default 60)")
     p.add_argument("--map", choices=("auto", "loops", "fewest"), default="auto",
                    help="which map to explain, as bootmap map finds it (auto: the loop-closed map of a log's "
                         "tableau, else the minimal map): for a loop-closed map, the joins that made two time "
                         "points one dstate, or what keeps them apart")
     _add_theory_options(p)
-    p.set_defaults(handler=cmd_why)
+    p.set_defaults(handler=_written(cmd_why))
 
     p = sub.add_parser("rehearse", help="plan the actions that tell the minimal maps apart",
                        description="When the experience leaves more than one minimal map, plan the shortest actions "
@@ -314,13 +314,13 @@ def build_parser() -> argparse.ArgumentParser:
                                    "rehearsal procedure), and print what each map predicts along them. 'Nothing to "
                                    "rehearse' when the map is unique.")
     p.add_argument("tableau", help="tableau JSON file")
-    p.add_argument("--format", choices=["text", "json"], default="text")
+    _add_output_options(p)
     p.add_argument("--max-length", type=arguments.count("actions"), default=10, metavar="N",
                    help="longest plan searched for (default 10)")
     p.add_argument("--time-limit", type=arguments.seconds, default=60.0, metavar="S",
                    help="seconds for the maps (default 60)")
     _add_theory_options(p)
-    p.set_defaults(handler=cmd_rehearse)
+    p.set_defaults(handler=_written(cmd_rehearse))
 
     p = sub.add_parser("schema", help="print the JSON Schema of the tableau format")
     p.set_defaults(handler=cmd_schema)
@@ -378,6 +378,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "laser.dropout=0.002 (twice the shipped sensor noise); validated as in the file; "
                         "repeatable (worlds/README.md lists the fields)")
     p.add_argument("-o", "--output", default="out", metavar="DIR", help="output directory (default out/)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(handler=cmd_experiment)
 
     p = sub.add_parser("demo", help="run the main job: the paper's experiment on both of its worlds",
@@ -405,6 +406,36 @@ def _register_optional(sub) -> None:
                 raise
             continue
         register(sub)
+
+
+def _add_output_options(p: argparse.ArgumentParser) -> None:
+    """``--format`` and ``-o``, shared by the commands that print an answer (map, why, rehearse)."""
+    p.add_argument("--format", choices=["text", "json"], default="text",
+                   help="text (default): for a person to read; json: the answer as the HTTP service returns it, "
+                        "for a program")
+    p.add_argument("-o", "--output", metavar="FILE", help="write the answer here (default: stdout)")
+
+
+def _written(handler: Callable[[argparse.Namespace], int]) -> Callable[[argparse.Namespace], int]:
+    """The handler with its printed answer written to ``args.output`` when given (nothing written on bad
+    input: the file is made only once the answer is complete)."""
+    def run(args: argparse.Namespace) -> int:
+        if not getattr(args, "output", None):
+            return handler(args)
+        import contextlib
+        import io
+
+        buffer = io.StringIO()
+        with contextlib.redirect_stdout(buffer):
+            code = handler(args)
+        try:
+            with open(args.output, "w", encoding="utf-8") as f:
+                f.write(buffer.getvalue())
+        except OSError as e:
+            print(f"bootmap {args.command}: cannot write {args.output}: {e.strerror}", file=sys.stderr)
+            return EXIT_FAILURE
+        return code
+    return run
 
 
 def main(argv: Sequence[str] | None = None) -> int:
