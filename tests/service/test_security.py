@@ -65,6 +65,37 @@ def test_token_create_prints_the_token_last_and_stores_only_its_hash(tmp_path):
     assert bad.returncode == 2 and "bad name" in bad.stderr
 
 
+def _token_command(*args, data_dir) -> subprocess.CompletedProcess:
+    env = {k: v for k, v in os.environ.items() if not k.startswith("BOOTMAP_")}
+    return subprocess.run([sys.executable, "-m", "bootmap.cli", "token", *args, "--data-dir", str(data_dir)],
+                          capture_output=True, text=True, env=env, timeout=60)
+
+
+def test_tokens_are_listed_without_their_secrets_and_a_revoked_one_is_refused_at_once(tmp_path, server_axioms):
+    s = Server(tmp_path / "revoking", axioms=server_axioms, require_tokens=True, **SESSION_SETTINGS)
+    dave, admin = make_token("dave", data_dir=s.data_dir), make_token("root", admin=True, data_dir=s.data_dir)
+    s.start()
+    try:
+        with s.client() as c:
+            r = c.post("/tableaux", json=SMALL, headers=bearer(dave))
+            assert r.status_code == 201, r.text
+            tableau = r.json()["id"]
+            listed = _token_command("list", data_dir=s.data_dir)
+            assert listed.returncode == 0, listed.stderr
+            rows = {line.split()[0]: line.split() for line in listed.stdout.splitlines()[1:]}
+            assert rows["dave"][1] == "user" and "1 tableau" in " ".join(rows["dave"])
+            assert rows["root"][1] == "admin" and dave not in listed.stdout and admin not in listed.stdout
+            revoked = _token_command("revoke", "dave", data_dir=s.data_dir)
+            assert revoked.returncode == 0, revoked.stderr
+            problem(c.get(f"/tableaux/{tableau}", headers=bearer(dave)), 401)
+            assert c.get(f"/tableaux/{tableau}", headers=bearer(admin)).status_code == 200
+            again = _token_command("revoke", "dave", data_dir=s.data_dir)
+            assert again.returncode == 2 and "no token is named 'dave'" in again.stderr
+            assert "dave" not in _token_command("list", data_dir=s.data_dir).stdout
+    finally:
+        s.stop()
+
+
 def test_without_a_token_every_write_and_read_of_tableaux_is_401(tokens_server, alices):
     with tokens_server.client() as c:
         for method, path, body in [("POST", "/tableaux", SMALL), ("POST", f"/tableaux/{alices}/steps", MORE),

@@ -9,7 +9,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_OK
+from ..errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_OK, BadInput
 
 
 def register(subparsers) -> None:
@@ -40,9 +40,21 @@ def register(subparsers) -> None:
     c.add_argument("name", metavar="NAME", help="who the token is for (letters, digits, _ . @ -)")
     c.add_argument("--admin", action="store_true", help="the token may reload axioms and make tokens, and reads "
                                                         "and changes every tableau")
-    c.add_argument("--db", metavar="PATH_OR_URL", help="SQLite file or SQLAlchemy URL (default DATA_DIR/bootmap.sqlite3)")
-    c.add_argument("--data-dir", metavar="DIR", help="data directory (default ~/.local/share/bootmap)")
     c.set_defaults(handler=cmd_token_create)
+    ls = tsub.add_parser("list", help="list the tokens: name, admin or not, when made, tableaux owned",
+                         description="List the API tokens (never the tokens themselves: only their hashes are "
+                                     "stored): name, whether it is an admin's, when it was made, and how many "
+                                     "tableaux it owns.")
+    ls.set_defaults(handler=cmd_token_list)
+    rv = tsub.add_parser("revoke", help="revoke a token: refused from now on, on every server",
+                         description="Revoke the token named NAME: every server refuses it from now on. Its "
+                                     "tableaux stay, owned by no one (admin tokens reach them).")
+    rv.add_argument("name", metavar="NAME", help="the token's name, as `bootmap token list` shows it")
+    rv.set_defaults(handler=cmd_token_revoke)
+    for action in (c, ls, rv):
+        action.add_argument("--db", metavar="PATH_OR_URL",
+                            help="SQLite file or SQLAlchemy URL (default DATA_DIR/bootmap.sqlite3)")
+        action.add_argument("--data-dir", metavar="DIR", help="data directory (default ~/.local/share/bootmap)")
 
 
 def cmd_serve(args: argparse.Namespace) -> int:
@@ -116,6 +128,63 @@ def cmd_token_create(args: argparse.Namespace) -> int:
     where = make_url(settings.database_url).render_as_string(hide_password=True)
     print(f"made {kind} {args.name!r} in {where}; it is shown only now:")
     print(token)
+    return EXIT_OK
+
+
+def _token_store(args: argparse.Namespace):
+    """The store of the database the token commands act on, and where it is (password hidden); a bad
+    setting is a BadInput naming it."""
+    from pydantic import ValidationError
+    from sqlalchemy.engine import make_url
+
+    from ..errors import BadInput
+    from .settings import Settings
+    from .store import Store
+
+    given = {"db": args.db, "data_dir": args.data_dir}
+    try:
+        settings = Settings(**{k: v for k, v in given.items() if v is not None})
+    except ValidationError as e:
+        raise BadInput(f"bad setting: {_first_error(e)}") from None
+    return Store(settings.database_url), make_url(settings.database_url).render_as_string(hide_password=True)
+
+
+def cmd_token_list(args: argparse.Namespace) -> int:
+    try:
+        store, where = _token_store(args)
+        try:
+            tokens = store.tokens()
+        finally:
+            store.close()
+    except BadInput as e:
+        print(f"bootmap token list: {e}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except Exception as e:  # noqa: BLE001  the database cannot be reached or read
+        print(f"bootmap token list: cannot read the tokens: {e}", file=sys.stderr)
+        return EXIT_FAILURE
+    print(f"{len(tokens)} token(s) in {where}")
+    for t in tokens:
+        print(f"{t.name:30s} {'admin' if t.admin else 'user ':5s}  made {t.created_at:%Y-%m-%d %H:%M} UTC  "
+              f"{t.tableaux} tableau(x)")
+    return EXIT_OK
+
+
+def cmd_token_revoke(args: argparse.Namespace) -> int:
+    from .store import NotFound
+
+    try:
+        store, where = _token_store(args)
+        try:
+            store.delete_token(args.name)
+        finally:
+            store.close()
+    except (BadInput, NotFound) as e:
+        print(f"bootmap token revoke: {e}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except Exception as e:  # noqa: BLE001  the database cannot be reached or written
+        print(f"bootmap token revoke: cannot revoke the token: {e}", file=sys.stderr)
+        return EXIT_FAILURE
+    print(f"revoked token {args.name!r} in {where}: refused from now on; its tableaux stay, owned by no one")
     return EXIT_OK
 
 

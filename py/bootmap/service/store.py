@@ -219,6 +219,17 @@ class TokenRecord:
 
 
 @dataclass(frozen=True)
+class TokenListing:
+    """A token as ``bootmap token list`` shows it: its name, whether it is an admin's, when it was made,
+    and how many tableaux it owns."""
+
+    name: str
+    admin: bool
+    created_at: datetime
+    tableaux: int
+
+
+@dataclass(frozen=True)
 class HeldLease:
     """A solve place a token holds: when it was taken, and the last heartbeat of the server holding it
     (None when it is the asking server's own)."""
@@ -469,6 +480,14 @@ class Store:
             s.execute(delete(SolveLease).where(SolveLease.token_id == token_id))
             s.execute(delete(RequestCount).where(RequestCount.token_id == token_id))
             s.execute(delete(TokenRow).where(TokenRow.id == token_id))
+
+    def tokens(self) -> list[TokenListing]:
+        """Every token (never its hash), oldest first, with how many tableaux it owns."""
+        owned = (select(TableauRow.owner_id, func.count().label("n")).group_by(TableauRow.owner_id).subquery())
+        with self._session() as s:
+            rows = s.execute(select(TokenRow.name, TokenRow.admin, TokenRow.created_at, owned.c.n)
+                             .outerjoin(owned, owned.c.owner_id == TokenRow.id).order_by(TokenRow.id)).all()
+        return [TokenListing(name, bool(admin), _utc(created), int(n or 0)) for name, admin, created, n in rows]
 
     def token_by_digest(self, digest: str) -> TokenRecord | None:
         with self._session() as s:
