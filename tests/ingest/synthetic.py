@@ -120,10 +120,10 @@ def ring_poses(laps: int = 2, size=RING_SIZE, widths=RING_WIDTHS, step: float = 
     return [(float(x), float(y), float(t)) for x, y, t in poses] + [(*map(float, points[-1]), poses[-1][2])]
 
 
-def write_drive_log(path: Path, walls: np.ndarray, poses: list[tuple]) -> Path:
+def write_drive_log(path: Path, walls: np.ndarray, poses: list[tuple], gaps=()) -> Path:
     """A drive through a building drawn as walls, as a gmapping-corrected CARMEN log: per pose a ``FLASER``
     of 180 beams ray-cast from it (the pose in both pose fields), an ``ODOM`` restarting from it and one at
-    the next pose (exact odometry)."""
+    the next pose (exact odometry), except before the scans in ``gaps`` (the wheels recorded nothing)."""
     from support.raycast import cast
 
     lines = []
@@ -132,7 +132,7 @@ def write_drive_log(path: Path, walls: np.ndarray, poses: list[tuple]) -> Path:
         p = " ".join(repr(v) for v in pose)
         t = float(i)
         lines += [f"FLASER 180 {ranges} {p} {p} {t} h {t}", f"ODOM {p} 0 0 0 0 h 0"]
-        if i + 1 < len(poses):
+        if i + 1 < len(poses) and i + 1 not in gaps:
             n = " ".join(repr(v) for v in poses[i + 1])
             lines.append(f"ODOM {n} 0 0 0 {t + 1} h {t + 1}")
     path.write_text("\n".join(lines) + "\n")

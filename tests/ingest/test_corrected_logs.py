@@ -22,7 +22,7 @@ from bootmap.ingest.carmen import read_carmen, read_carmen_text, rebuilt_odometr
 from bootmap.ingest.ingest import log_tableau
 from bootmap.ingest.scans import between, compose
 
-from synthetic import square_poses
+from synthetic import ring_poses, ring_walls, square_poses, write_drive_log
 
 BEAMS = 180
 
@@ -138,7 +138,27 @@ def test_a_scan_without_increments_is_a_marked_gap_of_no_motion(square):
     expected = chained((0.0, 0.0, 0.0), increments[:4] + [(0.0, 0.0, 0.0)] + increments[5:])
     _same_poses([s.odometry for s in scans], expected)
     tableau = log_tableau(scans, source="square.log")
-    assert tableau.meta["odometry_gaps"] == [5]
+    # Every scan of this log reads the same ranges: the laser cannot tell a turn, and says nothing.
+    assert tableau.meta["odometry_gaps"] == [{"scan": 5, "read_as": "still"}]
+
+
+def test_a_turn_on_the_spot_the_wheels_did_not_record_is_read_from_the_laser(tmp_path):
+    """In a ray-cast corridor ring the robot turns 90 degrees on the spot at a corner, and the log holds
+    no odometry for it: the two scans' beams show the turn, and the track turns with the truth."""
+    poses = ring_poses(laps=1)
+    corner = next(k for k, (a, b) in enumerate(zip(poses, poses[1:]), 1) if abs(b[2] - a[2]) > 1.0)
+    assert math.dist(poses[corner - 1][:2], poses[corner][:2]) < 0.6  # the last step before the turn
+    still = [(*poses[corner - 1][:2], poses[corner][2])]  # turn on the spot first, then drive on
+    drive = poses[:corner] + still + poses[corner:]
+    log = write_drive_log(tmp_path / "ring.log", ring_walls(), drive, gaps={corner})
+    scans = list(read_carmen(log))
+    assert scans[corner].odometry_gap == "laser"
+    turned = scans[corner].odometry[2] - scans[corner - 1].odometry[2]
+    assert math.degrees((turned + math.pi) % (2 * math.pi) - math.pi) == pytest.approx(90.0, abs=2.0)
+    # From the turn on, the track is the truth's, moved to where the robot was before it.
+    base = scans[corner - 1]
+    moved = [compose(base.truth, between(base.odometry, s.odometry)) for s in scans[corner:]]
+    _same_poses(moved, [s.truth for s in scans[corner:]], tol=0.3)
 
 
 def test_a_log_without_its_increments_is_refused_not_guessed(square):

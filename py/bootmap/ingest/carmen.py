@@ -34,7 +34,7 @@ from typing import Iterable, Iterator
 import numpy as np
 
 from ..errors import LogError
-from .scans import Pose, Scan, between, compose, wrap
+from .scans import Pose, Scan, between, compose, turn_in_place, wrap
 
 # After a ROBOTLASER1's ranges and remissions: laser pose (3), robot pose (3), tv, rv, forward and side
 # safety distances, turn axis (5), timestamp, host, logger timestamp (3).
@@ -46,8 +46,9 @@ GZIP_MAGIC = b"\x1f\x8b"
 RESTART_SHARE = 0.9
 #: Poses this close (m, rad) are the same pose (a log prints six or so significant digits).
 POSE_TOLERANCE = 1e-4
-#: A corrected log may miss the wheel increments before this share of its scans (each is then read
-#: as no motion, and marked); more, and the odometry is not in the log.
+#: A corrected log may miss the wheel increments before this share of its scans (each is then read as
+#: the turn on the spot the laser shows, or else as no motion, and marked); more, and the odometry is not
+#: in the log.
 MAX_GAP_SHARE = 0.05
 
 
@@ -192,19 +193,26 @@ def _corrected_with_restarts(rows: list[tuple[list[str], str]], source: str) -> 
             f"ODOM line between the previous scan's restart and themselves (the first is scan {gaps[0]}), "
             "so the raw wheel increments are not in the log; the corrected poses are not odometry, and no "
             "odometry is guessed", source)
-    odometry = rebuilt_odometry([s.truth for s in scans], predicted)
+    # Where the wheels recorded nothing, the laser may show the turn the robot made on the spot.
+    turns = {k: turn_in_place(scans[k - 1], scans[k]) for k in gaps}
+    bridged = {k: (0.0, 0.0, turn) for k, turn in turns.items() if turn is not None}
+    odometry = rebuilt_odometry([s.truth for s in scans], predicted, bridged)
     for k, (scan, pose) in enumerate(zip(scans, odometry)):
+        gap = "" if k not in turns else ("laser" if k in bridged else "still")
         yield Scan(scan.time, scan.ranges, scan.angle_min, scan.angle_increment, scan.range_max, pose, scan.truth,
-                   odometry_gap=k in gaps)
+                   odometry_gap=gap)
 
 
-def rebuilt_odometry(corrected: list[Pose], predicted: list[Pose | None]) -> list[Pose]:
+def rebuilt_odometry(corrected: list[Pose], predicted: list[Pose | None],
+                     bridged: dict[int, Pose] | None = None) -> list[Pose]:
     """The raw dead-reckoned track of a corrected log.
 
     ``predicted[k]`` is odometry's prediction of scan ``k``: the last ``ODOM`` before it, which started
     from scan ``k - 1``'s corrected pose. The raw increment from scan ``k - 1`` to scan ``k`` is
     ``corrected[k-1]^-1 (+) predicted[k]``; chaining the increments from the first prediction (the raw
-    reading at the first scan, or the origin) gives the track the robot itself measured.
+    reading at the first scan, or the origin) gives the track the robot itself measured. Where a scan has no
+    prediction (no ``ODOM`` line after the previous scan's restart) the increment is ``bridged[k]`` (a
+    turn on the spot the laser showed), else none.
 
     >>> track = rebuilt_odometry([(5, 5, 0), (6, 5, 0)], [None, (6.1, 5, 0.1)])
     >>> [tuple(round(v, 9) for v in pose) for pose in track]
@@ -212,8 +220,9 @@ def rebuilt_odometry(corrected: list[Pose], predicted: list[Pose | None]) -> lis
     """
     start = predicted[0] if predicted and predicted[0] is not None else (0.0, 0.0, 0.0)
     track = [tuple(float(v) for v in start)]
-    for before, prediction in zip(corrected, predicted[1:]):
-        step = (0.0, 0.0, 0.0) if prediction is None else between(before, prediction)
+    bridged = bridged or {}
+    for k, (before, prediction) in enumerate(zip(corrected, predicted[1:]), 1):
+        step = bridged.get(k, (0.0, 0.0, 0.0)) if prediction is None else between(before, prediction)
         track.append(compose(track[-1], step))
     return track
 

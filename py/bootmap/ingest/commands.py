@@ -92,5 +92,6 @@ def _gap_note(meta: dict) -> str:
     gaps = meta.get("odometry_gaps")
     if not gaps:
         return ""
-    return (f"; the log holds no wheel odometry before {len(gaps)} scan(s) (first: scan {gaps[0]}), read as no "
-            "motion")
+    laser = sum(g["read_as"] == "laser" for g in gaps)
+    return (f"; the log holds no wheel odometry before {len(gaps)} scan(s) (first: scan {gaps[0]['scan']}): "
+            f"{laser} read as the turn on the spot the laser shows, {len(gaps) - laser} as no motion")

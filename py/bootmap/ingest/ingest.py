@@ -194,9 +194,10 @@ def _meta(scans, chosen, turns, detector, max_range, radius_m, source, has_truth
                       "log_range_max": scans[0].range_max},
             "dstates": {"scans": chosen, "detector": asdict(detector),
                         "junctions": None if junctions is None else asdict(junctions), "passes": passes}}
-    gaps = [k for k, s in enumerate(scans) if s.odometry_gap]
+    gaps = [{"scan": k, "read_as": s.odometry_gap} for k, s in enumerate(scans) if s.odometry_gap]
     if gaps:
-        # Scans before which the log holds no wheel odometry: read as no motion (bootmap.ingest.carmen).
+        # Scans before which the log holds no wheel odometry: read as the turn on the spot the laser shows
+        # ("laser"), or as no motion ("still") (bootmap.ingest.carmen).
         meta["odometry_gaps"] = gaps
     if has_truth:
         truth = [s.truth for s in scans]

@@ -47,9 +47,10 @@ class Scan:
     truth : Pose, optional
         The log's best estimate of the true pose (optimised, or from a ground-truth topic); never used
         by the learning.
-    odometry_gap : bool
-        The log holds no odometry between the previous scan and this one: ``odometry`` carries the
-        previous scan's pose over unchanged.
+    odometry_gap : str
+        Empty where the log holds odometry from the previous scan to this one; else how the gap was read:
+        ``"laser"`` (a turn on the spot the two scans' beams show, :func:`turn_in_place`) or ``"still"``
+        (no motion: the previous pose carried over).
     """
 
     time: float
@@ -59,7 +60,7 @@ class Scan:
     range_max: float
     odometry: Pose
     truth: Pose | None = None
-    odometry_gap: bool = False
+    odometry_gap: str = ""
 
     @property
     def angles(self) -> np.ndarray:
@@ -106,3 +107,42 @@ def between(a: Pose, b: Pose) -> Pose:
     c, s = math.cos(a[2]), math.sin(a[2])
     dx, dy = b[0] - a[0], b[1] - a[1]
     return (c * dx + s * dy, -s * dx + c * dy, wrap(b[2] - a[2]))
+
+
+#: A turn on the spot is read from two scans' beams only where they agree this well (median, metres: a
+#: few times a laser's noise) over at least this much of their view, and no turn this far from it
+#: agrees a third as well.
+TURN_AGREE_M, TURN_OVERLAP_DEG, TURN_UNIQUE_DEG = 0.05, 60.0, 10.0
+
+
+def turn_in_place(a: Scan, b: Scan, max_range: float = 20.0) -> float | None:
+    """The turn (radians, counter-clockwise) from scan ``a`` to scan ``b`` of a robot that turned on the
+    spot between them: the shift of ``b``'s beams that lays them on ``a``'s, where over at least
+    :data:`TURN_OVERLAP_DEG` of view they agree to :data:`TURN_AGREE_M` and no shift
+    :data:`TURN_UNIQUE_DEG` or more away agrees a third as well; None where no shift does (the robot
+    also moved, or the scans are ambiguous, as in a featureless hall).
+
+    >>> ranges = 2.0 + np.sin(np.linspace(0, 7, 361)) + np.linspace(0, 1, 361)
+    >>> a = Scan(0.0, ranges[60:301], -np.radians(60), np.radians(0.5), 50.0, (0.0, 0.0, 0.0))
+    >>> b = Scan(1.0, ranges[100:341], -np.radians(60), np.radians(0.5), 50.0, (0.0, 0.0, 0.0))
+    >>> round(float(np.degrees(turn_in_place(a, b))), 1)   # b's beams see what a's saw 20 degrees left
+    20.0
+    """
+    beams = 361
+    step = math.pi / (beams - 1)
+    ia, ib = np.array(to_image(a, beams, max_range)), np.array(to_image(b, beams, max_range))
+    least = int(math.ceil(math.radians(TURN_OVERLAP_DEG) / step))
+    shifts = np.arange(-(beams - least), beams - least + 1)
+    agree = np.full(len(shifts), np.inf)
+    for n, k in enumerate(shifts):
+        x, y = (ia[k:], ib[:beams - k]) if k >= 0 else (ia[:k], ib[-k:])
+        seen = (x < max_range) | (y < max_range)  # a direction neither saw anything in says nothing
+        if seen.sum() >= least:
+            agree[n] = float(np.median(np.abs(x[seen] - y[seen])))
+    best = int(np.argmin(agree))
+    far = np.abs(shifts - shifts[best]) * step >= math.radians(TURN_UNIQUE_DEG)
+    if not np.isfinite(agree[best]) or agree[best] > TURN_AGREE_M or \
+            agree[far].min(initial=np.inf) < 3 * max(agree[best], 0.01):
+        return None
+    # b's beam j sees what a's beam j + k saw: the robot turned k beams to the left.
+    return float(shifts[best] * step)
