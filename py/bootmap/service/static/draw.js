@@ -6,7 +6,7 @@ export const WIDTH = 640, HEIGHT = 460;
 const MARGIN = 46;
 // A dstate's or a path's label shows when the nearest other one is at least this far on screen (px);
 // closer, it shows only when its dstate is hovered, focused or picked: zoom in to see them all.
-const LABEL_ROOM_PX = 26;
+const LABEL_ROOM_PX = 36;
 
 function el(name, attrs = {}, parent = null) {
   const node = document.createElementNS(NS, name);
@@ -162,6 +162,10 @@ function room(nodes) {
 export function fitLabels(svg, scale) {
   if (!(scale > 0)) return;
   svg.style.setProperty("--u", String(1 / scale));
+  crowd(svg, scale);
+}
+
+function crowd(svg, scale) {
   for (const node of svg.querySelectorAll("[data-room]")) {
     node.classList.toggle("crowded", Number(node.dataset.room) * scale < LABEL_ROOM_PX);
   }
@@ -183,6 +187,7 @@ export function svgFile(svg) {
   copy.setAttribute("width", WIDTH);
   copy.setAttribute("height", HEIGHT);
   copy.style.setProperty("--u", String(w / WIDTH));  // labels as large in the file as on screen
+  crowd(copy, WIDTH / w);  // and shown where the file's size gives them room
   copy.style.setProperty("background", "#fff");
   const rules = [];
   for (const sheet of document.styleSheets) {
@@ -191,7 +196,7 @@ export function svgFile(svg) {
     for (const rule of list) {
       if (!(rule instanceof CSSStyleRule)) continue;
       let used = rule.selectorText === ":root";
-      try { used ||= svg.querySelector(rule.selectorText) !== null; } catch { /* a selector this browser has no use for */ }
+      try { used ||= copy.querySelector(rule.selectorText) !== null; } catch { /* a selector this browser has no use for */ }
       if (used) rules.push(rule.cssText);
     }
   }
