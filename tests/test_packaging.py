@@ -28,7 +28,7 @@ def test_built_wheel_carries_the_axioms_and_maps_a_tableau(tmp_path):
     # The viewer's page and modules ship in the package: nothing for a user to build.
     shipped = set(zipfile.ZipFile(wheel).namelist())
     assert {f"bootmap/service/static/{f}" for f in ("index.html", "app.js", "api.js", "draw.js", "table.js",
-                                                     "why.js", "viewer.css")} <= shipped
+                                                     "why.js", "zoom.js", "viewer.css")} <= shipped
     env_dir = tmp_path / "clean"
     venv.create(env_dir, with_pip=False)
     py = env_dir / "bin" / "python"

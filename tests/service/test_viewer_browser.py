@@ -190,3 +190,166 @@ def test_on_a_server_that_needs_tokens_the_page_asks_once_and_sends_it_on_every_
     finally:
         page.goto("about:blank")  # stop the page's polling first: a poll of a stopped server is a console error
         s.stop()
+
+
+# ---------------------------------------------------------------------------------------------------
+# A map at a real log's scale: zoom, pan, fit, labels readable, clicks on dstates, downloads
+# ---------------------------------------------------------------------------------------------------
+
+HOME = [0.0, 0.0, 640.0, 460.0]  # the whole map: draw.js's WIDTH and HEIGHT
+
+
+@pytest.fixture(scope="module")
+def big(viewer_server) -> int:
+    """A 700-step exploration of a random 6x6 grid world with loops: 36 places and over 100 dstates,
+    about the size of a real log's map (MIT's Killian Court: 38 places, 80 dstates). Solved in a second."""
+    rng = np.random.default_rng(5)
+    doc = walk(random_world(rng, 6, 6, extra_edges=4, landmarks=0.5), 700, rng, policy="explore").to_dict()
+    with viewer_server.client() as c:
+        r = c.post("/tableaux", json=doc)
+        assert r.status_code == 201, r.text
+        assert r.json()["map"]["summary"]["places"] >= 30
+        return r.json()["id"]
+
+
+def _view(page) -> list[float]:
+    return [float(v) for v in page.locator("#map").get_attribute("viewBox").split()]
+
+
+def _to_map(page, x, y) -> list[float]:
+    """The map point (SVG user units) under the client point (x, y)."""
+    return page.evaluate("([x, y]) => { const p = new DOMPoint(x, y).matrixTransform("
+                         "document.getElementById('map').getScreenCTM().inverse()); return [p.x, p.y]; }", [x, y])
+
+
+def _to_screen(page, x, y) -> list[float]:
+    return page.evaluate("([x, y]) => { const p = new DOMPoint(x, y).matrixTransform("
+                         "document.getElementById('map').getScreenCTM()); return [p.x, p.y]; }", [x, y])
+
+
+def test_the_wheel_zooms_about_the_pointer_a_drag_pans_and_fit_shows_the_whole_map_again(page, viewer_server, big):
+    _open(page, viewer_server, big)
+    assert page.locator("#map .place").count() >= 30
+    assert _view(page) == HOME
+    box = page.locator("#map").bounding_box()
+    px, py = box["x"] + 0.3 * box["width"], box["y"] + 0.4 * box["height"]
+    under = _to_map(page, px, py)
+    page.mouse.move(px, py)
+    page.mouse.wheel(0, -300)  # away from the user: zoom in
+    for _ in range(50):  # the wheel event is dispatched, not awaited
+        if _view(page) != HOME:
+            break
+        page.wait_for_timeout(50)
+    zoomed = _view(page)
+    assert zoomed[2] < HOME[2] * 0.8 and zoomed[3] < HOME[3] * 0.8
+    assert abs(zoomed[2] / zoomed[3] - HOME[2] / HOME[3]) < 1e-3  # as much across as up
+    sx, sy = _to_screen(page, *under)  # the point that was under the pointer still is
+    assert abs(sx - px) < 3 and abs(sy - py) < 3, (sx, sy, px, py)
+
+    # A drag pans: the map follows the pointer, the view moves the other way by as many map units.
+    scale = box["width"] / zoomed[2]
+    page.mouse.down()
+    page.mouse.move(px + 80, py + 40, steps=8)
+    page.mouse.up()
+    panned = _view(page)
+    assert panned[2:] == zoomed[2:]
+    assert abs((zoomed[0] - panned[0]) * scale - 80) < 3 and abs((zoomed[1] - panned[1]) * scale - 40) < 3
+    assert page.locator("#map .dstate.lit").count() == 0  # the drag ended on the map, clicked nothing
+
+    page.locator("#zoom-fit").click()
+    assert _view(page) == HOME
+    # The buttons, the keys (with the map focused) and a double-click on the background.
+    page.locator("#zoom-in").click()
+    assert _view(page)[2] < HOME[2]
+    page.locator("#zoom-out").click()
+    page.locator("#zoom-out").click()
+    assert _view(page)[2] > HOME[2]
+    page.locator("#map").focus()
+    page.keyboard.press("0")
+    assert _view(page) == HOME
+    page.keyboard.press("+")
+    page.keyboard.press("+")
+    assert _view(page)[2] < HOME[2] * 0.7
+    x = _view(page)[0]
+    page.keyboard.press("ArrowLeft")  # shows more of the left
+    assert _view(page)[0] < x
+    page.mouse.dblclick(box["x"] + 3, box["y"] + 3)  # a corner: background
+    assert _view(page) == HOME
+
+
+@pytest.mark.parametrize("width", [500, 1280])
+def test_place_labels_are_at_least_11_px_on_screen_whatever_the_window_or_the_zoom(page, viewer_server, big, width):
+    page.set_viewport_size({"width": width, "height": 900})
+    _open(page, viewer_server, big)
+    measure = ("() => { const svg = document.getElementById('map'), k = svg.getScreenCTM().a;"
+               " return [...svg.querySelectorAll('.place-label')].map(t =>"
+               " [parseFloat(getComputedStyle(t).fontSize) * k, t.getBoundingClientRect().height]); }")
+    for action in ["fit", "zoom-out", "zoom-out", "zoom-out", "zoom-fit", "zoom-in", "zoom-in", "zoom-in", "zoom-in"]:
+        if action != "fit":
+            page.locator(f"#{action}").click()
+        sizes = page.evaluate(measure)
+        assert len(sizes) >= 30
+        assert min(font for font, _ in sizes) >= 11, (action, min(sizes))
+        assert min(height for _, height in sizes) >= 11, (action, min(sizes))
+    # Zoomed in, the map's circles grow on screen while the labels keep their size; crowded dstate
+    # labels show once they have room.
+    assert _view(page)[2] < HOME[2] / 2
+    assert page.locator("#map .dstate.crowded").count() < page.locator("#map .dstate").count()
+
+
+def test_a_click_on_a_dstate_where_it_lies_on_its_place_circle_selects_the_dstate(page, viewer_server, big):
+    _open(page, viewer_server, big)
+    # A point inside both a dstate's circle and its place's (the dstate's edge nearest the place's centre),
+    # in client coordinates; the place's circle is drawn first, the dstate above it.
+    found = page.evaluate("""() => {
+      const svg = document.getElementById('map'), ctm = svg.getScreenCTM();
+      for (const fan of svg.querySelectorAll('.dstates .fan')) {
+        const hub = svg.querySelector(`.place[data-place="${CSS.escape(fan.dataset.of)}"] .hub circle`);
+        if (!hub) continue;
+        const hx = +hub.getAttribute('cx'), hy = +hub.getAttribute('cy'), hr = +hub.getAttribute('r');
+        for (const c of fan.querySelectorAll('.dstate circle')) {
+          const x = +c.getAttribute('cx'), y = +c.getAttribute('cy'), r = +c.getAttribute('r');
+          const d = Math.hypot(x - hx, y - hy);
+          if (d === 0 || d - (r - 1.5) > hr - 1.5) continue;  // not on the place's circle
+          const t = (r - 1.5) / d, p = new DOMPoint(x + (hx - x) * t, y + (hy - y) * t).matrixTransform(ctm);
+          return { dstate: c.parentNode.dataset.dstate, place: fan.dataset.of, x: p.x, y: p.y };
+        }
+      }
+      return null; }""")
+    assert found is not None, "no dstate lies on its place's circle"
+    page.mouse.click(found["x"], found["y"])
+    assert page.locator("#map .dstate.lit").evaluate_all("ns => ns.map(n => n.dataset.dstate)") == [found["dstate"]]
+    assert found["dstate"] in page.locator("#selection").inner_text()
+    # The place stays unfolded: the click was not the place's.
+    assert page.locator(f'#map .place[data-place="{found["place"]}"]').get_attribute("class") == "place unfolded"
+
+
+def test_the_map_downloads_as_a_standalone_svg_and_as_the_apis_json(page, viewer_server, big):
+    import json
+    import xml.etree.ElementTree as ET
+
+    _open(page, viewer_server, big)
+    page.locator("#zoom-in").click()  # the drawing as it is: zoomed
+    view = page.locator("#map").get_attribute("viewBox")
+    with page.expect_download() as got:
+        page.locator("#save-svg").click()
+    svg = got.value
+    assert svg.suggested_filename == f"bootmap-tableau-{big}-rev1-map.svg"
+    root = ET.parse(svg.path()).getroot()
+    ns = "{http://www.w3.org/2000/svg}"
+    assert root.tag == f"{ns}svg" and root.get("viewBox") == view
+    assert root.get("width") == "640" and root.get("height") == "460"
+    places = root.findall(f".//{ns}g[@class='places']/{ns}g")
+    assert len(places) == page.locator("#map .place").count() >= 30
+    assert len(root.findall(f".//{ns}circle")) == page.locator("#map circle").count()
+    style = root.find(f"{ns}style").text  # the page's rules, in the file: it renders on its own
+    assert ".hub circle" in style and ".path .line" in style and "--path" in style
+
+    with page.expect_download() as got:
+        page.locator("#save-json").click()
+    assert got.value.suggested_filename == f"bootmap-tableau-{big}-rev1-map.json"
+    saved = json.loads(Path(got.value.path()).read_text())
+    with viewer_server.client() as c:
+        served = c.get(f"/tableaux/{big}/map").json()
+    assert saved == served
+    assert len(saved["dstates"]) == served["summary"]["dstates"] > 100

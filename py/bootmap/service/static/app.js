@@ -6,13 +6,14 @@
 // another server process on the same database, which a per-process event stream would not hear of.
 
 import { ApiError, askToken, getJSON, objectURL } from "./api.js";
-import { drawMap, drawTrajectory, light } from "./draw.js";
+import { HEIGHT, WIDTH, drawMap, drawTrajectory, fitLabels, light, svgFile } from "./draw.js";
 import { fillTable, markRows } from "./table.js";
 import { renderWhy } from "./why.js";
+import { ZoomView } from "./zoom.js";
 
 const POLL_MS = 1000;
 const $ = (id) => document.getElementById(id);
-const state = { id: null, etag: null, drawing: null, picks: [], poll: null, levels: [], whyAsked: 0 };
+const state = { id: null, etag: null, drawing: null, picks: [], poll: null, levels: [], whyAsked: 0, view: null };
 
 function status(message, isError = false) {
   $("status").textContent = message;
@@ -78,6 +79,7 @@ async function refresh() {
   state.etag = got.etag;
   state.drawing = got.data;
   draw();
+  if (revised) state.view.apply(); else state.view.fit();  // a new revision keeps the user's zoom
   if (revised) listTableaux(id).catch(fail);  // the list shows steps and counts: new ones now
   return true;
 }
@@ -197,8 +199,38 @@ async function loadRuns() {
   $("runs-panel").hidden = false;
 }
 
+// A file to save: a link to a blob, clicked. The names say which tableau (and revision) it is.
+function save(name, type, content) {
+  const url = URL.createObjectURL(new Blob([content], { type }));
+  const a = Object.assign(document.createElement("a"), { href: url, download: name });
+  document.body.append(a);
+  a.click();
+  a.remove();
+  setTimeout(() => URL.revokeObjectURL(url), 10_000);
+}
+
+function fileName(ext) {
+  return `bootmap-tableau-${state.id}-rev${state.drawing.revision}-map.${ext}`;
+}
+
+function mapTools() {
+  const svg = $("map");
+  state.view = new ZoomView(svg, [0, 0, WIDTH, HEIGHT], (scale) => fitLabels(svg, scale));
+  $("zoom-in").addEventListener("click", () => state.view.zoomIn());
+  $("zoom-out").addEventListener("click", () => state.view.zoomOut());
+  $("zoom-fit").addEventListener("click", () => state.view.fit());
+  $("save-svg").addEventListener("click", () => {
+    if (state.drawing) save(fileName("svg"), "image/svg+xml", svgFile(svg));
+  });
+  // The map as the API serves it (GET /tableaux/{id}/map), not the layout around it.
+  $("save-json").addEventListener("click", () => {
+    if (state.drawing) save(fileName("json"), "application/json", JSON.stringify(state.drawing.map, null, 1) + "\n");
+  });
+}
+
 async function main() {
   const params = new URLSearchParams(location.search);
+  mapTools();
   $("token-button").addEventListener("click", () => askToken("The API token this tab sends (kept until the tab closes)."));
   $("tableaux").addEventListener("change", (e) => openTableau(e.target.value).catch(fail));
   try {
