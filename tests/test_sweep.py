@@ -174,7 +174,7 @@ def test_the_command_exits_2_on_a_bad_sweep_file_and_1_when_a_cell_fails(tmp_pat
     bad.write_text(TINY.format(seeds='"1,,2"'))
     run = subprocess.run([sys.executable, "-m", "bootmap.cli", "sweep", str(bad), "-o", str(tmp_path / "o")],
                          capture_output=True, text=True, env=env, timeout=120)
-    assert run.returncode == 2 and f"bootmap: error: {bad}: grid.seeds:" in run.stderr
+    assert run.returncode == 2 and f"bootmap sweep: error: {bad}: grid.seeds:" in run.stderr
     timeout = tmp_path / "timeout.toml"  # every cell over a 0.05 s budget
     timeout.write_text(TINY.format(seeds="[1]").replace("cell_timeout = 120", "cell_timeout = 0.05"))
     run = subprocess.run([sys.executable, "-m", "bootmap.cli", "sweep", str(timeout), "-o", str(tmp_path / "t"),

@@ -438,6 +438,20 @@ def _written(handler: Callable[[argparse.Namespace], int]) -> Callable[[argparse
     return run
 
 
+def error_line(command: str, message: object, exit_code: int) -> str:
+    """How every command reports what stopped it: ``bootmap COMMAND: error: ...`` for bad input (exit 2),
+    ``bootmap COMMAND: ...`` for a failure (exit 1)."""
+    return f"bootmap {command}: {'error: ' if exit_code == EXIT_BAD_INPUT else ''}{message}".replace("bootmap : ", "bootmap: ")
+
+
+def _command_name(argv: Sequence[str]) -> str:
+    """The sub-command (and its action, for ``token``) of a command line, for messages."""
+    words = [a for a in argv if not a.startswith("-")][:2]
+    if not words:
+        return ""
+    return " ".join(words) if words[0] == "token" else words[0]
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     try:
         parser = build_parser()
@@ -449,8 +463,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print("bootmap: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
     except BootmapError as e:
-        prefix = "error: " if e.exit_code == EXIT_BAD_INPUT else ""
-        print(f"bootmap: {prefix}{e}", file=sys.stderr)
+        print(error_line(_command_name(sys.argv[1:] if argv is None else argv), e, e.exit_code), file=sys.stderr)
         return e.exit_code
     except BrokenPipeError:  # output piped into e.g. `head`, which closed early
         sys.stderr.close()

@@ -70,16 +70,16 @@ def cmd_serve(args: argparse.Namespace) -> int:
     try:
         settings = Settings(**{k: v for k, v in given.items() if v is not None})
         if settings.host in ("0.0.0.0", "::", "") and not settings.allowed_hosts:
-            print(f"bootmap serve: listening on {settings.host or 'every interface'} needs BOOTMAP_ALLOWED_HOSTS: "
+            print(f"bootmap serve: error: listening on {settings.host or 'every interface'} needs BOOTMAP_ALLOWED_HOSTS: "
                   "the host names clients use (or '*' behind a proxy that checks them)", file=sys.stderr)
             return EXIT_BAD_INPUT
         load_theory(settings.axioms)  # fail here, with the message, rather than inside uvicorn's start-up
         settings.data_dir.mkdir(parents=True, exist_ok=True)
     except ValidationError as e:
-        print(f"bootmap serve: bad setting: {_first_error(e)}", file=sys.stderr)
+        print(f"bootmap serve: error: bad setting: {_first_error(e)}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except (AxiomError, OSError) as e:
-        print(f"bootmap serve: {e}", file=sys.stderr)
+        print(f"bootmap serve: error: {e}", file=sys.stderr)
         return EXIT_BAD_INPUT
     import uvicorn
 
@@ -101,13 +101,13 @@ def cmd_token_create(args: argparse.Namespace) -> int:
     from .store import Conflict, Store
 
     if not re.fullmatch(r"[A-Za-z0-9_.@-]{1,100}", args.name):
-        print(f"bootmap token create: bad name {args.name!r}: use 1-100 letters, digits, _ . @ -", file=sys.stderr)
+        print(f"bootmap token create: error: bad name {args.name!r}: use 1-100 letters, digits, _ . @ -", file=sys.stderr)
         return EXIT_BAD_INPUT
     given = {"db": args.db, "data_dir": args.data_dir}
     try:
         settings = Settings(**{k: v for k, v in given.items() if v is not None})
     except ValidationError as e:
-        print(f"bootmap token create: bad setting: {_first_error(e)}", file=sys.stderr)
+        print(f"bootmap token create: error: bad setting: {_first_error(e)}", file=sys.stderr)
         return EXIT_BAD_INPUT
     token = new_token()
     try:
@@ -117,7 +117,7 @@ def cmd_token_create(args: argparse.Namespace) -> int:
         finally:
             store.close()
     except Conflict as e:
-        print(f"bootmap token create: {e}", file=sys.stderr)
+        print(f"bootmap token create: error: {e}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except Exception as e:  # the database cannot be reached or written: a failure, not bad input
         print(f"bootmap token create: cannot store the token: {e}", file=sys.stderr)
@@ -157,7 +157,7 @@ def cmd_token_list(args: argparse.Namespace) -> int:
         finally:
             store.close()
     except BadInput as e:
-        print(f"bootmap token list: {e}", file=sys.stderr)
+        print(f"bootmap token list: error: {e}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except Exception as e:  # noqa: BLE001  the database cannot be reached or read
         print(f"bootmap token list: cannot read the tokens: {e}", file=sys.stderr)
@@ -179,7 +179,7 @@ def cmd_token_revoke(args: argparse.Namespace) -> int:
         finally:
             store.close()
     except (BadInput, NotFound) as e:
-        print(f"bootmap token revoke: {e}", file=sys.stderr)
+        print(f"bootmap token revoke: error: {e}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except Exception as e:  # noqa: BLE001  the database cannot be reached or written
         print(f"bootmap token revoke: cannot revoke the token: {e}", file=sys.stderr)

@@ -66,7 +66,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         print(f"bootmap simulate: {e}", file=sys.stderr)
         return EXIT_FAILURE
     except (WorldError, OSError) as e:
-        print(f"bootmap simulate: {e}", file=sys.stderr)
+        print(f"bootmap simulate: error: {e}", file=sys.stderr)
         return EXIT_BAD_INPUT
     text = result.tableau.dumps()
     if args.output:
@@ -95,7 +95,7 @@ def cmd_render(args: argparse.Namespace) -> int:
             raise TableauError(f"--image {args.image} needs --run with at least {args.image + 1} steps")
         render(world, tableau, image_step=args.image, path=args.output)
     except (WorldError, TableauError) as e:
-        print(f"bootmap render: {e}", file=sys.stderr)
+        print(f"bootmap render: error: {e}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except (BootmapError, OSError, ValueError) as e:
         print(f"bootmap render: {e}", file=sys.stderr)
