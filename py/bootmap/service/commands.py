@@ -25,7 +25,7 @@ def register(subparsers) -> None:
     p.add_argument("--data-dir", metavar="DIR", help="data directory (default ~/.local/share/bootmap)")
     p.add_argument("--axioms", metavar="DIR", help="axiom directory (default: the shipped asp/)")
     p.add_argument("--time-limit", type=float, metavar="S", dest="solve_time_limit_s",
-                   help="seconds per solve (default 30)")
+                   help="seconds per solve (default 60, as bootmap map)")
     p.add_argument("--require-tokens", action="store_true", default=None,
                    help="every request needs an API token (always so when --host is not loopback)")
     p.add_argument("--runs-dir", metavar="DIR", help="experiment runs whose figures the viewer shows (read-only)")

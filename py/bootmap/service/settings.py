@@ -41,7 +41,7 @@ class Settings(BaseSettings):
     max_body_bytes: int = Field(16 * 2**20, ge=1024, description="Largest request body, bytes.")
     max_steps: int = Field(20_000, ge=1, description="Most steps a tableau may have (after appending).")
     max_image_len: int = Field(4096, ge=1, description="Most values in one image.")
-    solve_time_limit_s: float = Field(30.0, gt=0, description="The resolver's time limit per solve.")
+    solve_time_limit_s: float = Field(60.0, gt=0, description="The resolver's time limit per solve (as `bootmap map`'s).")
     solve_kill_grace_s: float = Field(2.0, ge=0, description="A solver still busy this long after its time "
                                                              "limit (grounding cannot be interrupted) is killed.")
     solver_memory_mb: int = Field(2048, ge=256, description="Address-space cap of each solver process, MiB.")
