@@ -15,6 +15,21 @@ from bootmap.mapping.theory import default_axioms_dir
 REPO = Path(__file__).resolve().parent.parent
 
 
+def test_the_release_files_say_the_licence_and_how_to_cite():
+    import tomllib
+
+    import yaml
+
+    project = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]
+    assert project["license"]["text"] == "MIT" and "MIT License" in (REPO / "LICENSE").read_text()
+    cff = yaml.safe_load((REPO / "CITATION.cff").read_text())
+    assert cff["cff-version"] == "1.2.0" and cff["version"] == project["version"] and cff["license"] == "MIT"
+    assert any(r["title"] == "Bootstrap Learning for Place Recognition" and r["year"] == 2002
+               for r in cff["references"])
+    assert f"## {project['version']}" in (REPO / "CHANGELOG.md").read_text()
+    assert (REPO / "py" / "bootmap" / "py.typed").exists()
+
+
 def test_editable_install_reads_the_repository_axioms():
     assert default_axioms_dir() == REPO / "asp"
 
@@ -29,6 +44,7 @@ def test_built_wheel_carries_the_axioms_and_maps_a_tableau(tmp_path):
     shipped = set(zipfile.ZipFile(wheel).namelist())
     assert {f"bootmap/service/static/{f}" for f in ("index.html", "app.js", "api.js", "draw.js", "table.js",
                                                      "why.js", "zoom.js", "viewer.css")} <= shipped
+    assert "bootmap/py.typed" in shipped  # type checkers read the package's annotations
     env_dir = tmp_path / "clean"
     venv.create(env_dir, with_pip=False)
     py = env_dir / "bin" / "python"
