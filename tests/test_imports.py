@@ -11,6 +11,8 @@ inside functions too (they are how a heavy dependency is put off, not how a laye
 from __future__ import annotations
 
 import ast
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -110,3 +112,13 @@ def test_no_module_imports_from_a_later_stage():
 def test_the_check_sees_an_upward_import_wherever_it_is(module, source, expected):
     known = set(modules())
     assert upward(module, imports_of(module, source), known) == expected
+
+
+def test_the_command_line_builds_its_parser_without_the_heavy_libraries():
+    """`bootmap --help` answers at once: building the parser loads none of the libraries the commands
+    use when they run (bench/startup_bench.py times it)."""
+    heavy = ("scipy", "sklearn", "pymunk", "clingo", "matplotlib", "fastapi", "sqlalchemy", "small_gicp")
+    code = ("import sys; from bootmap.cli import build_parser; build_parser(); "
+            f"print(sorted(m for m in {heavy!r} if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"

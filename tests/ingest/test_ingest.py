@@ -6,7 +6,7 @@ from collections import Counter
 import pytest
 
 from bootmap.cli import main
-from bootmap.ingest import ingest
+from bootmap.ingest.ingest import ingest
 from bootmap.ingest.ingest import log_tableau
 from bootmap.tableau import Tableau, Travel, Turn, load
 
