@@ -72,6 +72,11 @@ def _with_views(tableau):
 
 
 def _print_map(cmap, args: argparse.Namespace) -> int:
+    if args.format in GRAPH_FORMATS:
+        from .mapping.export import write
+
+        sys.stdout.write(write(cmap, args.format))
+        return EXIT_OK
     if args.format == "json":
         print(json.dumps(cmap.to_dict(), indent=1))
         return EXIT_OK
@@ -264,7 +269,7 @@ def build_parser() -> argparse.ArgumentParser:
                                    "paths with the ASP axioms, and print the map: text shows the tableau annotated "
                                    "like the paper's table (t, view, dstate, place, path, dir, action).")
     p.add_argument("tableau", help="tableau JSON file")
-    _add_output_options(p)
+    _add_output_options(p, GRAPH_FORMATS)
     p.add_argument("--all", action="store_true", help="also print every other minimal map found")
     p.add_argument("--time-limit", type=arguments.seconds, default=60.0, metavar="S", help="seconds for the search (default 60); it ends within 2 s more whatever the tableau")
     p.add_argument("--max-models", type=arguments.count("maps"), default=10, metavar="N",
@@ -408,11 +413,21 @@ def _register_optional(sub) -> None:
         register(sub)
 
 
-def _add_output_options(p: argparse.ArgumentParser) -> None:
-    """``--format`` and ``-o``, shared by the commands that print an answer (map, why, rehearse)."""
-    p.add_argument("--format", choices=["text", "json"], default="text",
+#: The map's graph formats (bootmap.mapping.export), for the tools that open graphs.
+GRAPH_FORMATS = {"graphml": "GraphML, for Gephi, yEd, Cytoscape or networkx.read_graphml",
+                 "json-graph": "networkx's node-link JSON (networkx.node_link_graph, d3)",
+                 "dot": "Graphviz DOT (dot -Tsvg)"}
+
+
+def _add_output_options(p: argparse.ArgumentParser, graphs: dict[str, str] | None = None) -> None:
+    """``--format`` and ``-o``, shared by the commands that print an answer (map, why, rehearse); ``graphs``,
+    more formats and what each is for."""
+    graphs = graphs or {}
+    p.add_argument("--format", choices=["text", "json", *graphs], default="text",
                    help="text (default): for a person to read; json: the answer as the HTTP service returns it, "
-                        "for a program")
+                        "for a program" + "".join(f"; {name}: {what}" for name, what in graphs.items())
+                        + ("; the graph's dstates, places and paths are nodes, its actions and relations edges"
+                           if graphs else ""))
     p.add_argument("-o", "--output", metavar="FILE", help="write the answer here (default: stdout)")
 
 

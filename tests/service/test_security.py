@@ -119,6 +119,7 @@ def test_another_owners_private_tableau_is_404_as_if_it_did_not_exist_and_nothin
         for method, path, body in [("POST", f"/tableaux/{alices}/steps", MORE), ("DELETE", f"/tableaux/{alices}", None),
                                    ("GET", f"/tableaux/{alices}", None), ("GET", f"/tableaux/{alices}/map", None),
                                    ("GET", f"/tableaux/{alices}/map/text", None), ("GET", f"/tableaux/{alices}/maps", None),
+                                   ("GET", f"/tableaux/{alices}/map/graph", None),
                                    ("GET", f"/tableaux/{alices}/why?a=0&b=4", None),
                                    ("PUT", f"/tableaux/{alices}/sharing", {"public": True})]:
             r = c.request(method, path, json=body, headers=bob)
@@ -284,6 +285,7 @@ ROUTES = {
     ("GET", "/runs/figure"): (TOKEN, {"params": {"run": "none", "name": "none.png"}}),
     ("GET", "/tableaux/{tableau_id}"): (READ, {}), ("GET", "/tableaux/{tableau_id}/map"): (READ, {}),
     ("GET", "/tableaux/{tableau_id}/map/text"): (READ, {}), ("GET", "/tableaux/{tableau_id}/maps"): (READ, {}),
+    ("GET", "/tableaux/{tableau_id}/map/graph"): (READ, {"params": {"format": "dot"}}),
     ("GET", "/tableaux/{tableau_id}/layout"): (READ, {}),
     ("GET", "/tableaux/{tableau_id}/why"): (READ, {"params": {"a": "S0", "b": "S4"}}),
     ("GET", "/tableaux/{tableau_id}/rehearsal"): (READ, {"params": {"max_length": 2}}),

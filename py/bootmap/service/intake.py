@@ -9,15 +9,17 @@ the document as compact JSON text (what is stored and solved), or the problem to
 processes' address space is capped like the solvers'.
 
 Drawing a stored map (:func:`draw_stored`) and recognising an image against a stored tableau
-(:func:`recognise_stored`) parse the whole tableau as well: they read it from the database in the
-intake process, and hand the server only their answer. The fitted recognisers are kept there too. So
-the server's memory does not grow with the size or the number of stored tableaux read at once.
+(:func:`recognise_stored`) parse the whole tableau as well, and exporting a map as a graph file
+(:func:`export_stored`) parses the whole map: they read it from the database in the intake process, and
+hand the server only their answer. The fitted recognisers are kept there too. So the server's memory
+does not grow with the size or the number of stored tableaux read at once.
 
 Once solved, the prepared text is stored from the intake process too (:func:`store_prepared`): the
 server never holds a tableau's text.
 
-:func:`prepare_tableau`, :func:`prepare_append`, :func:`store_prepared`, :func:`draw_stored` and
-:func:`recognise_stored` run in the intake process; :class:`Intake` is the server's side.
+:func:`prepare_tableau`, :func:`prepare_append`, :func:`store_prepared`, :func:`draw_stored`,
+:func:`export_stored` and :func:`recognise_stored` run in the intake process; :class:`Intake` is the
+server's side.
 """
 
 from __future__ import annotations
@@ -154,6 +156,18 @@ def draw_stored(url: str, tableau_id: int) -> tuple:
         del record, m
         # The map as stored (validated when it was solved): served as it is, not serialised again.
         return head[:-1] + ', "map": ' + cmap.document + "}"
+
+    return _guarded(run, STORED_TOO_LARGE)
+
+
+def export_stored(url: str, tableau_id: int, fmt: str) -> tuple:
+    """A stored tableau's map as a graph file (GET /tableaux/{id}/map/graph) -> ("ok", its text), in one of
+    :data:`bootmap.mapping.export.FORMATS`. The map is parsed and the graph built in this process, never
+    the server's."""
+    from ..mapping.export import write
+
+    def run():
+        return write(json.loads(store_at(url).get_map(tableau_id).document), fmt)
 
     return _guarded(run, STORED_TOO_LARGE)
 

@@ -1,15 +1,18 @@
-"""Maps of stored tableaux: the minimal map, its text table, and every minimal map when there are several."""
+"""Maps of stored tableaux: the minimal map, its text table, the map as a graph file (GraphML, node-link JSON,
+DOT), and every minimal map when there are several."""
 
 from __future__ import annotations
 
 import json
+from typing import Annotated, Literal
 
-from fastapi import APIRouter, Response
+from fastapi import APIRouter, Query, Response
 from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import PlainTextResponse
 
 from ..auth import CallerDep, readable
 from ..deps import ServicesDep, TableauId
+from ..intake import export_stored
 from ..models import MapOut, MinimalMap, MinimalMaps
 from ..problems import JSONRoute, openapi_responses
 from .tableaux import read_stream, streamed
@@ -33,6 +36,30 @@ def read_map_text(tableau_id: TableauId, services: ServicesDep, caller: CallerDe
     """The map as `bootmap map` prints it: a summary line, then t, view, dstate, place, path, dir and action
     for every step, then the paths and sides."""
     return streamed(read_stream(services, caller, tableau_id, "text"), media_type="text/plain; charset=utf-8")
+
+
+#: Graph format -> its media type (GraphML has no registered type of its own: it is XML).
+GRAPH_MEDIA_TYPES = {"graphml": "application/xml", "json-graph": "application/json", "dot": "text/vnd.graphviz"}
+GraphFormat = Annotated[Literal["graphml", "json-graph", "dot"], Query(
+    alias="format", description="graphml: GraphML (Gephi, yEd, Cytoscape, networkx.read_graphml); json-graph: "
+                                "networkx's node-link JSON (networkx.node_link_graph, d3); dot: Graphviz DOT.")]
+GRAPH_RESPONSES = {200: {"description": "The map as a graph file in the format asked for.", "content": {
+    "application/xml": {"schema": {"type": "string"}}, "application/json": {"schema": {"type": "object"}},
+    "text/vnd.graphviz": {"schema": {"type": "string"}}}}, **READ_ERRORS}
+
+
+@router.get("/map/graph", response_class=Response, responses=GRAPH_RESPONSES,
+            summary="The map as a graph file: GraphML, node-link JSON or DOT")
+async def read_map_graph(tableau_id: TableauId, services: ServicesDep, caller: CallerDep,
+                         fmt: GraphFormat = "graphml") -> Response:
+    """The map as a graph for graph tools (bootmap.mapping.export): dstates, places and paths are nodes
+    (``kind`` tells them apart); the actions between dstates (``turn``/``travel``, the action's word and how
+    many times it was taken), a dstate's place (``at``), a place on a path with its position along it
+    (``on``, ``pos``) and the side of a path a place is on (``right_of``/``left_of``) are edges. The same
+    file as `bootmap map --format FORMAT`."""
+    await readable(services, caller, tableau_id)  # as /map: its owner, an admin, or public
+    text = await services.intake.run(export_stored, services.settings.database_url, tableau_id, fmt)
+    return Response(text, media_type=GRAPH_MEDIA_TYPES[fmt])
 
 
 @router.get("/maps", response_model=MinimalMaps, responses=READ_ERRORS, summary="Every minimal map")
