@@ -353,3 +353,70 @@ def test_the_map_downloads_as_a_standalone_svg_and_as_the_apis_json(page, viewer
         served = c.get(f"/tableaux/{big}/map").json()
     assert saved == served
     assert len(saved["dstates"]) == served["summary"]["dstates"] > 100
+
+
+@pytest.fixture(scope="module")
+def killian(viewer_server) -> int:
+    """The MIT Killian Court log's tableau, as `bootmap ingest killian` writes it: 98 visits, mapped by the
+    server by loop closing."""
+    pytest.importorskip("rtbdata")
+    from bootmap.ingest.ingest import ingest
+
+    with viewer_server.client() as c:
+        r = c.post("/tableaux", json=ingest("killian").to_dict())
+        assert r.status_code == 201, r.text
+        return r.json()["id"]
+
+
+def test_a_real_logs_map_is_decluttered_and_readable_once_zoomed(page, viewer_server, killian):
+    """Killian's 80-odd dstates at 38 places: the whole map shows its places' names and hides the dstate
+    labels that have no room; zoomed in on the densest part, they show, and every label stays as large
+    on screen."""
+    page.set_viewport_size({"width": 1400, "height": 900})
+    _open(page, viewer_server, killian)
+    dstates = page.locator("#map .dstate").count()
+    assert page.locator("#map .place").count() >= 30 and dstates >= 70
+    crowded_at_fit = page.locator("#map .dstate.crowded").count()
+    assert crowded_at_fit > dstates / 2
+    shots = REPO / "docs" / "logs" if SHOTS is not None else None
+    if shots is not None:
+        page.mouse.move(0, 0)
+        page.screenshot(path=str(shots / "killian_viewer.png"))
+    # Zoom in on the densest places: the place circle with the most others within 80 px on screen.
+    centres = np.array(page.evaluate(
+        "() => [...document.querySelectorAll('#map .place circle')].map(c => {"
+        " const r = c.getBoundingClientRect(); return [r.x + r.width / 2, r.y + r.height / 2]; })"))
+    near = (np.hypot(*(centres[:, None, :] - centres[None, :, :]).transpose(2, 0, 1)) < 80).sum(axis=1)
+    x, y = centres[int(np.argmax(near))]
+    page.mouse.move(x, y)
+    home = _view(page)
+    box = page.locator("#map").bounding_box()
+
+    def places_in_view() -> int:
+        return page.evaluate(
+            "([x0, y0, x1, y1]) => [...document.querySelectorAll('#map .place circle')].filter(c => {"
+            " const r = c.getBoundingClientRect(), x = r.x + r.width / 2, y = r.y + r.height / 2;"
+            " return x > x0 && x < x1 && y > y0 && y < y1; }).length",
+            [box["x"], box["y"], box["x"] + box["width"], box["y"] + box["height"]])
+
+    def wheel(times: int) -> None:
+        for _ in range(times):
+            page.mouse.wheel(0, -300)
+            page.wait_for_timeout(100)
+
+    wheel(3)  # about six times closer: the dense part fills the view, its places' names all readable
+    page.wait_for_function(f"() => document.getElementById('map').viewBox.baseVal.width < {home[2] / 3}",
+                           timeout=10_000)
+    assert places_in_view() >= 5
+    if shots is not None:
+        page.mouse.move(0, 0)
+        page.screenshot(path=str(shots / "killian_viewer_zoomed.png"))
+        page.mouse.move(x, y)
+    wheel(3)  # closer still: the dstates' labels that had no room show
+    page.wait_for_function(f"() => document.querySelectorAll('#map .dstate.crowded').length < {crowded_at_fit}",
+                           timeout=10_000)
+    assert places_in_view() >= 1
+    sizes = page.evaluate("() => { const svg = document.getElementById('map'), k = svg.getScreenCTM().a;"
+                          " return [...svg.querySelectorAll('.place-label')].map(t =>"
+                          " parseFloat(getComputedStyle(t).fontSize) * k); }")
+    assert min(sizes) >= 11
