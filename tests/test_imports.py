@@ -22,7 +22,8 @@ PACKAGE = Path(__file__).resolve().parents[1] / "py" / "bootmap"
 # (stage, the modules and packages in it): a module belongs to the stage of its longest listed prefix.
 STAGES: list[tuple[str, tuple[str, ...]]] = [
     ("foundation", ("bootmap", "bootmap.errors", "bootmap.arguments", "bootmap.proc", "bootmap.images",
-                    "bootmap.tableau", "bootmap.metrics", "bootmap.examples", "bootmap.paths")),
+                    "bootmap.tableau", "bootmap.metrics", "bootmap.examples", "bootmap.paths",
+                    "bootmap.lazy")),
     ("sources", ("bootmap.sim", "bootmap.ingest", "bootmap.ingest.scans", "bootmap.ingest.carmen", "bootmap.ingest.g2o",
                  "bootmap.ingest.rosbag", "bootmap.ingest.dstates", "bootmap.ingest.places", "bootmap.ingest.truth",
                  "bootmap.ingest.ingest")),

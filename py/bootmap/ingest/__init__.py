@@ -5,7 +5,7 @@ against their poses.
 turns them into a tableau the rest of the pipeline reads (``bootmap ingest LOG -o run.json``).
 """
 
-from importlib import import_module
+from ..lazy import exports
 
 # (``ingest``, the function that does both, is ``bootmap.ingest.ingest.ingest``: the package's name
 # ``ingest`` is its module, which importing it sets.)
@@ -13,11 +13,4 @@ __all__ = ["Scan", "log_tableau", "read_log"]
 _HOME = {"Scan": ".scans", "log_tableau": ".ingest", "read_log": ".ingest"}
 
 
-def __getattr__(name: str):
-    """The package's names, imported when first used (PEP 562): the command line registers ``bootmap
-    ingest`` without loading the log readers and scipy."""
-    if name in _HOME:
-        value = getattr(import_module(_HOME[name], __name__), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = exports(__name__, _HOME)  # the command line registers this package's commands without loading it
