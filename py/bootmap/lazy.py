@@ -13,6 +13,7 @@ Example
 
 from __future__ import annotations
 
+import sys
 from importlib import import_module
 from typing import Callable
 
@@ -20,8 +21,6 @@ from typing import Callable
 def exports(package: str, homes: dict[str, str]) -> Callable[[str], object]:
     """A module ``__getattr__`` for ``package`` whose names live in the modules ``homes`` gives (relative
     to ``package`` when they start with a dot); each is imported when first asked for, and kept."""
-    import sys
-
     def __getattr__(name: str):
         if name not in homes:
             raise AttributeError(f"module {package!r} has no attribute {name!r}")

@@ -18,7 +18,10 @@ import numpy as np
 
 
 def simplify(xy: np.ndarray, tolerance_m: float) -> np.ndarray:
-    """Indices of the Ramer-Douglas-Peucker simplification of a path (first and last kept)."""
+    """Indices of the Ramer-Douglas-Peucker simplification of a path (first and last kept; a path of
+    fewer than three points is all kept)."""
+    if len(xy) < 3:
+        return np.arange(len(xy))
     keep = np.zeros(len(xy), dtype=bool)
     keep[[0, -1]] = True
     stack = [(0, len(xy) - 1)]

@@ -110,8 +110,9 @@ def run_log_experiment(log: str | Path, out_dir: str | Path | None = None, seed:
 
 def _experiment(scans, log, lap, seed, k_max, time_limit, quantum_deg, view_criterion, detector, max_range,
                 radius_m, junctions, mapper, places, scan_match=False,
-                recognise_places=True) -> tuple[dict, object, object]:
-    """The experiment on scans already read: results (without targets), the tableau and the map."""
+                recognise=True) -> tuple[dict, object, object]:
+    """The experiment on scans already read: results (without targets), the tableau and the map. Without
+    ``recognise``, recognition (the learners, nearest neighbour, place recognition) is left out: None."""
     timings = lap.timings
     tableau = log_tableau(scans, detector, max_range=max_range, radius_m=radius_m, source=str(log),
                           junctions=junctions, places=places)
@@ -131,11 +132,12 @@ def _experiment(scans, log, lap, seed, k_max, time_limit, quantum_deg, view_crit
     except SolveTimeout as e:
         cmap, map_note = e.best_map, str(e)
     lap("map_s")
-    nn = {d: nn_on_revisits(images, truth, d) for d in DESCRIPTORS}
+    nn = {d: nn_on_revisits(images, truth, d) for d in DESCRIPTORS} if recognise else None
     odometry = [s.odometry for s in scans]
     dead = dead_reckoned_dstates([odometry[i] for i in tableau.meta["dstates"]["scans"]], odometry, radius_m,
                                  turn_ends(tableau.actions), travel_ends(tableau.actions))
-    recognition = None if cmap is None else recognition_section(images, cmap.dstate_of, "1-NN", seed)
+    recognition = None if cmap is None or not recognise else recognition_section(images, cmap.dstate_of, "1-NN",
+                                                                                   seed)
     lap("recognise_s")
     poses = [s.pose for s in tableau.steps]
     results = {
@@ -149,7 +151,7 @@ def _experiment(scans, log, lap, seed, k_max, time_limit, quantum_deg, view_crit
                 "retyped_steps": cmap.retyped_steps},
         "dead_reckoning": {"dstates": len(set(dead)), "dstate_accuracy": dstate_accuracy(truth, dead)},
         "recognition": recognition, "nn_revisited": nn, "timings": timings}
-    results.update(_slam_evaluation(results, images, poses, truth, cmap, dead, radius_m, recognise_places,
+    results.update(_slam_evaluation(results, images, poses, truth, cmap, dead, radius_m, recognise,
                                     max_range if scan_match else None))
     lap("evaluate_s")
     return results, tableau, cmap
@@ -185,8 +187,8 @@ def _slam_evaluation(r: dict, images, poses, truth, cmap, dead, radius_m, recogn
 def _perfect_odometry(scans, log, settings: dict) -> dict:
     """The experiment again with each scan's odometry replaced by its corrected pose: an upper bound
     that separates the method's errors from the odometry's drift."""
-    perfect = [replace(s, odometry=s.truth, odometry_gap=False) for s in scans]
-    r, _, _ = _experiment(perfect, log, Laps(), **settings, recognise_places=False)
+    perfect = [replace(s, odometry=s.truth, odometry_gap="") for s in scans]
+    r, _, _ = _experiment(perfect, log, Laps(), **settings, recognise=False)
     keep = ("images", "truth", "map", "dead_reckoning", "baselines", "loop_closure")
     out = {k: r[k] for k in keep}
     out["truth"] = {"true_dstates": r["truth"]["true_dstates"], "corner_recall": r["truth"]["corner_recall"]}

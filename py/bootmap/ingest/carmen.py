@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import gzip
 import math
+from dataclasses import replace
 import zlib
 from pathlib import Path
 from typing import Iterable, Iterator
@@ -157,12 +158,23 @@ def _has_odometry_restarts(rows: list[tuple[list[str], str]]) -> bool:
     for tokens, where in rows:
         if tokens[0] == "FLASER":
             flasers += 1
-            scan = flaser(tokens, where)
-            pending = scan.truth if _same_pose(scan.truth, scan.odometry) else None
+            poses = _flaser_poses(tokens)
+            pending = poses[0] if poses and _same_pose(*poses) else None
         elif tokens[0] == "ODOM" and pending is not None:
             restarts += _same_pose(_pose(_fields(tokens, _ODOM_FIELDS, where), 1, where), pending)
             pending = None
     return flasers >= 2 and restarts >= RESTART_SHARE * flasers
+
+
+def _flaser_poses(tokens: list[str]) -> tuple[Pose, Pose] | None:
+    """A ``FLASER`` line's two poses, read from its last fields without its ranges (the layout test looks
+    at every scan; the reading that follows parses each line once, and names what is wrong with it); None
+    where they do not read as numbers."""
+    try:
+        x, y, theta, ox, oy, otheta = (float(v) for v in tokens[-9:-3])
+    except ValueError:
+        return None
+    return (x, y, theta), (ox, oy, otheta)
 
 
 def _corrected_with_restarts(rows: list[tuple[list[str], str]], source: str) -> Iterator[Scan]:
@@ -182,8 +194,7 @@ def _corrected_with_restarts(rows: list[tuple[list[str], str]], source: str) -> 
             last = pose
         elif tokens[0] == "FLASER":
             scan = flaser(tokens, where)
-            scans.append(Scan(scan.time, scan.ranges, scan.angle_min, scan.angle_increment, scan.range_max,
-                              scan.truth, scan.truth))
+            scans.append(replace(scan, odometry=scan.truth))
             predicted.append(last)
             last, restarting = None, True
     gaps = [k for k, p in enumerate(predicted) if p is None and k > 0]
@@ -199,8 +210,7 @@ def _corrected_with_restarts(rows: list[tuple[list[str], str]], source: str) -> 
     odometry = rebuilt_odometry([s.truth for s in scans], predicted, bridged)
     for k, (scan, pose) in enumerate(zip(scans, odometry)):
         gap = "" if k not in turns else ("laser" if k in bridged else "still")
-        yield Scan(scan.time, scan.ranges, scan.angle_min, scan.angle_increment, scan.range_max, pose, scan.truth,
-                   odometry_gap=gap)
+        yield replace(scan, odometry=pose, odometry_gap=gap)
 
 
 def rebuilt_odometry(corrected: list[Pose], predicted: list[Pose | None],
@@ -269,8 +279,7 @@ def rawlaser(tokens: list[str], odometry: Pose, where: str) -> Scan:
 
 
 def _with_truth(scan: Scan, truth: Pose | None, corrected: bool) -> Scan:
-    keep = scan.truth if corrected else truth
-    return Scan(scan.time, scan.ranges, scan.angle_min, scan.angle_increment, scan.range_max, scan.odometry, keep)
+    return scan if corrected else replace(scan, truth=truth)
 
 
 def _ranges(tokens: list[str], count_at: int, where: str) -> tuple[int, np.ndarray, list[str]]:

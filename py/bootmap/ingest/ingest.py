@@ -112,8 +112,13 @@ def log_tableau(scans: list[Scan], detector: TurnDetector = TurnDetector(), max_
         if len(visits) < 2:
             raise LogError(f"the laser shows {len(visits)} place(s) in {len(scans)} scans (a junction, corner or "
                            "room): a map needs at least two", source)
-        turns = [FoundTurn(v.first, v.last, v.angle_deg) for v in visits if len(v.dstates(places.turn_deg)) == 2]
-        passes = [v.dstates(places.turn_deg)[0] for v in visits if len(v.dstates(places.turn_deg)) == 1]
+        turns, passes = [], []
+        for v in visits:  # a visit that turns gives the turn's two ends, a pass its middle scan
+            ends = v.dstates(places.turn_deg)
+            if len(ends) == 2:
+                turns.append(FoundTurn(*ends, v.angle_deg))
+            else:
+                passes.append(ends[0])
     chosen = dstate_scans(turns, passes)
     actions = _actions(chosen, turns, distance, heading)
     has_truth = all(s.truth is not None for s in scans)

@@ -169,8 +169,3 @@ def find_visits(scans: list[Scan], distance: np.ndarray, heading: np.ndarray,
         else:
             runs.append([int(first), int(last)])
     return [Visit(a, b, float(np.degrees(wrap(heading[b] - heading[a])))) for a, b in runs]
-
-
-def visit_dstates(visits: list[Visit], detector: PlaceDetector = PlaceDetector()) -> list[int]:
-    """The dstate scans of the visits, in time order."""
-    return [i for v in visits for i in v.dstates(detector.turn_deg)]

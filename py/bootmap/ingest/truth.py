@@ -91,8 +91,8 @@ def true_dstates(poses: list[Pose] | np.ndarray, radius_m: float = 3.0, axis_rad
     building's frame."""
     p = np.asarray(poses, dtype=float).reshape(-1, 3)
     axis = main_axis(p) if axis_rad is None else axis_rad
-    sectors = np.rint(wrap(p[:, 2] - axis) / (np.pi / 2)).astype(int) % 4
-    return [f"P{place}:{SECTORS[s]}" for place, s in zip(place_labels(p, radius_m, together, apart), sectors)]
+    return [f"P{place}:{sector_name(heading, axis)}"
+            for place, heading in zip(place_labels(p, radius_m, together, apart), p[:, 2])]
 
 
 def sector_name(heading_rad: float, axis_rad: float) -> str:

@@ -269,8 +269,6 @@ def _thin(traj: np.ndarray, tolerance_m: float = TRAJECTORY_TOLERANCE_M) -> list
     position (Ramer-Douglas-Peucker, :func:`bootmap.paths.simplify`): a straight travel is its two ends,
     so a long run stays within what the service takes as a tableau's ``meta``."""
     xy = np.asarray(traj, dtype=float)[:, :2]
-    if len(xy) < 3:
-        return np.round(xy, 3).tolist()
     return np.round(xy[simplify(xy, tolerance_m)], 3).tolist()
 
 
