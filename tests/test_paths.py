@@ -30,3 +30,8 @@ def test_every_point_stays_within_the_tolerance_and_the_ends_are_kept(steps, tol
 def test_a_straight_run_is_its_two_ends():
     xy = np.column_stack([np.linspace(0, 10, 500), np.zeros(500)])
     assert simplify(xy, 0.01).tolist() == [0, 499]
+
+
+def test_a_path_of_fewer_than_three_points_is_kept_whole():
+    for n in range(3):
+        assert simplify(np.zeros((n, 2)), 0.1).tolist() == list(range(n))
