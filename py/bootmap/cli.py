@@ -14,7 +14,8 @@ import time
 from typing import Callable, Sequence
 
 from . import __version__, arguments
-from .errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_INTERRUPTED, EXIT_OK, BadInput, BootmapError, SolveTimeout
+from .errors import (EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_INTERRUPTED, EXIT_OK, BadInput, BootmapError, SolveTimeout,
+                     error_line)
 
 
 def _add_theory_options(p: argparse.ArgumentParser) -> None:
@@ -447,27 +448,22 @@ def _written(handler: Callable[[argparse.Namespace], int]) -> Callable[[argparse
             with open(args.output, "w", encoding="utf-8") as f:
                 f.write(buffer.getvalue())
         except OSError as e:
-            print(f"bootmap {args.command}: cannot write {args.output}: {e.strerror}", file=sys.stderr)
+            print(error_line(_command_name(args), f"cannot write {args.output}: {e.strerror}", EXIT_FAILURE),
+                  file=sys.stderr)
             return EXIT_FAILURE
         return code
     return run
 
 
-def error_line(command: str, message: object, exit_code: int) -> str:
-    """How every command reports what stopped it: ``bootmap COMMAND: error: ...`` for bad input (exit 2),
-    ``bootmap COMMAND: ...`` for a failure (exit 1)."""
-    return f"bootmap {command}: {'error: ' if exit_code == EXIT_BAD_INPUT else ''}{message}".replace("bootmap : ", "bootmap: ")
-
-
-def _command_name(argv: Sequence[str]) -> str:
-    """The sub-command (and its action, for ``token``) of a command line, for messages."""
-    words = [a for a in argv if not a.startswith("-")][:2]
-    if not words:
+def _command_name(args: argparse.Namespace | None) -> str:
+    """The sub-command (and its action, for ``token``) a command line ran, for messages."""
+    if args is None:
         return ""
-    return " ".join(words) if words[0] == "token" else words[0]
+    return " ".join(w for w in (args.command, getattr(args, "token_command", None)) if w)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    args = None
     try:
         parser = build_parser()
         args = parser.parse_args(argv)
@@ -478,7 +474,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print("bootmap: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
     except BootmapError as e:
-        print(error_line(_command_name(sys.argv[1:] if argv is None else argv), e, e.exit_code), file=sys.stderr)
+        print(error_line(_command_name(args), e, e.exit_code), file=sys.stderr)
         return e.exit_code
     except BrokenPipeError:  # output piped into e.g. `head`, which closed early
         sys.stderr.close()

@@ -14,6 +14,17 @@ EXIT_OK, EXIT_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
 EXIT_INTERRUPTED = 130
 
 
+def error_line(command: str, message: object, exit_code: int) -> str:
+    """How every command reports what stopped it: ``bootmap COMMAND: error: ...`` for bad input (exit 2),
+    ``bootmap COMMAND: ...`` for a failure (exit 1).
+
+    >>> error_line("token list", "bad setting: db", EXIT_BAD_INPUT), error_line("", "no map", EXIT_FAILURE)
+    ('bootmap token list: error: bad setting: db', 'bootmap: no map')
+    """
+    who = f"bootmap {command}" if command else "bootmap"
+    return f"{who}: {'error: ' if exit_code == EXIT_BAD_INPUT else ''}{message}"
+
+
 class BootmapError(Exception):
     """Base class of every error bootmap raises on purpose."""
 

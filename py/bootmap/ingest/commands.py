@@ -12,7 +12,7 @@ import time
 from pathlib import Path
 
 from .. import arguments
-from ..errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_OK, BadInput
+from ..errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_OK, BadInput, error_line
 from .dstates import JunctionDetector, TurnDetector
 from .places import PlaceDetector
 
@@ -64,7 +64,7 @@ def cmd_ingest(args: argparse.Namespace) -> int:
         tableau = log_tableau(scans, detector, max_range=args.max_range, radius_m=args.radius, source=args.log,
                               junctions=junctions, places=places)
     except BadInput as e:
-        print(f"bootmap ingest: error: {e}", file=sys.stderr)
+        print(error_line("ingest", e, EXIT_BAD_INPUT), file=sys.stderr)
         return EXIT_BAD_INPUT
     text = tableau.dumps()
     if not args.output:
@@ -73,7 +73,7 @@ def cmd_ingest(args: argparse.Namespace) -> int:
     try:
         Path(args.output).write_text(text + "\n")
     except OSError as e:
-        print(f"bootmap ingest: cannot write {args.output}: {e.strerror}", file=sys.stderr)
+        print(error_line("ingest", f"cannot write {args.output}: {e.strerror}", EXIT_FAILURE), file=sys.stderr)
         return EXIT_FAILURE
     seconds = time.perf_counter() - start
     print(f"{args.output}: {len(tableau)} dstates from {len(scans)} scans ({len(scans) / seconds:.0f} scans/s)"

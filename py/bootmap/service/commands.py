@@ -9,7 +9,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_OK, BadInput
+from ..errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_OK, error_line
 
 
 def register(subparsers) -> None:
@@ -70,16 +70,17 @@ def cmd_serve(args: argparse.Namespace) -> int:
     try:
         settings = Settings(**{k: v for k, v in given.items() if v is not None})
         if settings.host in ("0.0.0.0", "::", "") and not settings.allowed_hosts:
-            print(f"bootmap serve: error: listening on {settings.host or 'every interface'} needs BOOTMAP_ALLOWED_HOSTS: "
-                  "the host names clients use (or '*' behind a proxy that checks them)", file=sys.stderr)
+            print(error_line("serve", f"listening on {settings.host or 'every interface'} needs "
+                             "BOOTMAP_ALLOWED_HOSTS: the host names clients use (or '*' behind a proxy that checks "
+                             "them)", EXIT_BAD_INPUT), file=sys.stderr)
             return EXIT_BAD_INPUT
         load_theory(settings.axioms)  # fail here, with the message, rather than inside uvicorn's start-up
         settings.data_dir.mkdir(parents=True, exist_ok=True)
     except ValidationError as e:
-        print(f"bootmap serve: error: bad setting: {_first_error(e)}", file=sys.stderr)
+        print(error_line("serve", f"bad setting: {_first_error(e)}", EXIT_BAD_INPUT), file=sys.stderr)
         return EXIT_BAD_INPUT
     except (AxiomError, OSError) as e:
-        print(f"bootmap serve: error: {e}", file=sys.stderr)
+        print(error_line("serve", e, EXIT_BAD_INPUT), file=sys.stderr)
         return EXIT_BAD_INPUT
     import uvicorn
 
@@ -91,77 +92,60 @@ def cmd_serve(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def cmd_token_create(args: argparse.Namespace) -> int:
-    import re
-
+def _on_tokens(args: argparse.Namespace, command: str, failing: str, act):
+    """``act(store)`` on the token database the command names (``--db``, ``--data-dir``), the store closed
+    after: ``(EXIT_OK, act's value, where the database is)``, or the exit code once the error is printed (a
+    bad setting, a name taken or unknown: bad input; a database that cannot be reached: ``failing``)."""
     from pydantic import ValidationError
+    from sqlalchemy.engine import make_url
 
-    from .auth import digest, new_token
     from .settings import Settings
-    from .store import Conflict, Store
+    from .store import Conflict, NotFound, Store
 
-    if not re.fullmatch(r"[A-Za-z0-9_.@-]{1,100}", args.name):
-        print(f"bootmap token create: error: bad name {args.name!r}: use 1-100 letters, digits, _ . @ -", file=sys.stderr)
-        return EXIT_BAD_INPUT
     given = {"db": args.db, "data_dir": args.data_dir}
     try:
         settings = Settings(**{k: v for k, v in given.items() if v is not None})
     except ValidationError as e:
-        print(f"bootmap token create: error: bad setting: {_first_error(e)}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    token = new_token()
+        print(error_line(command, f"bad setting: {_first_error(e)}", EXIT_BAD_INPUT), file=sys.stderr)
+        return EXIT_BAD_INPUT, None, None
     try:
         store = Store(settings.database_url)
         try:
-            store.add_token(args.name, digest(token), args.admin)
+            value = act(store)
         finally:
             store.close()
-    except Conflict as e:
-        print(f"bootmap token create: error: {e}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    except Exception as e:  # the database cannot be reached or written: a failure, not bad input
-        print(f"bootmap token create: cannot store the token: {e}", file=sys.stderr)
-        return EXIT_FAILURE
-    kind = "admin token" if args.admin else "token"
-    from sqlalchemy.engine import make_url
+    except (Conflict, NotFound) as e:
+        print(error_line(command, e, EXIT_BAD_INPUT), file=sys.stderr)
+        return EXIT_BAD_INPUT, None, None
+    except Exception as e:  # noqa: BLE001  the database cannot be reached, read or written: a failure
+        print(error_line(command, f"{failing}: {e}", EXIT_FAILURE), file=sys.stderr)
+        return EXIT_FAILURE, None, None
+    return EXIT_OK, value, make_url(settings.database_url).render_as_string(hide_password=True)
 
-    where = make_url(settings.database_url).render_as_string(hide_password=True)
-    print(f"made {kind} {args.name!r} in {where}; it is shown only now:")
+
+def cmd_token_create(args: argparse.Namespace) -> int:
+    import re
+
+    from .auth import digest, new_token
+
+    if not re.fullmatch(r"[A-Za-z0-9_.@-]{1,100}", args.name):
+        print(error_line("token create", f"bad name {args.name!r}: use 1-100 letters, digits, _ . @ -",
+                         EXIT_BAD_INPUT), file=sys.stderr)
+        return EXIT_BAD_INPUT
+    token = new_token()
+    code, _, where = _on_tokens(args, "token create", "cannot store the token",
+                                lambda store: store.add_token(args.name, digest(token), args.admin))
+    if code != EXIT_OK:
+        return code
+    print(f"made {'admin token' if args.admin else 'token'} {args.name!r} in {where}; it is shown only now:")
     print(token)
     return EXIT_OK
 
 
-def _token_store(args: argparse.Namespace):
-    """The store of the database the token commands act on, and where it is (password hidden); a bad
-    setting is a BadInput naming it."""
-    from pydantic import ValidationError
-    from sqlalchemy.engine import make_url
-
-    from ..errors import BadInput
-    from .settings import Settings
-    from .store import Store
-
-    given = {"db": args.db, "data_dir": args.data_dir}
-    try:
-        settings = Settings(**{k: v for k, v in given.items() if v is not None})
-    except ValidationError as e:
-        raise BadInput(f"bad setting: {_first_error(e)}") from None
-    return Store(settings.database_url), make_url(settings.database_url).render_as_string(hide_password=True)
-
-
 def cmd_token_list(args: argparse.Namespace) -> int:
-    try:
-        store, where = _token_store(args)
-        try:
-            tokens = store.tokens()
-        finally:
-            store.close()
-    except BadInput as e:
-        print(f"bootmap token list: error: {e}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    except Exception as e:  # noqa: BLE001  the database cannot be reached or read
-        print(f"bootmap token list: cannot read the tokens: {e}", file=sys.stderr)
-        return EXIT_FAILURE
+    code, tokens, where = _on_tokens(args, "token list", "cannot read the tokens", lambda store: store.tokens())
+    if code != EXIT_OK:
+        return code
     print(f"{len(tokens)} token(s) in {where}")
     for t in tokens:
         print(f"{t.name:30s} {'admin' if t.admin else 'user ':5s}  made {t.created_at:%Y-%m-%d %H:%M} UTC  "
@@ -170,20 +154,10 @@ def cmd_token_list(args: argparse.Namespace) -> int:
 
 
 def cmd_token_revoke(args: argparse.Namespace) -> int:
-    from .store import NotFound
-
-    try:
-        store, where = _token_store(args)
-        try:
-            store.delete_token(args.name)
-        finally:
-            store.close()
-    except (BadInput, NotFound) as e:
-        print(f"bootmap token revoke: error: {e}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    except Exception as e:  # noqa: BLE001  the database cannot be reached or written
-        print(f"bootmap token revoke: cannot revoke the token: {e}", file=sys.stderr)
-        return EXIT_FAILURE
+    code, _, where = _on_tokens(args, "token revoke", "cannot revoke the token",
+                                lambda store: store.delete_token(args.name))
+    if code != EXIT_OK:
+        return code
     print(f"revoked token {args.name!r} in {where}: refused from now on; its tableaux stay, owned by no one")
     return EXIT_OK
 

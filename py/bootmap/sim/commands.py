@@ -11,7 +11,7 @@ import sys
 from pathlib import Path
 
 from .. import arguments
-from ..errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_OK, BootmapError, TableauError, WorldError
+from ..errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_OK, BootmapError, TableauError, WorldError, error_line
 
 
 def register(subparsers) -> None:
@@ -63,17 +63,17 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         result = run(world, policy=policy, circuits=args.circuits, steps=args.steps,
                      seed=args.seed, progress=not args.no_progress, direction=args.direction)
     except SimulationError as e:
-        print(f"bootmap simulate: {e}", file=sys.stderr)
+        print(error_line("simulate", e, EXIT_FAILURE), file=sys.stderr)
         return EXIT_FAILURE
     except (WorldError, OSError) as e:
-        print(f"bootmap simulate: error: {e}", file=sys.stderr)
+        print(error_line("simulate", e, EXIT_BAD_INPUT), file=sys.stderr)
         return EXIT_BAD_INPUT
     text = result.tableau.dumps()
     if args.output:
         try:
             Path(args.output).write_text(text + "\n")
         except OSError as e:
-            print(f"bootmap simulate: cannot write {args.output}: {e.strerror}", file=sys.stderr)
+            print(error_line("simulate", f"cannot write {args.output}: {e.strerror}", EXIT_FAILURE), file=sys.stderr)
             return EXIT_FAILURE
         truths = {s.truth for s in result.tableau.steps}
         print(f"{args.output}: {len(result.tableau)} dstate images from {len(truths)} true dstates, "
@@ -95,10 +95,10 @@ def cmd_render(args: argparse.Namespace) -> int:
             raise TableauError(f"--image {args.image} needs --run with at least {args.image + 1} steps")
         render(world, tableau, image_step=args.image, path=args.output)
     except (WorldError, TableauError) as e:
-        print(f"bootmap render: error: {e}", file=sys.stderr)
+        print(error_line("render", e, EXIT_BAD_INPUT), file=sys.stderr)
         return EXIT_BAD_INPUT
     except (BootmapError, OSError, ValueError) as e:
-        print(f"bootmap render: {e}", file=sys.stderr)
+        print(error_line("render", e, EXIT_FAILURE), file=sys.stderr)
         return EXIT_FAILURE
     print(f"wrote {args.output}", file=sys.stderr)
     return EXIT_OK
