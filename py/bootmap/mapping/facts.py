@@ -12,13 +12,16 @@ Facts (see docs/asp.md): ``view(T, "label")``, ``turn(T, A)``, ``travel(T, C)``,
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from typing import Iterable, Sequence
 
 import clingo
 from clingo import Function, Number, String, Symbol
 
 from ..tableau import Action, Tableau, Travel, Turn
-from .motion import ActionType, LengthType, LengthTypes, MotionPrimitives, action_types, measured_angle, quantise, resolution_of
+from .compass import WallCompass
+from .motion import (ActionType, LengthType, LengthTypes, MotionPrimitives, TypeSuspect, action_types, measured_angle,
+                     quantise, resolution_of, type_suspects)
 from .vocabulary import LENGTH, PASSES_THROUGH, RESUME, TRAVEL, TURN, VIEW, action_term
 
 
@@ -26,22 +29,78 @@ def read_actions(tableau: Tableau, quantum_deg: float | None = None) -> tuple[li
     """The angle the axioms see for each action of the tableau (a turn's angle, a travel's net heading
     change), and the action types: learned (:mod:`.motion`), or, given a quantum, the measurements
     rounded to it."""
-    angles, types, _ = typed_actions(tableau, quantum_deg)
-    return angles, types
+    typing = typing_of(tableau, quantum_deg)
+    return typing.angles, typing.types
 
 
 def typed_actions(tableau: Tableau, quantum_deg: float | None = None) -> tuple[list[int], list[ActionType], int | None]:
     """:func:`read_actions`, and the grid the learned types lie on (None with a fixed quantum, or no
     actions): the grid says which readings may be mistyped (:func:`.motion.type_suspects`)."""
-    actions = tableau.actions
+    typing = typing_of(tableau, quantum_deg)
+    return typing.angles, typing.types, typing.grid
+
+
+@dataclass(frozen=True)
+class Typing:
+    """How a tableau's actions are read and typed.
+
+    Attributes
+    ----------
+    angles : list of int
+        The angle the axioms see for each action (its type's).
+    types : list of ActionType
+        The action types.
+    grid : int or None
+        The grid the learned types lie on (None with a fixed quantum, or no actions).
+    read : list of Action
+        The actions as read: the walls' reading of each angle where the laser confirmed one
+        (:mod:`.compass`), else odometry's.
+    alternatives : dict
+        Time point -> the other angle (on the grid) an action may have, where the walls leave odometry
+        two candidates it cannot tell apart.
+    """
+
+    angles: list[int]
+    types: list[ActionType]
+    grid: int | None
+    read: list[Action]
+    alternatives: dict[int, int] = field(default_factory=dict)
+
+    def suspects(self, angles: Sequence[int] | None = None) -> list[TypeSuspect]:
+        """The actions that may be mistyped (the resolver weighs each, :mod:`.search.retyping`): readings
+        far from their type (:func:`.motion.type_suspects`), and actions the walls leave ambiguous."""
+        angles = list(self.angles if angles is None else angles)
+        if self.grid is None:
+            return []
+        found = {s.t: s for s in type_suspects(self.read, angles, self.grid)}
+        for t, alt in self.alternatives.items():
+            if t not in found and alt != angles[t]:
+                a = self.read[t]
+                found[t] = TypeSuspect(t, "turn" if isinstance(a, Turn) else "travel", measured_angle(a),
+                                       angles[t], alt)
+        return [found[t] for t in sorted(found)]
+
+
+def typing_of(tableau: Tableau, quantum_deg: float | None = None, compass: bool = True) -> Typing:
+    """How the tableau's actions are read (:class:`Typing`): with a quantum, odometry's readings rounded to
+    it; else the walls' readings where the tableau has laser images (:class:`.compass.WallCompass`), and
+    types learned from them (:class:`.motion.MotionPrimitives`)."""
+    actions = list(tableau.actions)
     resolution = resolution_of(tableau.meta, "angle_deg")
-    if quantum_deg is None:
-        if not actions:
-            return [], [], None
+    if quantum_deg is not None:
+        angles = [quantise(measured_angle(a), quantum_deg) for a in actions]
+        return Typing(angles, action_types(actions, angles, resolution), None, actions)
+    if not actions:
+        return Typing([], [], None, [])
+    walls = WallCompass().fit(tableau) if compass else None
+    if walls is None or not walls.used_:
         learned = MotionPrimitives(resolution_deg=resolution).fit(actions)
-        return learned.angles_, learned.types_, learned.grid_deg_
-    angles = [quantise(measured_angle(a), quantum_deg) for a in actions]
-    return angles, action_types(actions, angles, resolution), None
+        return Typing(learned.angles_, learned.types_, learned.grid_deg_, actions)
+    read = walls.actions(actions)
+    learned = MotionPrimitives(resolution_deg=0.0, exact_deg=0.0).fit(read, trusted=walls.confirmed_)
+    grid = learned.grid_deg_
+    alternatives = {t: quantise(a, grid) for t, a in enumerate(walls.alternatives_) if a is not None}
+    return Typing(learned.angles_, learned.types_, grid, read, alternatives)
 
 
 def action_symbol(action: Action | None, angle: int, length: int | None = None) -> Symbol | None:

@@ -177,6 +177,10 @@ class MotionPrimitives:
     resolution_deg : float, optional
         The step the angles were recorded at (0: continuous); by default read from the readings of each
         kind (:func:`reading_step`).
+    exact_deg : float
+        Readings whose types spread less than this are taken as exact: every type is kept, however few
+        its readings (:data:`EXACT_DEG`; 0 for readings that are precise but not exact, as a laser's,
+        among which a reading or two of their own are strays, not primitives).
 
     Attributes
     ----------
@@ -192,18 +196,26 @@ class MotionPrimitives:
         Per kind, whether its readings are exact primitives (:func:`exact_readings`).
     """
 
-    def __init__(self, grids: Sequence[int] = GRIDS, resolution_deg: float | None = None):
+    def __init__(self, grids: Sequence[int] = GRIDS, resolution_deg: float | None = None, exact_deg: float = EXACT_DEG):
         self.grids = grids
         self.resolution_deg = resolution_deg
+        self.exact_deg = exact_deg
 
-    def fit(self, actions: Sequence[Action]) -> "MotionPrimitives":
+    def fit(self, actions: Sequence[Action], trusted: Sequence[bool] | None = None) -> "MotionPrimitives":
+        """Learn the types of ``actions``. Where ``trusted`` is given, the types and their grid are learned
+        from the trusted readings of each kind (those a better sensor confirmed, :mod:`.compass`) and every
+        other reading takes the grid angle nearest it: a reading the sensor could not confirm is as likely
+        a misread as a primitive, and cannot make a type of its own."""
         is_turn, read = _readings(actions)
         kinds = np.where(is_turn, "turn", "travel")
         measured = _wrap(read)
+        sure = np.ones(len(read), dtype=bool) if trusted is None else np.asarray(trusted, dtype=bool)
         self.resolution_, self.exact_ = {}, {}
         clusters: list[tuple[str, np.ndarray]] = []  # (kind, indices into actions)
         for kind in ("turn", "travel"):
             idx = np.flatnonzero(kinds == kind)
+            if idx.size and sure[idx].any():
+                idx = idx[sure[idx]]
             if idx.size:
                 self.resolution_[kind], self.exact_[kind] = _as_recorded(read[idx], self.resolution_deg)
                 clusters += [(kind, idx[members]) for members in _cluster(measured[idx], self.exact_[kind])]
@@ -220,16 +232,16 @@ class MotionPrimitives:
             # Readings without noise (a hand-written or simulated tableau) are all primitives.
             same = self.resolution_.get(kind, 0.0) < SAME_DEG  # can two readings agree by more than chance?
             keep = [(m, pooled) for i, (m, sd, n) in enumerate(mine)
-                    if n >= max(3, MIN_SHARE * total) or (n >= 2 and sd < SAME_DEG and same) or pooled < EXACT_DEG
+                    if n >= max(3, MIN_SHARE * total) or (n >= 2 and sd < SAME_DEG and same) or pooled < self.exact_deg
                     or (n >= 3 and _apart(m, [o for j, (o, _, _) in enumerate(mine) if j != i], pooled))]
             common += keep or [(m, pooled) for m, _, _ in mine]
             # A few readings (a tail, at most TAIL) set the grid only where no grid angle is near them:
             # three turn-arounds read at -153 beside eighteen at +175 +- 8 are a tail of 180, not a
             # primitive that makes every heading its own; a bend read at 45 three times is a primitive.
-            few += [m for m, sd, n in mine if n <= TAIL and (m, pooled) in keep and pooled >= EXACT_DEG]
+            few += [m for m, sd, n in mine if n <= TAIL and (m, pooled) in keep and pooled >= self.exact_deg]
         self.grid_deg_ = _coarsest_grid([t for t in common if t[0] not in few], self.grids, few)
         snapped = [quantise(m, self.grid_deg_) for m in means]
-        angles = np.zeros(len(actions), dtype=int)
+        angles = np.array([quantise(m, self.grid_deg_) for m in measured], dtype=int)  # the untrusted
         for (_, idx), angle in zip(clusters, snapped):
             angles[idx] = angle
         self.angles_ = angles.tolist()

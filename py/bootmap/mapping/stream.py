@@ -46,10 +46,10 @@ from clingo import Symbol
 from ..tableau import Tableau
 from .cogmap import CognitiveMap, SolveStats, Try, build_map, step_row
 from .facts import (action_symbol, action_symbols, passes_through, tableau_facts, travel_length_types,
-                    travel_lengths, typed_actions)
+                    travel_lengths, typing_of)
 from .grounding import Deadline, check_fixed, prepass
 from .misreads import MIN_VISITS, find_suspects, has_images, rare_clustered_views
-from .motion import ActionType, type_suspects
+from .motion import ActionType
 from .replay import Replay, covers, length_labels
 from .resolver import Resolver
 from .vocabulary import FIXED, fixed_dstate
@@ -91,9 +91,10 @@ class MapStream:
         """The map of ``tableau``, which usually extends the last one given by a few steps."""
         deadline = deadline or Deadline.after(self.resolver.time_limit)
         start = time.perf_counter()
-        angles, types, grid = typed_actions(tableau, self.resolver.quantum_deg)
+        typing = typing_of(tableau, self.resolver.quantum_deg)
+        angles, types = typing.angles, typing.types
         cmap = None
-        if not (self.resolver.retype and grid is not None and type_suspects(tableau.actions, angles, grid)):
+        if not (self.resolver.retype and typing.suspects()):
             cmap = self._extended(tableau, angles, types, deadline, start)
         # (else the resolver may take an action as mistyped, against the whole experience: resolve anew)
         if cmap is None:

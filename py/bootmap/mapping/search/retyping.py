@@ -9,11 +9,13 @@ the theory proves necessary by more than retyping costs. The map lists the actio
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Sequence
+
+import numpy as np
 
 from ..facts import tableau_facts
 from ..grounding import prepass
-from ..motion import action_types, type_suspects
+from ..motion import TypeSuspect, action_types
 from ..vocabulary import DSTATE_COST
 
 if TYPE_CHECKING:
@@ -43,15 +45,29 @@ class Retyping:
         experience has no suspects and is resolved as before; out of its share of the time, the typing
         chosen so far stands."""
         state = self.state
-        suspects = type_suspects(state.tableau.actions, state.angles, state.grid)
+        suspects = state.typing.suspects(state.angles)
         if not suspects:
             return
         share = self.budget.deadline.share(RETYPE_SHARE, RETYPE_MAX_S)
         angles = list(state.angles)
         best = DSTATE_COST * self.proved_with(angles)
+        # First, jointly: the suspects whose retyping the views and headings alone call for (a wrong turn
+        # puts every later time point in another heading, so mistyped turns are weighed together).
+        joint = jointly_retyped(suspects, angles, state.tableau.views)
+        if joint:
+            trial = list(angles)
+            for s in joint:
+                trial[s.t] = s.alternative
+            score = DSTATE_COST * self.proved_with(trial) + MISTYPE_COST * len(joint)
+            if score < best:
+                angles, best = trial, score - MISTYPE_COST * len(joint)
+                state.retyped.extend(joint)
+        # Then each other suspect in turn, by the dstates the theory proves necessary.
         for s in suspects:
             if share.passed():
                 break
+            if s in state.retyped:
+                continue
             trial = list(angles)
             trial[s.t] = s.alternative
             score = DSTATE_COST * self.proved_with(trial) + MISTYPE_COST * (len(state.retyped) + 1)
@@ -59,9 +75,10 @@ class Retyping:
                 angles, best = trial, score - MISTYPE_COST * (len(state.retyped) + 1)
                 state.retyped.append(s)
         if state.retyped:
+            state.retyped.sort(key=lambda s: s.t)
             state.angles = angles
             state.facts = tableau_facts(state.tableau, angles=angles)
-            state.action_types = action_types(state.tableau.actions, angles)
+            state.action_types = action_types(state.typing.read, angles)
 
     def proved_with(self, angles: list[int]) -> int:
         """The dstates the theory proves necessary (the classes' lower bounds) with these action angles."""
@@ -71,3 +88,41 @@ class Retyping:
         state.ground_s += grounded.ground_s
         classes = grounded.classes(range(len(state.tableau)))
         return sum(grounded.lower_bounds(classes))
+
+
+def view_headings(views: Sequence[str | None], angles: Sequence[int]) -> int:
+    """How many (view, heading) pairs the time points show with these action angles: a dstate has one
+    view and one heading, so at least as many dstates are necessary."""
+    heading = np.concatenate([[0], np.cumsum(np.asarray(angles, dtype=np.int64))]) % 360
+    return len(set(zip(views, heading[:len(views)].tolist())))
+
+
+def jointly_retyped(suspects: Sequence[TypeSuspect], angles: Sequence[int], views: Sequence[str | None]
+                    ) -> list[TypeSuspect]:
+    """The suspects to retype by the views and headings alone (:func:`view_headings`), best first: each
+    round retypes the suspect that removes the most pairs, while that is more than retyping costs (one
+    dstate). Mistyped turns are found together, where the theory's bound, one suspect at a time, sees
+    none of them pay: after two wrong turns, righting the first alone leaves as many headings wrong."""
+    angles = list(angles)
+    pairs = view_headings(views, angles)
+    chosen: list[TypeSuspect] = []
+    left = list(suspects)
+    while left:
+        gains = []
+        for s in left:
+            trial = list(angles)
+            trial[s.t] = s.alternative
+            gains.append(pairs - view_headings(views, trial))
+        # the largest gain; between equal gains, the reading furthest from its type
+        i = max(range(len(left)), key=lambda k: (gains[k], abs(_wrapped(left[k].measured - left[k].angle))))
+        if gains[i] * DSTATE_COST <= MISTYPE_COST:
+            break
+        s = left.pop(i)
+        angles[s.t] = s.alternative
+        pairs -= gains[i]
+        chosen.append(s)
+    return chosen
+
+
+def _wrapped(a: float) -> float:
+    return (a + 180.0) % 360.0 - 180.0

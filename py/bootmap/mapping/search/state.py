@@ -18,7 +18,7 @@ from clingo import Symbol
 from ...errors import SolveTimeout
 from ...tableau import Tableau
 from ..cogmap import CognitiveMap, SolveStats, Try, build_map
-from ..facts import tableau_facts, typed_actions
+from ..facts import tableau_facts, typing_of
 from ..grounding import Classes, Grounding, PartialFeatures
 from ..misreads import Suspect
 from ..motion import TypeSuspect
@@ -35,7 +35,8 @@ class SearchState:
         self.resolver, self.tableau = resolver, tableau
         self.start = time.perf_counter()
         # the actions' angles and types, and the learned types' grid (None with a fixed quantum)
-        self.angles, self.action_types, self.grid = typed_actions(tableau, resolver.quantum_deg)
+        self.typing = typing_of(tableau, resolver.quantum_deg)
+        self.angles, self.action_types, self.grid = self.typing.angles, self.typing.types, self.typing.grid
         self.facts = tableau_facts(tableau, angles=self.angles)
         self.retyped: list[TypeSuspect] = []  # actions taken as mistyped
         self.first: Grounding | None = None  # the first try's grounding

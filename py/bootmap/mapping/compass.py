@@ -1,0 +1,351 @@
+"""The walls as a compass: how far each action turned the robot, read from the laser images at its ends.
+
+Odometry reads a turn on the spot to a few degrees on a good robot and to tens of degrees on a poor one
+(a turn-around read as 236 degrees); a heading read wrong puts every later time point in the wrong
+heading. The laser reads it better. Walls are straight, and the directions the walls run in, as a robot
+sees them, turn with the robot: a turn of 90 degrees shifts every wall's direction in the image by -90.
+So the rotation between two images is where their histograms of wall directions agree (the angle
+histograms of Weiss, Wetzler and von Puttkamer, IROS 1994). The images need not overlap: before and
+after a turn-around a 180-degree laser sees disjoint halves of a corridor, but the same walls' direction.
+
+A wall has no sense (a wall running at 10 degrees also runs at 190), and a building's walls repeat their
+directions (a rectangular building's every 90 degrees), so the histograms say the rotation only up to
+those repeats: they give *candidates*. Odometry chooses among them, as a compass needle is read against a
+rough idea of the way one faces:
+
+1. Each image's wall directions: every beam's point with its neighbours lies on a line (the smaller
+   spread of the points across it is small), whose direction votes with the length of wall it covers.
+2. Each action's candidates: the peaks of the two histograms' circular correlation, each peak being a
+   rotation modulo 180 degrees, so each makes two candidates.
+3. How far odometry strays, per kind of action: the robust spread of odometry's readings around the
+   nearest candidate (learned from the tableau; the robot's own noise, not a setting).
+4. Each action's reading: the nearest candidate where it lies within three such spreads of what odometry
+   read (*confirmed*), else odometry's own reading. Where a second candidate is nearly as likely given
+   odometry's spread (at least :data:`ALTERNATIVE_ODDS` as likely), the action is ambiguous: its reading
+   is the nearer candidate, and the other is kept as the angle the action has if odometry misled it. The
+   resolver weighs it as it weighs a mistyped action (:mod:`.search.retyping`).
+
+Images without a laser's geometry (``meta.laser``: ``angle_min``, ``angle_max``, ``range_max``), or
+tableaux without images, are read by odometry alone; so is a log of a robot that drove through its
+dstates without stopping (``meta.passes_through``): its images at an action's two ends lie metres apart,
+around corners, and the walls each sees are not the other's (on the MIT Killian Court log, reading its
+actions from the walls put 80.6% of visits in their true dstate, against 88.8% by odometry).
+
+Example
+-------
+>>> import numpy as np
+>>> from bootmap.tableau import Step, Tableau, Turn
+>>> def corridor(heading_deg):  # a robot 1 m from either wall of a long corridor running east
+...     a = np.linspace(-np.pi / 2, np.pi / 2, 180) + np.radians(heading_deg)
+...     with np.errstate(divide="ignore"):
+...         r = np.abs(1.0 / np.sin(a))
+...     return tuple(np.minimum(r, 8.0))
+>>> laser = {"angle_min": -np.pi / 2, "angle_max": np.pi / 2, "range_max": 8.0}
+>>> steps = [Step(action=Turn(a), image=corridor(h)) for a, h in ((203.0, 0), (-178.0, 180))]
+>>> steps.append(Step(image=corridor(0)))
+>>> c = WallCompass().fit(Tableau(tuple(steps), "corridor", {"laser": laser}))
+>>> [round(x) for x in c.readings_], c.confirmed_
+([180, -180], [True, True])
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..tableau import Action, Tableau, Travel, Turn
+
+#: Each beam's point is fitted with its neighbours within this many metres either side along the wall,
+#: and at least and at most so many neighbours either side.
+HALF_LENGTH_M, HALF_WINDOW, MAX_HALF_WINDOW = 0.5, 4, 30
+#: A fit is a wall where the points' spread across the line is at most this share of their spread along it.
+FLATNESS = 0.05
+#: Points more than this far apart (plus this share of their range) are not on one wall.
+GAP_M, GAP_SHARE = 0.3, 0.05
+#: Ranges at or beyond this share of the laser's maximum are "nothing seen", not a wall.
+MAX_RANGE_SHARE = 0.98
+#: Histogram bins per degree of wall direction, and the smoothing (degrees, s.d.) of one vote.
+BINS, SMOOTH_DEG = 180, 2.0
+#: A correlation peak is a candidate where it reaches this share of the highest.
+PEAK_SHARE = 0.25
+#: A reading is confirmed where the nearest candidate lies within this many of odometry's spreads ...
+CONFIRM_SDS = 3.0
+#: ... and ambiguous where the next candidate is at least this likely, relative to the nearest, given
+#: odometry's spread (Gaussian): odometry cannot tell the two apart.
+ALTERNATIVE_ODDS = 0.01
+#: The least spread odometry is granted (degrees): the laser's own resolution.
+MIN_SPREAD_DEG = 1.0
+#: Before and after a turn on the spot, two beams looking the same way agree within this many metres plus
+#: this share of the range ...
+AGREE_M, AGREE_SHARE = 0.1, 0.05
+#: ... and a candidate turn is refuted where more than this share of the shared beams that see something
+#: disagree (or verified where fewer do), judged on at least this many beams.
+REFUTE_SHARE, MIN_SHARED = 0.25, 20
+
+
+@dataclass(frozen=True)
+class Reading:
+    """What the walls say about one action."""
+
+    odometry: float                 # what odometry read (a turn's angle, a travel's heading change)
+    reading: float                  # what the compass reads: the confirmed candidate, or odometry's reading
+    confirmed: bool                 # the walls confirmed a candidate near odometry's reading
+    alternative: float | None       # a second candidate odometry cannot tell from the first
+
+
+class WallCompass:
+    """Read each action's change of heading from the wall directions in the images at its ends
+    (scikit-learn's estimator contract; module docstring).
+
+    Attributes
+    ----------
+    readings_ : list of float
+        Per action, the angle read: a turn's angle or a travel's heading change, in degrees; odometry's
+        own reading where the walls confirm no candidate (or the tableau has no laser images).
+    confirmed_ : list of bool
+        Per action, whether the walls confirmed the reading.
+    alternatives_ : list of float or None
+        Per action, a second candidate as likely as :data:`ALTERNATIVE_ODDS` of the first, given odometry.
+    spread_deg_ : dict
+        Per kind (``"turn"``, ``"travel"``), how far odometry strays from the walls' reading (robust s.d.).
+    used_ : bool
+        Whether the tableau had laser images to read (else every reading is odometry's).
+    """
+
+    def fit(self, tableau: Tableau) -> "WallCompass":
+        actions = tableau.actions
+        odometry = [_measured(a) for a in actions]
+        laser = _laser(tableau)
+        self.used_ = laser is not None
+        candidates: list[list[tuple[float, float]]] = [[] for _ in actions]
+        if laser is not None:
+            hists = [wall_directions(s.image, *laser) for s in tableau.steps]
+            for t in range(len(actions)):
+                candidates[t] = rotation_candidates(hists[t], hists[t + 1])
+        kinds = ["turn" if isinstance(a, Turn) else "travel" for a in actions]
+        self.spread_deg_ = {}
+        for kind in ("turn", "travel"):
+            off = [_nearest([a for a, _ in c], o)[1] for c, o, k in zip(candidates, odometry, kinds) if k == kind and c]
+            if off:
+                self.spread_deg_[kind] = max(MIN_SPREAD_DEG, 1.4826 * float(np.median(off)))
+        # A robot that stops at its dstates turns on the spot: the images before and after a turn share
+        # the beams that look the same way, and those must agree.
+        on_spot = laser is not None
+        out = []
+        for t, (o, c, k) in enumerate(zip(odometry, candidates, kinds)):
+            spot = None
+            if on_spot and k == "turn":
+                spot = _Spot(tableau.steps[t].image, tableau.steps[t + 1].image, *laser)
+            out.append(_read(o, c, self.spread_deg_.get(k, MIN_SPREAD_DEG), spot))
+        self.results_ = out
+        self.readings_ = [r.reading for r in out]
+        self.confirmed_ = [r.confirmed for r in out]
+        self.alternatives_ = [r.alternative for r in out]
+        return self
+
+    def actions(self, actions: list[Action]) -> list[Action]:
+        """The actions with the compass's readings in place of odometry's angles (lengths unchanged)."""
+        out: list[Action] = []
+        for a, r in zip(actions, self.readings_):
+            out.append(Turn(r) if isinstance(a, Turn) else Travel(a.distance_m, r))  # type: ignore[union-attr]
+        return out
+
+
+def _read(odometry: float, candidates: list[tuple[float, float]], spread: float, overlap: "_Spot | None" = None
+          ) -> Reading:
+    """One action's reading from its candidates (module docstring, step 4): each weighed by its strength
+    and by how likely odometry's reading makes it (Gaussian, odometry's spread). ``overlap`` (for a turn
+    on the spot) says of a candidate whether the beams both images share agree (True), disagree (False),
+    or are too few to say (None), and whether the spot looks alike turned by some angle."""
+    window = CONFIRM_SDS * spread
+
+    def odds(c: float, strength: float) -> float:
+        return strength * float(np.exp(-0.5 * ((c - odometry) / spread) ** 2))
+
+    weighed = sorted(((odometry + _wrap(c - odometry), w) for c, w in candidates),
+                     key=lambda cw: -odds(*cw) if abs(cw[0] - odometry) <= window else abs(cw[0] - odometry))
+    if overlap is not None:
+        said = {c: overlap.agrees(c) for c, _ in weighed}
+        weighed = [(c, w) for c, w in weighed if said[c] is not False]  # the shared beams refute it
+        verified = sorted((c for c, _ in weighed if said[c]), key=lambda c: abs(c - odometry))
+        nearest = min(weighed, key=lambda cw: abs(cw[0] - odometry), default=(math.inf, 0.0))[0]
+        if verified and verified[0] == nearest:
+            # the shared beams agree with the candidate nearest odometry's reading
+            return Reading(odometry, nearest, True, None)
+        if verified and _tail_odds(abs(verified[0] - odometry), abs(nearest - odometry), spread) >= ALTERNATIVE_ODDS:
+            # the beams verify a candidate odometry cannot rule out, beside a nearer one they cannot check
+            # (a spot of like walls can look alike turned by the difference): the verified one, the other
+            # kept as its alternative
+            return Reading(odometry, verified[0], True, nearest)
+    near = [(c, w) for c, w in weighed if abs(c - odometry) <= window]
+    if not near:
+        # Odometry strayed further than it usually does: on the spot, the candidate the beams leave
+        # nearest to it (not to learn types from); elsewhere, odometry's own reading.
+        reading = weighed[0][0] if overlap is not None and weighed else odometry
+        return Reading(odometry, reading, False, None)
+    alternative = None
+    if len(near) > 1 and odds(*near[1]) >= ALTERNATIVE_ODDS * odds(*near[0]) and \
+            abs(_wrap(near[1][0] - near[0][0])) > 2 * SMOOTH_DEG:
+        alternative = near[1][0]
+    return Reading(odometry, near[0][0], True, alternative)
+
+
+@dataclass(frozen=True)
+class _Spot:
+    """The two images of a turn on the spot, before and after."""
+
+    before: tuple
+    after: tuple
+    beam_angles: np.ndarray
+    range_max: float
+
+    def agrees(self, turn_deg: float) -> bool | None:
+        """Whether the images agree where they look the same way, had the robot turned ``turn_deg``."""
+        return overlap_agrees(self.before, self.after, self.beam_angles, self.range_max, turn_deg)
+
+
+def _tail_odds(far: float, near: float, spread: float) -> float:
+    """How likely odometry's reading makes a candidate ``far`` degrees from it, relative to one ``near``
+    degrees from it, counting its errors' heavy tails (Laplace, of odometry's spread): a turn's reading
+    carries the to-and-fro of the law that ended it, so tens of degrees off happen more often than a
+    Gaussian of the same spread allows."""
+    return float(np.exp(-(far - near) / spread))
+
+
+def overlap_agrees(before, after, beam_angles: np.ndarray, range_max: float, turn_deg: float) -> bool | None:
+    """Whether two images taken on one spot, before and after a turn of ``turn_deg``, agree where they look
+    the same way: True where at most :data:`REFUTE_SHARE` of the shared beams that see something disagree
+    (by more than :data:`AGREE_M` plus :data:`AGREE_SHARE` of the range), False where more do, None where
+    fewer than :data:`MIN_SHARED` beams are shared (a turn-around of a 180-degree laser shares none)."""
+    b, a = np.asarray(before, dtype=float), np.asarray(after, dtype=float)
+    # the beam at angle alpha after the turn looks where the beam at alpha + turn looked before it
+    source = beam_angles + np.radians(_wrap(turn_deg))
+    shared = (source >= beam_angles[0]) & (source <= beam_angles[-1])
+    far = MAX_RANGE_SHARE * range_max
+    rb = np.minimum(np.interp(source[shared], beam_angles, b), far)
+    ra = np.minimum(a[shared], far)
+    seen = (rb < far) | (ra < far)
+    if seen.sum() < MIN_SHARED:
+        return None
+    disagree = np.abs(rb - ra) > AGREE_M + AGREE_SHARE * np.minimum(rb, ra)
+    return bool(disagree[seen].mean() <= REFUTE_SHARE)
+
+
+def _nearest(candidates: list[float], odometry: float) -> tuple[float, float]:
+    """The candidate nearest odometry's reading, unwrapped next to it, and its distance."""
+    best = min(candidates, key=lambda c: abs(_wrap(c - odometry)))
+    near = odometry + _wrap(best - odometry)
+    return near, abs(near - odometry)
+
+
+def _measured(action: Action) -> float:
+    return action.angle_deg if isinstance(action, Turn) else action.heading_change_deg  # type: ignore[union-attr]
+
+
+def _laser(tableau: Tableau) -> tuple[np.ndarray, float] | None:
+    """The beams' angles and the laser's maximum range, where the tableau has images, says its laser's
+    geometry (``meta.laser``) and the robot stopped at its dstates, else None."""
+    laser = tableau.meta.get("laser")
+    steps = tableau.steps
+    if not isinstance(laser, dict) or not steps or any(s.image is None for s in steps) or \
+            tableau.meta.get("passes_through", False):
+        return None
+    try:
+        lo, hi, rmax = float(laser["angle_min"]), float(laser["angle_max"]), float(laser["range_max"])
+    except (KeyError, TypeError, ValueError):
+        return None
+    beams = len(steps[0].image)
+    if beams < 2 * HALF_WINDOW + 1 or any(len(s.image) != beams for s in steps) or not hi > lo:
+        return None
+    return np.linspace(lo, hi, beams), rmax
+
+
+def _wrap(a: float) -> float:
+    """An angle into [-180, 180)."""
+    return (a + 180.0) % 360.0 - 180.0
+
+
+def wall_directions(image, beam_angles: np.ndarray, range_max: float) -> np.ndarray:
+    """The histogram of wall directions in one laser image: per degree of direction (0-179, a wall has no
+    sense), the metres of wall seen running that way, smoothed. Each beam's point is fitted with
+    :data:`HALF_WINDOW` neighbours either side; where those are too few to see a wall through the range
+    noise (near the robot, where points crowd), with the neighbours within :data:`HALF_LENGTH_M` either
+    side along the wall."""
+    r = np.asarray(image, dtype=float)
+    n = len(r)
+    seen = np.isfinite(r) & (r > 0.05) & (r < MAX_RANGE_SHARE * range_max)
+    r0 = np.where(seen, r, 0.0)
+    x, y = r0 * np.cos(beam_angles), r0 * np.sin(beam_angles)
+    # a step from one point to the next that leaves the wall (or a beam that saw nothing)
+    hop = np.hypot(np.diff(x), np.diff(y))
+    broken = (~(seen[:-1] & seen[1:]) | (hop > GAP_M + GAP_SHARE * np.minimum(r0[:-1], r0[1:]))).astype(float)
+    spacing = max(float(np.median(np.abs(np.diff(beam_angles)))), 1e-6)
+    by_length = np.ceil(HALF_LENGTH_M / np.maximum(r0, 1e-3) / spacing)
+    votes = np.full(n, np.nan)
+    for half in (np.full(n, HALF_WINDOW), np.clip(by_length, HALF_WINDOW, MAX_HALF_WINDOW).astype(int)):
+        flat, direction = _line_fits(x, y, seen, broken, half)
+        votes = np.where(np.isnan(votes) & flat, direction, votes)
+    # Each point votes with the length of wall it stands for: the distance between its neighbours, halved.
+    length = np.zeros(n)
+    length[1:-1] = np.hypot(x[2:] - x[:-2], y[2:] - y[:-2]) / 2
+    voting = ~np.isnan(votes)
+    hist = np.bincount((votes[voting] * BINS / 180.0).astype(int) % BINS, weights=length[voting], minlength=BINS)
+    return _smooth(hist)
+
+
+def _line_fits(x: np.ndarray, y: np.ndarray, seen: np.ndarray, broken: np.ndarray, half: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """Per point, whether it and its ``half`` neighbours either side lie on one straight wall (all seen,
+    no step off the wall, flat: :data:`FLATNESS`), and the wall's direction (degrees, 0-180)."""
+    n = len(x)
+    i = np.arange(n)
+    lo, hi = i - half, i + half  # inclusive
+    inside = seen & (lo >= 0) & (hi < n)
+    lo, hi = np.clip(lo, 0, n - 1), np.clip(hi, 0, n - 1)
+
+    def window_sum(v: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        c = np.concatenate([[0.0], np.cumsum(v)])
+        return c[b + 1] - c[a]
+
+    whole = inside & (window_sum(broken, lo, np.maximum(hi - 1, lo)) == 0)
+    m = (hi - lo + 1).astype(float)
+    sx, sy = window_sum(x, lo, hi), window_sum(y, lo, hi)
+    sxx = window_sum(x * x, lo, hi) - sx * sx / m
+    syy = window_sum(y * y, lo, hi) - sy * sy / m
+    sxy = window_sum(x * y, lo, hi) - sx * sy / m
+    half_tr, root = (sxx + syy) / 2, np.sqrt(((sxx - syy) / 2) ** 2 + sxy ** 2)
+    lam_max, lam_min = half_tr + root, half_tr - root
+    flat = whole & (lam_max > 0) & (lam_min <= FLATNESS * np.maximum(lam_max, 1e-12))
+    return flat, np.degrees(0.5 * np.arctan2(2 * sxy, sxx - syy)) % 180.0
+
+
+def _smooth(hist: np.ndarray) -> np.ndarray:
+    """The histogram smoothed on the circle (a Gaussian of :data:`SMOOTH_DEG`)."""
+    k = np.arange(BINS)
+    d = np.minimum(k, BINS - k) * (180.0 / BINS)
+    kernel = np.exp(-0.5 * (d / SMOOTH_DEG) ** 2)
+    return np.real(np.fft.ifft(np.fft.fft(hist) * np.fft.fft(kernel)))
+
+
+def rotation_candidates(before: np.ndarray, after: np.ndarray) -> list[tuple[float, float]]:
+    """The rotations (degrees, in [-180, 180)) that bring the walls seen ``before`` onto those seen
+    ``after``: each peak of the histograms' circular correlation of at least :data:`PEAK_SHARE` of the
+    highest, a direction modulo 180 degrees, so two candidates per peak, each with its strength (its
+    peak's share of the highest). Empty where either image shows no wall."""
+    if before.max(initial=0.0) <= 0 or after.max(initial=0.0) <= 0:
+        return []
+    # c[d] = sum over phi of before[phi] * after[phi - d]: a wall at phi before the turn is at phi - d after.
+    c = np.real(np.fft.ifft(np.fft.fft(before) * np.conj(np.fft.fft(after))))
+    top = c.max()
+    if top <= 0:
+        return []
+    out = []
+    for d in range(BINS):
+        y0, y1, y2 = c[d - 1], c[d], c[(d + 1) % BINS]
+        if y1 >= y0 and y1 > y2 and y1 >= PEAK_SHARE * top:
+            den = y0 - 2 * y1 + y2
+            peak = (d + (0.5 * (y0 - y2) / den if den < 0 else 0.0)) * (180.0 / BINS)
+            out += [(_wrap(peak), y1 / top), (_wrap(peak + 180.0), y1 / top)]
+    return out
