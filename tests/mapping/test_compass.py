@@ -184,3 +184,17 @@ def test_a_log_that_drove_through_its_dstates_is_read_by_odometry(hall):
     log = Tableau(tableau.steps, "log", {"laser": LASER, "passes_through": True})
     compass = WallCompass().fit(log)
     assert not compass.used_ and compass.readings_ == [a.angle_deg if isinstance(a, Turn) else 0.0 for a in log.actions]
+
+
+def test_the_map_says_which_angles_the_walls_read(hall):
+    from bootmap.mapping.cogmap import readings_text
+
+    rng = np.random.default_rng(3)
+    tableau, _ = turns_tableau(hall, [(SPOTS[i], 0.0, 90.0 * (1 - 2 * (i % 2))) for i in range(8)], rng, 8.0)
+    typing = typing_of(tableau.with_views([f"v{t}" for t in range(len(tableau.steps))]))
+    turns = [a for a in typing.types if a.kind == "turn"]
+    assert sum(a.from_walls for a in turns) == sum(a.count for a in turns) == 8
+    assert all(a.to_dict()["read_from_walls"] == a.from_walls for a in typing.types)
+    assert "angles read from the walls: 8 of 8 turns" in readings_text(typing.types, [])
+    plain = typing_of(tableau.with_views([f"v{t}" for t in range(len(tableau.steps))]), compass=False)
+    assert "walls" not in readings_text(plain.types, [])

@@ -201,6 +201,11 @@ def readings_text(action_types: list[ActionType], length_types: list[LengthType]
     out = [one(f"{kind} angles", a.resolution_deg, "deg", a.exact) for kind, a in kinds.items()]
     if length_types:
         out.append(one("distances", length_types[0].resolution_m, "m", length_types[0].exact))
+    walls = {kind: (sum(a.from_walls for a in action_types if a.kind == kind),
+                    sum(a.count for a in action_types if a.kind == kind)) for kind in kinds}
+    if any(n for n, _ in walls.values()):
+        out.append("angles read from the walls: " + ", ".join(f"{n} of {total} {kind}s"
+                                                                for kind, (n, total) in walls.items()))
     return "; ".join(out)
 
 

@@ -52,6 +52,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -121,9 +122,12 @@ class WallCompass:
         self.used_ = laser is not None
         candidates: list[list[tuple[float, float]]] = [[] for _ in actions]
         if laser is not None:
-            hists = [wall_directions(s.image, *laser) for s in tableau.steps]
+            # (each image's walls and each pair's candidates are remembered: a map kept current as steps
+            # arrive reads only the new ones)
+            lo, hi, rmax = float(laser[0][0]), float(laser[0][-1]), laser[1]
+            images = [s.image if isinstance(s.image, tuple) else tuple(s.image) for s in tableau.steps]
             for t in range(len(actions)):
-                candidates[t] = rotation_candidates(hists[t], hists[t + 1])
+                candidates[t] = _candidates(images[t], images[t + 1], lo, hi, rmax)
         kinds = ["turn" if isinstance(a, Turn) else "travel" for a in actions]
         self.spread_deg_ = {}
         for kind in ("turn", "travel"):
@@ -260,6 +264,20 @@ def _laser(tableau: Tableau) -> tuple[np.ndarray, float] | None:
     if beams < 2 * HALF_WINDOW + 1 or any(len(s.image) != beams for s in steps) or not hi > lo:
         return None
     return np.linspace(lo, hi, beams), rmax
+
+
+#: How many images' walls, and pairs' candidates, are remembered.
+REMEMBERED = 16384
+
+
+@lru_cache(maxsize=REMEMBERED)
+def _walls(image: tuple, lo: float, hi: float, range_max: float) -> np.ndarray:
+    return wall_directions(image, np.linspace(lo, hi, len(image)), range_max)
+
+
+@lru_cache(maxsize=REMEMBERED)
+def _candidates(before: tuple, after: tuple, lo: float, hi: float, range_max: float) -> list[tuple[float, float]]:
+    return rotation_candidates(_walls(before, lo, hi, range_max), _walls(after, lo, hi, range_max))
 
 
 def _wrap(a: float) -> float:

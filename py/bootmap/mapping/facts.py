@@ -12,7 +12,7 @@ Facts (see docs/asp.md): ``view(T, "label")``, ``turn(T, A)``, ``travel(T, C)``,
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Iterable, Sequence
 
 import clingo
@@ -100,7 +100,18 @@ def typing_of(tableau: Tableau, quantum_deg: float | None = None, compass: bool 
     learned = MotionPrimitives(resolution_deg=0.0, exact_deg=0.0).fit(read, trusted=walls.confirmed_)
     grid = learned.grid_deg_
     alternatives = {t: quantise(a, grid) for t, a in enumerate(walls.alternatives_) if a is not None}
-    return Typing(learned.angles_, learned.types_, grid, read, alternatives)
+    return Typing(learned.angles_, with_walls(learned.types_, read, learned.angles_, walls.confirmed_), grid, read,
+                  alternatives)
+
+
+def with_walls(types: list[ActionType], actions: Sequence[Action], angles: Sequence[int], confirmed: Sequence[bool]
+               ) -> list[ActionType]:
+    """The action types, each saying how many of its actions' angles the walls read."""
+    count: dict[tuple[str, int], int] = {}
+    for a, angle, sure in zip(actions, angles, confirmed):
+        key = ("turn" if isinstance(a, Turn) else "travel", angle)
+        count[key] = count.get(key, 0) + bool(sure)
+    return [replace(t, from_walls=count.get((t.kind, t.angle), 0)) for t in types]
 
 
 def action_symbol(action: Action | None, angle: int, length: int | None = None) -> Symbol | None:

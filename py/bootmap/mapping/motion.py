@@ -90,11 +90,12 @@ class ActionType:
     sd_deg: float               # and spread
     resolution_deg: float = 0.0  # the step the angles of its kind were recorded at (0: continuous)
     exact: bool = True          # its kind's readings are exact primitives (else noisy readings, clustered)
+    from_walls: int = 0         # of its actions, those whose angle the laser's walls read (mapping.compass)
 
     def to_dict(self) -> dict:
         return {"kind": self.kind, "angle_deg": self.angle, "count": self.count,
                 "measured_mean_deg": round(self.mean_deg, 2), "measured_sd_deg": round(self.sd_deg, 2),
-                "resolution_deg": self.resolution_deg, "exact": self.exact}
+                "resolution_deg": self.resolution_deg, "exact": self.exact, "read_from_walls": self.from_walls}
 
     def __str__(self) -> str:
         return f"{self.kind} {self.angle:+d} ({self.count}x, measured {self.mean_deg:+.1f} +- {self.sd_deg:.1f})"

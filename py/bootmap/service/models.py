@@ -227,6 +227,8 @@ class ActionTypeOut(Out):
                                               "as the tableau states it (meta.resolution) or its readings show.")
     exact: bool = Field(description="Its kind's readings were taken as exact primitives (every value a type), "
                                     "not as noisy readings clustered into types.")
+    read_from_walls: int = Field(0, description="Of its actions, those whose angle was read from the walls in the "
+                                                "laser images at their ends (the tableau's meta.laser), not odometry.")
 
 
 class LengthTypeOut(Out):
