@@ -23,7 +23,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "py" / "bootmap"
 STAGES: list[tuple[str, tuple[str, ...]]] = [
     ("foundation", ("bootmap", "bootmap.errors", "bootmap.arguments", "bootmap.proc", "bootmap.images",
                     "bootmap.tableau", "bootmap.metrics", "bootmap.examples", "bootmap.paths",
-                    "bootmap.lazy")),
+                    "bootmap.lazy", "bootmap.walls")),
     ("sources", ("bootmap.sim", "bootmap.ingest", "bootmap.ingest.scans", "bootmap.ingest.carmen", "bootmap.ingest.g2o",
                  "bootmap.ingest.rosbag", "bootmap.ingest.dstates", "bootmap.ingest.places", "bootmap.ingest.truth",
                  "bootmap.ingest.ingest")),

@@ -14,9 +14,9 @@ import pytest
 
 from bootmap.sim import run
 from bootmap.sim.control import HOLD_TICKS, TURN_BOUND, Limits, Turn
-from bootmap.sim.perception import FOLD_LIMIT, Percept
+from bootmap.sim.perception import FOLD_LIMIT, Percept, Perception
 from bootmap.sim.physics import Odometry
-from bootmap.sim.world import load_world
+from bootmap.sim.world import LaserSpec, load_world
 
 DT = 0.1
 TWICE_THE_ODOMETRY_NOISE = {"motion_noise.turn_scale": 0.1, "motion_noise.drift_deg_s": 0.3}
@@ -116,3 +116,37 @@ def test_the_run_that_used_to_spin_at_a_turn_around_completes_with_every_turn_bo
         odometry_error.append(step.action.angle_deg - rotated)
     # the run still holds the turn that broke the old law: odometry more than its 40 degrees off
     assert max(np.abs(odometry_error)) > 40.0
+
+
+def _room_scan(spec, x: float, y: float, heading: float, size=(6.0, 4.0)) -> np.ndarray:
+    """The ranges a laser at (x, y), facing ``heading``, reads in an empty rectangular room."""
+    a = spec.angles + heading
+    c, s = np.cos(a), np.sin(a)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        tx = np.where(c > 0, (size[0] - x) / c, np.where(c < 0, -x / c, np.inf))
+        ty = np.where(s > 0, (size[1] - y) / s, np.where(s < 0, -y / s, np.inf))
+    return np.minimum(np.minimum(tx, ty), spec.range_max)
+
+
+@pytest.mark.parametrize("scale, angle", [(1.6, 90.0), (1.6, -90.0), (1.6, 180.0), (0.6, -90.0), (0.6, 180.0)])
+def test_a_turn_far_off_what_odometry_reads_is_followed_by_the_walls_directions_scan_to_scan(scale, angle):
+    """The body turns ``scale`` times as far as odometry reads, in an empty rectangular room: the walls
+    the percept reads near the axes lie further from odometry than its gates allow, and a law that
+    followed odometry ended the turn 40-90 degrees off (at 180 or 321 degrees for a turn-around).
+    Followed from scan to scan by the directions the walls run in, the turn ends on the walls of the new
+    path, as asked."""
+    spec = LaserSpec(180, -math.pi / 2, math.pi / 2, 8.0, 0.0, 0.0)
+    perception = Perception(spec, open_range=3.0)
+    law = Turn(Limits(), math.radians(angle), perception=perception)
+    odo = Odometry()
+    law.begin(odo)
+    heading = 0.0
+    for _ in range(law.max_ticks + 1):
+        ranges = _room_scan(spec, 1.0, 1.0, heading)
+        _, omega = law.step(perception(ranges), ranges, odo)
+        if law.done:
+            break
+        heading += scale * omega * DT
+        odo.advance(0.0, omega, DT)
+    assert law.done and law.scanning
+    assert math.degrees(heading) == pytest.approx(angle, abs=1.0)

@@ -10,8 +10,9 @@ corridor (hallways), then hill-climbs: to ``stop_distance`` from the wall ahead,
 to where the opening is symmetric about the robot: the near edge is seen in the scan before the robot
 reaches it and carried by odometry, the far edge is seen in the scan; once the opening's width is known
 the stop is where the far edge is half of it ahead. ``Turn`` rotates by odometry, corrected by the
-walls' direction, and then hill-climbs to alignment with the walls of the new path. Travel distances are
-odometry's signed progress: backing up onto a fixed point the robot overshot counts back.
+walls' direction (or, where odometry is far off, by the walls' directions from scan to scan), and then
+hill-climbs to alignment with the walls of the new path. Travel distances are odometry's signed progress:
+backing up onto a fixed point the robot overshot counts back.
 
 Every phase is bounded, so every law ends. A law whose hill-climbing has not converged ``SETTLE_BOUND``
 control periods into it (noisy readings that never hold the tolerance for two periods in a row, or a
@@ -32,6 +33,7 @@ import numpy as np
 from ..tableau import Action
 from ..tableau import Travel as TravelAction
 from ..tableau import Turn as TurnAction
+from ..walls import rotation_candidates, wall_directions
 from .perception import Percept, Perception
 from .physics import Odometry
 
@@ -49,6 +51,18 @@ TRACK_LIMIT = math.radians(18)
 TRACK_GATE = math.radians(8)
 TRACK_GATE_SCALE = 0.4
 PAIR_GATE = math.radians(3)  # and where it follows from the last scan's reading, by odometry, within this
+# Odometry can be off by more than those gates allow (at three times the default noise, a turn rate half as
+# fast again as odometry's): the walls' readings are refused, or a stray is taken, and the estimate carries
+# the turn to a heading 40-60 degrees off the walls. So the turn is also followed from one scan to the next
+# by the directions the walls run in (:mod:`bootmap.walls`, the map's compass): the rotation between two
+# consecutive scans is the strongest of those their histograms allow within SCAN_GATE of odometry's step
+# (the histograms repeat every quarter turn, and a control period's step is a fraction of one), good to a
+# few tenths of a degree. Where the scans' rotation since the turn began and the estimate part by more than
+# SCAN_TRUST and SCAN_TRUST_SCALE of the rotation - more than the estimate is off at the default noise, where
+# odometry reports the commanded rate before the body reaches it (up to 10 degrees ahead as a turn starts)
+# and its scale is a few percent off - the estimate follows the scans for the rest of the turn.
+SCAN_GATE = math.radians(20)
+SCAN_TRUST, SCAN_TRUST_SCALE = math.radians(12), 0.15
 TAKEOVER = TRACK_LIMIT  # a turn's walls take over this far from its target, when they show there
 TURN_BOUND = math.radians(30)  # a turn never looks for or aligns with walls further than this from its target
 HOLD_TICKS = 10  # control periods an aligning turn waits for walls it lost before it stands where it is
@@ -323,7 +337,14 @@ class Turn(ControlLaw):
     that leaves odometry 50 degrees off on a turn-around (2-3 standard deviations at twice the default
     noise, docs/noise.md) therefore does not move where the turn ends; a law that trusted odometry to
     within a fixed search range instead turned to and fro between the range and odometry's target for
-    ever (``stuck: turn did not reach a dstate``).
+    ever (``stuck: turn did not reach a dstate``). Further off still (at three times the default noise the
+    turn rate can be half as fast again as odometry's), the gates refuse the walls' readings, or let a
+    stray through, and the estimate would carry the turn 40-60 degrees past the walls, where none shows
+    within ``TURN_BOUND`` of the target and the estimate settles it diagonally. So the turn is also
+    followed scan to scan by the histograms of the directions the walls run in (``SCAN_GATE``), which
+    see every wall in view whatever its angle; where they part from the estimate by more than it can be
+    off at the default noise (``SCAN_TRUST``), the estimate follows them for the rest of the turn. (Short
+    of that they are only a check: at the default noise the law turns as by odometry and the walls.)
 
     Phases, each ending, so that every turn ends:
 
@@ -356,11 +377,18 @@ class Turn(ControlLaw):
     align_window : float
         Radians of turn still to go (by the estimate) where alignment with the walls takes over, and how
         far short of the walls the last approach starts.
+    perception : Perception, optional
+        The laser's geometry (beam angles, maximum range), for the walls' directions in each scan; without
+        it the turn is followed by odometry and the percept's wall angle alone.
 
     Attributes
     ----------
     turned : float
         The rotation so far by the estimate, radians.
+    scanned : float
+        The rotation so far by the walls' directions, scan to scan, radians.
+    scanning : bool
+        The estimate has parted from the scans by more than ``SCAN_TRUST`` and follows them.
     phase : str
         One of the phases above.
     """
@@ -368,15 +396,20 @@ class Turn(ControlLaw):
     timeout = 30.0
     max_ticks = 250  # 25 s at 10 Hz: a turn-around takes two
 
-    def __init__(self, lim: Limits, angle: float, align_window: float = math.radians(12)):
+    def __init__(self, lim: Limits, angle: float, align_window: float = math.radians(12),
+                 perception: Perception | None = None):
         super().__init__(lim)
         self.angle, self.align_window = angle, align_window
+        self.perception = perception  # its laser's geometry, for the wall directions; None: odometry alone
         self.direction = math.copysign(1.0, angle)
         self.phase = "rotate"
         self.turned = 0.0
         self.approaching = False  # the last approach, from align_window short of the walls, has begun
         self._odometry_theta = 0.0
         self._anchor: tuple[float, float] | None = None  # (wall angle, turned) at the last reliable reading
+        self.scanned = 0.0  # the rotation so far by the walls' directions, scan to scan
+        self.scanning = False  # the estimate follows the scans (odometry has been found too far off)
+        self._directions: np.ndarray | None = None  # the last scan's histogram of wall directions
         self._previous = math.nan  # the last scan's wall angle, if within TRACK_LIMIT
         self._lost = 0  # control periods the walls have been lost while aligning
 
@@ -389,11 +422,32 @@ class Turn(ControlLaw):
         """The walls have taken over from the estimate."""
         return self.phase == "align"
 
-    def _track(self, wall: float, odo: Odometry) -> None:
-        """Advance the rotation estimate by odometry, then correct it by a reliable wall reading."""
+    def _scan_step(self, ranges: np.ndarray, step: float) -> float:
+        """The rotation since the last scan by the walls' directions: of the rotations the two scans'
+        histograms allow, the strongest within ``SCAN_GATE`` of odometry's ``step``; odometry's step where
+        they allow none there (no wall seen in one of them)."""
+        directions = wall_directions(ranges, self.perception.angles, self.perception.range_max)
+        before, self._directions = self._directions, directions
+        if before is None:
+            return step
+        near = [(strength, math.radians(c) + round((step - math.radians(c)) / (2 * math.pi)) * 2 * math.pi)
+                for c, strength in rotation_candidates(before, directions)]
+        near = [(strength, c) for strength, c in near if abs(c - step) <= SCAN_GATE]
+        return max(near)[1] if near else step
+
+    def _track(self, wall: float, ranges: np.ndarray, odo: Odometry) -> None:
+        """Advance the rotation estimate by odometry, then correct it by a reliable wall reading; once the
+        scans show the estimate further off than odometry can be, follow the scans instead."""
         step = odo.theta - self._odometry_theta
-        self.turned += step
         self._odometry_theta = odo.theta
+        if self.perception is not None:
+            self.scanned += self._scan_step(ranges, step)
+            if self.scanning or \
+                    abs(self.scanned - self.turned - step) > SCAN_TRUST + SCAN_TRUST_SCALE * abs(self.scanned):
+                self.scanning = True
+                self.turned = self.scanned
+                return
+        self.turned += step
         if math.isnan(wall) or abs(wall) > TRACK_LIMIT:
             self._previous = math.nan
             return
@@ -417,7 +471,7 @@ class Turn(ControlLaw):
     def step(self, p: Percept, ranges: np.ndarray, odo: Odometry) -> tuple[float, float]:
         if self._tick(self.phase):
             return 0.0, 0.0
-        self._track(p.wall_angle, odo)
+        self._track(p.wall_angle, ranges, odo)
         remaining = self.angle - self.turned
         # The percept folds the walls onto the nearest axis; the estimate says which axis is the target's.
         wall = p.wall_angle

@@ -170,7 +170,7 @@ class Simulation:
     def _law(self, decision: Decision, policy) -> ControlLaw:
         if decision.kind == "travel":
             return self._travel_law(policy)
-        return Turn(self.limits, decision.angle)
+        return Turn(self.limits, decision.angle, perception=self.perception)
 
     def _travel_law(self, policy) -> Travel:
         c = self.world.control
