@@ -288,3 +288,14 @@ def test_ctrl_c_stops_a_sweep_and_its_workers_and_says_how_to_resume(tmp_path):
     assert "interrupted" in err and "--resume" in err
     assert "Traceback" not in err and "KeyboardInterrupt" not in err
     assert _until(lambda: not _session(proc.pid), 15), f"left running: {_session(proc.pid)}"
+
+
+def test_every_shipped_sweep_file_reads():
+    from pathlib import Path
+
+    from bootmap.experiments.sweep.spec import load_spec
+
+    files = sorted((Path(__file__).resolve().parents[1] / "sweeps").glob("*.toml"))
+    assert files
+    for f in files:
+        assert load_spec(f).cells, f

@@ -88,9 +88,10 @@ def test_turns_read_from_the_walls_are_right_where_odometry_is_off_by_tens_of_de
 
 
 def test_a_turn_around_read_as_minus_124_is_read_as_180(hall):
+    # a robot whose odometry strays by 15 degrees (s.d.) on its turns; this turn-around it reads 56 off
     rng = np.random.default_rng(5)
     turns = [((40.0, 1.2), 0.0, 180.0)] + [(SPOTS[i % len(SPOTS)], 0.0, 90.0 * (1 - 2 * (i % 2))) for i in range(12)]
-    tableau, _ = turns_tableau(hall, turns, rng, odometry_sd=4.0)
+    tableau, _ = turns_tableau(hall, turns, rng, odometry_sd=15.0)
     steps = list(tableau.steps)
     steps[0] = Step(action=Turn(236.0), image=steps[0].image)  # odometry 56 degrees off: nearer -90 than 180
     compass = WallCompass().fit(Tableau(tuple(steps), "taylor_hall", {"laser": LASER}))
@@ -198,3 +199,22 @@ def test_the_map_says_which_angles_the_walls_read(hall):
     assert "angles read from the walls: 8 of 8 turns" in readings_text(typing.types, [])
     plain = typing_of(tableau.with_views([f"v{t}" for t in range(len(tableau.steps))]), compass=False)
     assert "walls" not in readings_text(plain.types, [])
+
+
+def test_a_good_odometry_is_not_overruled_by_a_candidate_far_from_it(hall):
+    """A robot whose odometry strays by 4 degrees reads a right turn at a crossing as -87; the beams both
+    images share disagree (a third of the after image spoilt), refuting -90. The turn-around the walls also
+    allow is 90 degrees from odometry's reading: odometry's own reading stands (typed -90), not 180."""
+    rng = np.random.default_rng(0)
+    turns = [((25.0, 1.2), 0.0, -90.0)] + [(SPOTS[i % len(SPOTS)], 0.0, 90.0 * (1 - 2 * (i % 2))) for i in range(12)]
+    tableau, _ = turns_tableau(hall, turns, rng, odometry_sd=4.0)
+    steps = list(tableau.steps)
+    after = np.array(steps[1].image)
+    spoilt = rng.choice(len(after), size=60, replace=False)
+    after[spoilt] = rng.uniform(0.3, 7.0, size=60)
+    steps[0] = Step(action=Turn(-87.0), image=steps[0].image)
+    steps[1] = Step(action=steps[1].action, image=tuple(after.tolist()))
+    spoilt_tableau = Tableau(tuple(steps), "taylor_hall", {"laser": LASER})
+    compass = WallCompass().fit(spoilt_tableau)
+    assert abs(wrap(compass.readings_[0] + 90.0)) < 5.0
+    assert typing_of(spoilt_tableau.with_views([f"v{t}" for t in range(len(steps))])).angles[0] == -90

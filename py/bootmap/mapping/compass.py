@@ -175,10 +175,12 @@ def _read(odometry: float, candidates: list[tuple[float, float]], spread: float,
             return Reading(odometry, verified[0], True, nearest)
     near = [(c, w) for c, w in weighed if abs(c - odometry) <= window]
     if not near:
-        # Odometry strayed further than it usually does: on the spot, the candidate the beams leave
-        # nearest to it (not to learn types from); elsewhere, odometry's own reading.
-        reading = weighed[0][0] if overlap is not None and weighed else odometry
-        return Reading(odometry, reading, False, None)
+        # No candidate where odometry usually strays. On the spot, the one the beams leave nearest, if
+        # odometry's heavy tails allow it (not to learn types from); else odometry's own reading.
+        far = weighed[0][0] if overlap is not None and weighed else None
+        if far is not None and _tail_odds(abs(far - odometry), window, spread) >= ALTERNATIVE_ODDS:
+            return Reading(odometry, far, False, None)
+        return Reading(odometry, odometry, False, None)
     alternative = None
     if len(near) > 1 and odds(*near[1]) >= ALTERNATIVE_ODDS * odds(*near[0]) and \
             abs(_wrap(near[1][0] - near[0][0])) > 2 * SMOOTH_DEG:
