@@ -150,3 +150,6 @@ def test_a_turn_far_off_what_odometry_reads_is_followed_by_the_walls_directions_
         odo.advance(0.0, omega, DT)
     assert law.done and law.scanning
     assert math.degrees(heading) == pytest.approx(angle, abs=1.0)
+    # and the robot records the turn as the scans measured it, not as odometry misread it
+    assert law.action(odo).angle_deg == pytest.approx(math.degrees(heading), abs=1.0)
+    assert abs(math.degrees(odo.theta) - math.degrees(heading)) > 20.0

@@ -543,4 +543,8 @@ class Turn(ControlLaw):
         return 0.0, (0.0 if self.done else max(-lim.w_max, min(lim.w_max, lim.k_align * (wall - target))))
 
     def action(self, odometry: Odometry) -> Action:
-        return TurnAction(round(math.degrees(odometry.theta - self.start.theta), 3))
+        """The turn as the robot measured it: odometry's rotation; or, where the turn was followed by the
+        scans because odometry was found further off than it can be (``scanning``), the scans' rotation,
+        which is what the robot then knows it turned."""
+        turned = self.scanned if self.scanning else odometry.theta - self.start.theta
+        return TurnAction(round(math.degrees(turned), 3))
