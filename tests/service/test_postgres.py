@@ -140,9 +140,13 @@ def test_two_servers_on_one_postgresql_share_tokens_quotas_and_appends(tmp_path,
             s.stop()
 
 
-MORE = {"action": {"type": "turn", "angle_deg": -90}, "steps": [{"view": "V1", "action": {"type": "travel",
-                                                                                        "distance_m": 4}},
-                                                              {"view": "V2"}]}
+# One more circuit of the notched rectangle from its last view (V0): appended once or twice, one after the
+# other, the map is the same 8 dstates (a partial circuit appended twice would contradict the first).
+MORE = {"action": {"type": "turn", "angle_deg": -90},
+        "steps": [{"view": "V1", "action": {"type": "travel", "distance_m": 4}},
+                  {"view": "V2", "action": {"type": "turn", "angle_deg": -90}},
+                  {"view": "V3", "action": {"type": "travel", "distance_m": 2}},
+                  {"view": "V0"}]}
 
 
 def _race(calls) -> list[int]:
