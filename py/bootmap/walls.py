@@ -31,7 +31,7 @@ BINS, SMOOTH_DEG = 180, 2.0
 PEAK_SHARE = 0.25
 
 
-def _wrap(a: float) -> float:
+def wrap_deg(a: float) -> float:
     """An angle into [-180, 180)."""
     return (a + 180.0) % 360.0 - 180.0
 
@@ -116,5 +116,5 @@ def rotation_candidates(before: np.ndarray, after: np.ndarray) -> list[tuple[flo
         if y1 >= y0 and y1 > y2 and y1 >= PEAK_SHARE * top:
             den = y0 - 2 * y1 + y2
             peak = (d + (0.5 * (y0 - y2) / den if den < 0 else 0.0)) * (180.0 / BINS)
-            out += [(_wrap(peak), y1 / top), (_wrap(peak + 180.0), y1 / top)]
+            out += [(wrap_deg(peak), y1 / top), (wrap_deg(peak + 180.0), y1 / top)]
     return out

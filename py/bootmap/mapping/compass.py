@@ -59,7 +59,7 @@ import numpy as np
 from ..tableau import Action, Tableau, Travel, Turn
 # the wall-direction histograms and their rotations (step 1, and step 2's peaks) are the foundation's,
 # shared with the simulator's turn law
-from ..walls import HALF_WINDOW, MAX_RANGE_SHARE, SMOOTH_DEG, _wrap, rotation_candidates, wall_directions
+from ..walls import HALF_WINDOW, MAX_RANGE_SHARE, SMOOTH_DEG, rotation_candidates, wall_directions, wrap_deg
 
 #: A reading is confirmed where the nearest candidate lies within this many of odometry's spreads ...
 CONFIRM_SDS = 3.0
@@ -158,7 +158,7 @@ def _read(odometry: float, candidates: list[tuple[float, float]], spread: float,
     def odds(c: float, strength: float) -> float:
         return strength * float(np.exp(-0.5 * ((c - odometry) / spread) ** 2))
 
-    weighed = sorted(((odometry + _wrap(c - odometry), w) for c, w in candidates),
+    weighed = sorted(((odometry + wrap_deg(c - odometry), w) for c, w in candidates),
                      key=lambda cw: -odds(*cw) if abs(cw[0] - odometry) <= window else abs(cw[0] - odometry))
     if overlap is not None:
         said = {c: overlap.agrees(c) for c, _ in weighed}
@@ -183,7 +183,7 @@ def _read(odometry: float, candidates: list[tuple[float, float]], spread: float,
         return Reading(odometry, odometry, False, None)
     alternative = None
     if len(near) > 1 and odds(*near[1]) >= ALTERNATIVE_ODDS * odds(*near[0]) and \
-            abs(_wrap(near[1][0] - near[0][0])) > 2 * SMOOTH_DEG:
+            abs(wrap_deg(near[1][0] - near[0][0])) > 2 * SMOOTH_DEG:
         alternative = near[1][0]
     return Reading(odometry, near[0][0], True, alternative)
 
@@ -217,7 +217,7 @@ def overlap_agrees(before, after, beam_angles: np.ndarray, range_max: float, tur
     fewer than :data:`MIN_SHARED` beams are shared (a turn-around of a 180-degree laser shares none)."""
     b, a = np.asarray(before, dtype=float), np.asarray(after, dtype=float)
     # the beam at angle alpha after the turn looks where the beam at alpha + turn looked before it
-    source = beam_angles + np.radians(_wrap(turn_deg))
+    source = beam_angles + np.radians(wrap_deg(turn_deg))
     shared = (source >= beam_angles[0]) & (source <= beam_angles[-1])
     far = MAX_RANGE_SHARE * range_max
     rb = np.minimum(np.interp(source[shared], beam_angles, b), far)
@@ -231,8 +231,8 @@ def overlap_agrees(before, after, beam_angles: np.ndarray, range_max: float, tur
 
 def _nearest(candidates: list[float], odometry: float) -> tuple[float, float]:
     """The candidate nearest odometry's reading, unwrapped next to it, and its distance."""
-    best = min(candidates, key=lambda c: abs(_wrap(c - odometry)))
-    near = odometry + _wrap(best - odometry)
+    best = min(candidates, key=lambda c: abs(wrap_deg(c - odometry)))
+    near = odometry + wrap_deg(best - odometry)
     return near, abs(near - odometry)
 
 
