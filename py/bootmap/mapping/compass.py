@@ -24,6 +24,10 @@ rough idea of the way one faces:
    odometry's spread (at least :data:`ALTERNATIVE_ODDS` as likely), the action is ambiguous: its reading
    is the nearer candidate, and the other is kept as the angle the action has if odometry misled it. The
    resolver weighs it as it weighs a mistyped action (:mod:`.search.retyping`).
+5. For a robot that stops at its dstates, a turn is on the spot, and the beams both images share (none
+   for a turn-around) must agree: a candidate they refute is dropped; one they verify is taken, if
+   odometry's heavy tails allow it, with the nearer unverifiable candidate as its alternative. Where no
+   candidate is left within three spreads, the nearest one the beams leave is read, if the tails allow it.
 
 Images without a laser's geometry (``meta.laser``: ``angle_min``, ``angle_max``, ``range_max``), or
 tableaux without images, are read by odometry alone; so is a log of a robot that drove through its
@@ -52,7 +56,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import lru_cache, partial
+from typing import Callable
 
 import numpy as np
 
@@ -60,6 +65,7 @@ from ..tableau import Action, Tableau, Travel, Turn
 # the wall-direction histograms and their rotations (step 1, and step 2's peaks) are the foundation's,
 # shared with the simulator's turn law
 from ..walls import HALF_WINDOW, MAX_RANGE_SHARE, SMOOTH_DEG, rotation_candidates, wall_directions, wrap_deg
+from .motion import measured_angle
 
 #: A reading is confirmed where the nearest candidate lies within this many of odometry's spreads ...
 CONFIRM_SDS = 3.0
@@ -107,7 +113,7 @@ class WallCompass:
 
     def fit(self, tableau: Tableau) -> "WallCompass":
         actions = tableau.actions
-        odometry = [_measured(a) for a in actions]
+        odometry = [measured_angle(a) for a in actions]
         laser = _laser(tableau)
         self.used_ = laser is not None
         candidates: list[list[tuple[float, float]]] = [[] for _ in actions]
@@ -126,13 +132,12 @@ class WallCompass:
                 self.spread_deg_[kind] = max(MIN_SPREAD_DEG, 1.4826 * float(np.median(off)))
         # A robot that stops at its dstates turns on the spot: the images before and after a turn share
         # the beams that look the same way, and those must agree.
-        on_spot = laser is not None
         out = []
         for t, (o, c, k) in enumerate(zip(odometry, candidates, kinds)):
-            spot = None
-            if on_spot and k == "turn":
-                spot = _Spot(tableau.steps[t].image, tableau.steps[t + 1].image, *laser)
-            out.append(_read(o, c, self.spread_deg_.get(k, MIN_SPREAD_DEG), spot))
+            agrees = None
+            if laser is not None and k == "turn":
+                agrees = partial(overlap_agrees, images[t], images[t + 1], *laser)
+            out.append(_read(o, c, self.spread_deg_.get(k, MIN_SPREAD_DEG), agrees))
         self.results_ = out
         self.readings_ = [r.reading for r in out]
         self.confirmed_ = [r.confirmed for r in out]
@@ -147,12 +152,12 @@ class WallCompass:
         return out
 
 
-def _read(odometry: float, candidates: list[tuple[float, float]], spread: float, overlap: "_Spot | None" = None
-          ) -> Reading:
-    """One action's reading from its candidates (module docstring, step 4): each weighed by its strength
-    and by how likely odometry's reading makes it (Gaussian, odometry's spread). ``overlap`` (for a turn
-    on the spot) says of a candidate whether the beams both images share agree (True), disagree (False),
-    or are too few to say (None), and whether the spot looks alike turned by some angle."""
+def _read(odometry: float, candidates: list[tuple[float, float]], spread: float,
+          agrees: Callable[[float], bool | None] | None = None) -> Reading:
+    """One action's reading from its candidates (module docstring, steps 4 and 5): each weighed by its
+    strength and by how likely odometry's reading makes it (Gaussian, odometry's spread). ``agrees`` (for
+    a turn on the spot, :func:`overlap_agrees`) says of a candidate turn whether the beams both images
+    share agree (True), disagree (False), or are too few to say (None)."""
     window = CONFIRM_SDS * spread
 
     def odds(c: float, strength: float) -> float:
@@ -160,8 +165,8 @@ def _read(odometry: float, candidates: list[tuple[float, float]], spread: float,
 
     weighed = sorted(((odometry + wrap_deg(c - odometry), w) for c, w in candidates),
                      key=lambda cw: -odds(*cw) if abs(cw[0] - odometry) <= window else abs(cw[0] - odometry))
-    if overlap is not None:
-        said = {c: overlap.agrees(c) for c, _ in weighed}
+    if agrees is not None:
+        said = {c: agrees(c) for c, _ in weighed}
         weighed = [(c, w) for c, w in weighed if said[c] is not False]  # the shared beams refute it
         verified = sorted((c for c, _ in weighed if said[c]), key=lambda c: abs(c - odometry))
         nearest = min(weighed, key=lambda cw: abs(cw[0] - odometry), default=(math.inf, 0.0))[0]
@@ -177,7 +182,7 @@ def _read(odometry: float, candidates: list[tuple[float, float]], spread: float,
     if not near:
         # No candidate where odometry usually strays. On the spot, the one the beams leave nearest, if
         # odometry's heavy tails allow it (not to learn types from); else odometry's own reading.
-        far = weighed[0][0] if overlap is not None and weighed else None
+        far = weighed[0][0] if agrees is not None and weighed else None
         if far is not None and _tail_odds(abs(far - odometry), window, spread) >= ALTERNATIVE_ODDS:
             return Reading(odometry, far, False, None)
         return Reading(odometry, odometry, False, None)
@@ -186,20 +191,6 @@ def _read(odometry: float, candidates: list[tuple[float, float]], spread: float,
             abs(wrap_deg(near[1][0] - near[0][0])) > 2 * SMOOTH_DEG:
         alternative = near[1][0]
     return Reading(odometry, near[0][0], True, alternative)
-
-
-@dataclass(frozen=True)
-class _Spot:
-    """The two images of a turn on the spot, before and after."""
-
-    before: tuple
-    after: tuple
-    beam_angles: np.ndarray
-    range_max: float
-
-    def agrees(self, turn_deg: float) -> bool | None:
-        """Whether the images agree where they look the same way, had the robot turned ``turn_deg``."""
-        return overlap_agrees(self.before, self.after, self.beam_angles, self.range_max, turn_deg)
 
 
 def _tail_odds(far: float, near: float, spread: float) -> float:
@@ -234,10 +225,6 @@ def _nearest(candidates: list[float], odometry: float) -> tuple[float, float]:
     best = min(candidates, key=lambda c: abs(wrap_deg(c - odometry)))
     near = odometry + wrap_deg(best - odometry)
     return near, abs(near - odometry)
-
-
-def _measured(action: Action) -> float:
-    return action.angle_deg if isinstance(action, Turn) else action.heading_change_deg  # type: ignore[union-attr]
 
 
 def _laser(tableau: Tableau) -> tuple[np.ndarray, float] | None:

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
+from ...walls import wrap_deg
 from ..facts import tableau_facts
 from ..grounding import prepass
 from ..motion import TypeSuspect, action_types
@@ -114,7 +115,7 @@ def jointly_retyped(suspects: Sequence[TypeSuspect], angles: Sequence[int], view
             trial[s.t] = s.alternative
             gains.append(pairs - view_headings(views, trial))
         # the largest gain; between equal gains, the reading furthest from its type
-        i = max(range(len(left)), key=lambda k: (gains[k], abs(_wrapped(left[k].measured - left[k].angle))))
+        i = max(range(len(left)), key=lambda k: (gains[k], abs(wrap_deg(left[k].measured - left[k].angle))))
         if gains[i] * DSTATE_COST <= MISTYPE_COST:
             break
         s = left.pop(i)
@@ -122,7 +123,3 @@ def jointly_retyped(suspects: Sequence[TypeSuspect], angles: Sequence[int], view
         pairs -= gains[i]
         chosen.append(s)
     return chosen
-
-
-def _wrapped(a: float) -> float:
-    return (a + 180.0) % 360.0 - 180.0
