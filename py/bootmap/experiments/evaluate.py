@@ -50,7 +50,8 @@ from scipy.spatial.distance import cdist
 from ..metrics import dstate_accuracy
 from ..views import uncertainty_coefficient
 from ..ingest.scans import Pose
-from ..ingest.truth import main_axis, true_dstates
+from ..ingest.truth import true_dstates
+from ..paths import main_axis
 
 #: Descriptors :func:`nn_on_revisits` compares scans with.
 DESCRIPTORS = ("raw", "shift")

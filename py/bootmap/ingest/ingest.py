@@ -32,7 +32,8 @@ from .dstates import (FoundTurn, JunctionDetector, TurnDetector, dstate_scans, f
 from .scans import IMAGE_ANGLE_MAX, IMAGE_ANGLE_MIN, IMAGE_BEAMS, Scan, to_image, wrap
 from .places import PlaceDetector, find_visits
 from ..paths import simplify
-from .truth import corner_recall, corners_in_poses, main_axis, sector_name, true_dstates, visit_places
+from ..paths import main_axis
+from .truth import corner_recall, corners_in_poses, sector_name, true_dstates, visit_places
 
 ROS_SUFFIXES = (".bag", ".db3", ".mcap")
 #: How far the drawn true path may stray from the log's poses (metres).

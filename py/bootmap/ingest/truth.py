@@ -29,7 +29,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .dstates import FoundTurn, odometry_track
-from ..paths import simplify
+from ..paths import main_axis, simplify
 from .scans import Pose, wrap
 
 SECTORS = "ENWS"  # as bootmap.sim.world.heading_sector names them, here in the building's frame
@@ -71,18 +71,6 @@ def place_labels(poses: list[Pose] | np.ndarray, radius_m: float = 3.0,
         join(int(pairs[k, 0]), int(pairs[k, 1]))
     first_seen: dict[int, int] = {}
     return [first_seen.setdefault(root(i), len(first_seen)) for i in range(len(xy))]
-
-
-def main_axis(poses: list[Pose] | np.ndarray, tolerance_m: float = 1.0) -> float:
-    """The building's main axis (radians, in [-pi/4, pi/4)): the mean direction of the path's straight
-    legs modulo 90 degrees, each leg weighted by its length."""
-    xy = np.asarray(poses, dtype=float).reshape(-1, 3)[:, :2]
-    legs = np.diff(xy[simplify(xy, tolerance_m)], axis=0)
-    length = np.hypot(legs[:, 0], legs[:, 1])
-    direction = np.arctan2(legs[:, 1], legs[:, 0])
-    # Directions four times over: corridors at 0, 90, 180 and 270 degrees all point the same way.
-    mean = np.arctan2((length * np.sin(4 * direction)).sum(), (length * np.cos(4 * direction)).sum())
-    return float(wrap(mean / 4 + np.pi / 4) - np.pi / 4) if length.sum() else 0.0
 
 
 def true_dstates(poses: list[Pose] | np.ndarray, radius_m: float = 3.0, axis_rad: float | None = None,

@@ -30,10 +30,11 @@ rough idea of the way one faces:
    candidate is left within three spreads, the nearest one the beams leave is read, if the tails allow it.
 
 Images without a laser's geometry (``meta.laser``: ``angle_min``, ``angle_max``, ``range_max``), or
-tableaux without images, are read by odometry alone; so is a log of a robot that drove through its
-dstates without stopping (``meta.passes_through``): its images at an action's two ends lie metres apart,
-around corners, and the walls each sees are not the other's (on the MIT Killian Court log, reading its
-actions from the walls put 80.6% of visits in their true dstate, against 88.8% by odometry).
+tableaux without images, are read by odometry alone. A log of a robot that drove through its dstates
+without stopping (``meta.passes_through``) is not read here: its images at an action's two ends lie
+metres apart, around corners, and the walls each sees are not the other's (on the MIT Killian Court log,
+reading its actions from the walls put 80.6% of visits in their true dstate, against 88.8% by odometry's
+angles); its headings are the building's sectors (:mod:`.sectors`).
 
 Example
 -------

@@ -20,6 +20,7 @@ from clingo import Function, Number, String, Symbol
 
 from ..tableau import Action, Tableau, Travel, Turn
 from .compass import WallCompass
+from .sectors import sector_angles
 from .motion import (ActionType, LengthType, LengthTypes, MotionPrimitives, TypeSuspect, action_types, measured_angle,
                      quantise, resolution_of, type_suspects)
 from .vocabulary import LENGTH, PASSES_THROUGH, RESUME, TRAVEL, TURN, VIEW, action_term
@@ -83,8 +84,9 @@ class Typing:
 
 def typing_of(tableau: Tableau, quantum_deg: float | None = None, compass: bool = True) -> Typing:
     """How the tableau's actions are read (:class:`Typing`): with a quantum, odometry's readings rounded to
-    it; else the walls' readings where the tableau has laser images (:class:`.compass.WallCompass`), and
-    types learned from them (:class:`.motion.MotionPrimitives`)."""
+    it; for a log that drove through its dstates with odometry at each, the changes of the building's
+    sector the robot faced (:mod:`.sectors`); else the walls' readings where the tableau has laser images
+    (:class:`.compass.WallCompass`), and types learned from them (:class:`.motion.MotionPrimitives`)."""
     actions = list(tableau.actions)
     resolution = resolution_of(tableau.meta, "angle_deg")
     if quantum_deg is not None:
@@ -92,6 +94,10 @@ def typing_of(tableau: Tableau, quantum_deg: float | None = None, compass: bool 
         return Typing(angles, action_types(actions, angles, resolution), None, actions)
     if not actions:
         return Typing([], [], None, [])
+    if passes_through(tableau) and all(step.odometry is not None for step in tableau.steps):
+        # a log: each dstate faces the building's sector its odometry heading lies in (.sectors)
+        angles = sector_angles([step.odometry for step in tableau.steps])[:len(actions)]
+        return Typing(angles, action_types(actions, angles, resolution), None, actions)
     walls = WallCompass().fit(tableau) if compass else None
     if walls is None or not walls.used_:
         learned = MotionPrimitives(resolution_deg=resolution).fit(actions)

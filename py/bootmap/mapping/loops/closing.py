@@ -205,8 +205,25 @@ class Closing:
 
     def _apart(self, i: int, j: int, share: float) -> float:
         """How far apart dead reckoning puts i and j, as a share of what it may drift between them."""
-        gap = float(np.hypot(*(self.xy[i] - self.xy[j])))
+        gap = self.gap(i, j)
         return gap / (self.closer.radius_m + share * abs(self.along[j] - self.along[i]))
+
+    @cached_property
+    def turn_ends(self) -> list[tuple[int, ...]]:
+        """Each time point with the other end of the turn it starts or ends: a turn never leaves its place,
+        though a robot that turns while driving ends it metres on."""
+        steps = self.tableau.steps
+        ends = [[t] for t in range(self.n)]
+        for t, step in enumerate(steps[:-1]):
+            if isinstance(step.action, Turn):
+                ends[t].append(t + 1)
+                ends[t + 1].append(t)
+        return [tuple(e) for e in ends]
+
+    def gap(self, i: int, j: int) -> float:
+        """How far apart dead reckoning puts the places of i and j (metres): the nearest ends of the turns
+        they belong to."""
+        return min(float(np.hypot(*(self.xy[a] - self.xy[b]))) for a in self.turn_ends[i] for b in self.turn_ends[j])
 
     def agreeing(self, i: int, j: int) -> int:
         """How many actions agree in a row after i and j, plus before them."""
@@ -264,7 +281,7 @@ class Closing:
 
     def odometry(self, x: int, y: int) -> str:
         """How far apart dead reckoning puts x and y, in words."""
-        return (f"dead reckoning puts them {float(np.hypot(*(self.xy[x] - self.xy[y]))):.1f} m apart after "
+        return (f"dead reckoning puts them {self.gap(x, y):.1f} m apart after "
                 f"{abs(self.along[y] - self.along[x]):.0f} m driven")
 
     def drift_bound(self, x: int, y: int, share: float) -> float:
