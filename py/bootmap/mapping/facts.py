@@ -16,6 +16,7 @@ from dataclasses import dataclass, field, replace
 from typing import Iterable, Sequence
 
 import clingo
+import numpy as np
 from clingo import Function, Number, String, Symbol
 
 from ..tableau import Action, Tableau, Travel, Turn
@@ -95,8 +96,12 @@ def typing_of(tableau: Tableau, quantum_deg: float | None = None, compass: bool 
     if not actions:
         return Typing([], [], None, [])
     if passes_through(tableau) and all(step.odometry is not None for step in tableau.steps):
-        # a log: each dstate faces the building's sector its odometry heading lies in (.sectors)
-        angles = sector_angles([step.odometry for step in tableau.steps])[:len(actions)]
+        # a log: each dstate faces the building's sector its heading lies in (.sectors), the heading where
+        # odometry began plus the actions' measured angles, along the odometry's path
+        start = tableau.steps[0].odometry
+        heading = start[2] + np.radians(np.concatenate([[0.0], np.cumsum([measured_angle(a) for a in actions])]))
+        poses = [(step.odometry[0], step.odometry[1], h) for step, h in zip(tableau.steps, heading)]
+        angles = sector_angles(poses)[:len(actions)]
         return Typing(angles, action_types(actions, angles, resolution), None, actions)
     walls = WallCompass().fit(tableau) if compass else None
     if walls is None or not walls.used_:

@@ -9,8 +9,9 @@ one dstate are left facing "different ways" for the axioms, which forbid their j
 
 The building says what a heading is: its corridors run along a main axis and across it
 (:func:`bootmap.paths.main_axis`, from the robot's own dead-reckoned path through its dstates). Each
-dstate faces the sector (east, north, west or south of that axis) its odometry heading lies in, and each
-action's angle is the change of sector, a multiple of 90 degrees (a turn-around is +180). The angles then
+dstate faces the sector (east, north, west or south of that axis) its heading lies in (the heading odometry
+began at plus the actions' measured angles: for a log's own tableau, odometry's heading at each dstate),
+and each action's angle is the change of sector, a multiple of 90 degrees (a turn-around is +180). The angles then
 add up to the sectors, however the drive bent: the heading the axioms see at a dstate is where odometry
 says it faced, never a sum of rounding errors. The truth of a log's dstate is made the same way from the
 true poses (:mod:`bootmap.ingest.truth`); what differs is only odometry's drift.
