@@ -10,7 +10,6 @@ import pytest
 
 from bootmap import examples
 from bootmap.errors import EXIT_INTERRUPTED
-from support.readme import missing, shown_commands
 
 
 def bootmap(*args, cwd=None):
@@ -98,20 +97,6 @@ def test_map_of_a_simulated_run_clusters_its_images_first(tmp_path):
     assert out.returncode == 0, out.stderr
     assert "clustered 80 images into 4 views" in out.stderr
     assert out.stdout.startswith("8 dstates, 4 places, 4 paths")
-
-
-@pytest.mark.slow
-def test_demo_runs_both_paper_worlds_and_explains_s4(tmp_path):
-    out = bootmap("demo", cwd=tmp_path)
-    assert out.returncode == 0, out.stderr
-    assert "reports: out/notched_rectangle/report.md, out/taylor_hall/report.md" in out.stdout
-    assert (tmp_path / "out" / "taylor_hall" / "report.md").is_file()
-    assert "8 dstates, 4 places, 4 paths" in out.stdout
-    assert "t0 (S0) and t4 (S4) cannot be one dstate" in out.stdout and "on_path_no_side" in out.stdout
-    # The demo runs the README's Taylor Hall experiment (seed 1, 100 dstates): what the README shows it
-    # print, it prints (all but the report's folder, which the demo names after the world).
-    (shown,) = [text for args, text in shown_commands() if args[:2] == ["experiment", "taylor_hall"]]
-    assert missing(shown.replace("report: out/th/report.md", ""), out.stdout) == []
 
 
 def test_a_sub_command_is_hidden_only_when_a_third_party_package_is_missing(monkeypatch, capsys):

@@ -30,7 +30,7 @@ def test_readme_python_blocks_run_and_print_what_their_comments_say(monkeypatch,
 
 def _runs(args):
     """The README's commands but the two that tests run anyway and check there: the whole Killian log
-    (its slow test) and Taylor Hall's seed 1 (the demo's test: the demo runs it)."""
+    (its slow test) and Taylor Hall's (the demo runs it, in the installed wheel's test)."""
     return "killian" not in args and "taylor_hall" not in args
 
 

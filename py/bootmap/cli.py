@@ -224,6 +224,12 @@ def _print_summary(r: dict) -> None:
     print(f"  {verdict}")
 
 
+#: The demo's (and the README's) seed. The paper's checks hold on most seeds, not all (nearest neighbour
+#: at 90 images falls below 85% on 2 of seeds 1-20 of the notched rectangle, 3 of Taylor Hall's:
+#: docs/results/paper.md); on this one they hold on both worlds, so a failed check means something broke.
+DEMO_SEED = 2
+
+
 def cmd_demo(args: argparse.Namespace) -> int:
     from . import examples
     from .experiments.world import run_experiment
@@ -231,11 +237,13 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
     runs = [("notched_rectangle", "notched rectangle, 50 clockwise circuits (the paper's Figure 2)", {"circuits": 50}),
             ("taylor_hall", "Taylor Hall, 100 dstates of exploration (the paper's Figure 5)", {"steps": 100})]
-    reports = []
+    reports, failing = [], []
     for world, title, kw in runs:
         print(f"The paper's experiment, from simulation: {title}.\n")
-        r = run_experiment(world, seed=1, out_dir=f"out/{world}", progress=True, **kw)
+        r = run_experiment(world, seed=DEMO_SEED, out_dir=f"out/{world}", progress=True, **kw)
         _print_summary(r)
+        if r.get("error") or not all(r.get("checks", {}).values()):
+            failing.append(world)
         reports.append(f"out/{world}/report.md")
         print(f"  report: {reports[-1]}\n")
     tableau = examples.notched_rectangle(circuits=50)
@@ -254,6 +262,9 @@ def cmd_demo(args: argparse.Namespace) -> int:
     print("evidence: " + ", ".join(f"t{t}" for t in why.evidence) + "; axioms needed: "
           + ", ".join(r.cite() for r in why.axioms))
     print("\nreports: " + ", ".join(reports))
+    if failing:
+        print(f"a check of the paper's figures failed on {' and '.join(failing)} (above): exit {EXIT_FAILURE}")
+        return EXIT_FAILURE
     return EXIT_OK
 
 
