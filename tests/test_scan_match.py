@@ -9,7 +9,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from bootmap.scan_match import Match, ScanMatcher, image_points, surface_points
+from bootmap.scan_match import Match, ScanMatcher
+from bootmap.surfaces import image_points, surface_points
 from support.raycast import CORRIDOR, ROOM, cast
 
 MATCHER = ScanMatcher()

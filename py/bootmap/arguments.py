@@ -94,3 +94,10 @@ def setting(text: str) -> tuple[str, object]:
     except tomllib.TOMLDecodeError:
         parsed = value.strip()
     return key, parsed
+
+
+def add_calibrate(parser, prefix: str = "") -> None:
+    """``--no-calibrate``: keep a log's odometry as recorded (bootmap.ingest.calibrate)."""
+    parser.add_argument("--no-calibrate", action="store_true",
+                        help=f"{prefix}keep the log's odometry as recorded, without calibrating its heading by the "
+                             "laser where it drifts (bootmap.ingest.calibrate)")

@@ -143,7 +143,8 @@ def cmd_experiment(args: argparse.Namespace) -> int:
     if args.world is None:
         raise BadInput("give a world (e.g. taylor_hall) or a robot's log (--log LOG, or killian)")
     log_only = [flag for flag, used in (("--junctions", args.junctions), ("--dstates", args.dstates != "turns"),
-                                        ("--no-scan-match", args.no_scan_match)) if used]
+                                        ("--no-scan-match", args.no_scan_match),
+                                        ("--no-calibrate", args.no_calibrate)) if used]
     if log_only:
         raise BadInput(f"{', '.join(log_only)}: for an experiment on a robot's log (--log LOG), not for the world "
                        f"{args.world}")
@@ -190,7 +191,7 @@ def _log_experiment(args: argparse.Namespace) -> int:
                            time_limit=args.time_limit, quantum_deg=args.quantum, view_criterion=args.views,
                            progress=not args.no_progress, junctions=JunctionDetector() if args.junctions else None,
                            mapper=args.map, places=PlaceDetector() if args.dstates == "places" else None,
-                           scan_match=not args.no_scan_match)
+                           scan_match=not args.no_scan_match, calibrate=not args.no_calibrate)
     print("\n".join(headline(r)))
     print(f"report: {args.output}/report.md")
     return EXIT_FAILURE if "error" in r["map"] else EXIT_OK
@@ -373,6 +374,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-scan-match", action="store_true",
                    help="--log: measure place recognition by the scans' distances only, without scan matching "
                         "(which takes seconds to a minute on a long log)")
+    arguments.add_calibrate(p, "--log: ")
     runs = p.add_mutually_exclusive_group()
     runs.add_argument("--circuits", type=arguments.count("circuits"), metavar="N",
                       help="circuits of a room (worlds of the circuits policy; default 50)")

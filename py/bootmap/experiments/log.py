@@ -77,7 +77,7 @@ def run_log_experiment(log: str | Path, out_dir: str | Path | None = None, seed:
                        max_range: float = 20.0, radius_m: float = 3.0, progress: bool = False,
                        junctions: JunctionDetector | None = None, mapper: str = "loops",
                        perfect_odometry: bool = True, places: PlaceDetector | None = None,
-                       scan_match: bool = True) -> dict:
+                       scan_match: bool = True, calibrate: bool = True) -> dict:
     """Run the experiment on a log (a path any of :func:`~bootmap.ingest.ingest.read_log`'s formats, or
     ``killian``); see the module docstring. Returns the results and, given ``out_dir``, writes
     ``results.json``, ``report.md`` and figures there. The robot's action types are learned, as in the
@@ -86,7 +86,8 @@ def run_log_experiment(log: str | Path, out_dir: str | Path | None = None, seed:
     (``perfect_odometry`` in the results: the method's errors without the drift). ``places`` chooses
     dstates at the places the laser shows (:mod:`bootmap.ingest.places`) instead of at odometry's turns;
     ``scan_match`` adds scan matching (:class:`~bootmap.scan_match.ScanMatcher`) to the descriptors place
-    recognition is measured with."""
+    recognition is measured with; ``calibrate`` calibrates odometry's heading by the laser where it drifts
+    (:mod:`bootmap.ingest.calibrate`; the baseline "odometry alone" keeps the odometry as recorded)."""
     if view_criterion not in VIEW_CRITERIA:
         raise BadInput(f"unknown view criterion {view_criterion!r}; known: {', '.join(VIEW_CRITERIA)}")
     if mapper not in MAPPERS:
@@ -95,7 +96,7 @@ def run_log_experiment(log: str | Path, out_dir: str | Path | None = None, seed:
 
     settings = dict(seed=seed, k_max=k_max, time_limit=time_limit, quantum_deg=quantum_deg,
                     view_criterion=view_criterion, detector=detector, max_range=max_range, radius_m=radius_m,
-                    junctions=junctions, mapper=mapper, places=places)
+                    junctions=junctions, mapper=mapper, places=places, calibrate=calibrate)
     with threadpool_limits(limits=1):  # small arrays: threads only wait on each other (see run_experiment)
         lap = Laps()
         scans = read_log(log, progress=progress)
@@ -109,13 +110,13 @@ def run_log_experiment(log: str | Path, out_dir: str | Path | None = None, seed:
 
 
 def _experiment(scans, log, lap, seed, k_max, time_limit, quantum_deg, view_criterion, detector, max_range,
-                radius_m, junctions, mapper, places, scan_match=False,
+                radius_m, junctions, mapper, places, calibrate=True, scan_match=False,
                 recognise=True) -> tuple[dict, object, object]:
     """The experiment on scans already read: results (without targets), the tableau and the map. Without
     ``recognise``, recognition (the learners, nearest neighbour, place recognition) is left out: None."""
     timings = lap.timings
     tableau = log_tableau(scans, detector, max_range=max_range, radius_m=radius_m, source=str(log),
-                          junctions=junctions, places=places)
+                          junctions=junctions, places=places, calibrate=calibrate)
     if any(s.truth is None for s in tableau.steps):
         raise LogError("the log has no true poses (g2o vertices, CARMEN robot poses or a ROS --truth-topic): "
                        "nothing to evaluate the map against", str(log))
@@ -144,6 +145,7 @@ def _experiment(scans, log, lap, seed, k_max, time_limit, quantum_deg, view_crit
         "world": _name(log), "log": str(log), "seed": seed, "scans": len(scans), "images": len(images),
         "clusterer": "kmeans", "quantum_deg": quantum_deg, "dstates_at": "turns" if places is None else "places",
         "truth": {**tableau.meta["truth"], "true_dstates": len(set(truth))},
+        "odometry_calibration": tableau.meta.get("odometry", {}).get("calibration"),
         "views": views_section,
         "map": {"error": map_note} if cmap is None else
                {**map_against_truth(truth, cmap), "found_by": cmap.found_by, "proved_minimal": cmap.minimal,
@@ -186,9 +188,9 @@ def _slam_evaluation(r: dict, images, poses, truth, cmap, dead, radius_m, recogn
 
 def _perfect_odometry(scans, log, settings: dict) -> dict:
     """The experiment again with each scan's odometry replaced by its corrected pose: an upper bound
-    that separates the method's errors from the odometry's drift."""
+    that separates the method's errors from the odometry's drift (which leaves nothing to calibrate)."""
     perfect = [replace(s, odometry=s.truth, odometry_gap="") for s in scans]
-    r, _, _ = _experiment(perfect, log, Laps(), **settings, recognise=False)
+    r, _, _ = _experiment(perfect, log, Laps(), **{**settings, "calibrate": False}, recognise=False)
     keep = ("images", "truth", "map", "dead_reckoning", "baselines", "loop_closure")
     out = {k: r[k] for k in keep}
     out["truth"] = {"true_dstates": r["truth"]["true_dstates"], "corner_recall": r["truth"]["corner_recall"]}
@@ -274,6 +276,10 @@ def headline(r: dict) -> list[str]:
     lines = [f"{r['world']}: {r['scans']} scans, {r['images']} dstates chosen; turns at "
              f"{t['corner_recall']['found']} of {t['corner_recall']['corners']} corners; truth: "
              f"{t['true_dstates']} true dstates"]
+    calibration = r.get("odometry_calibration")
+    if calibration and calibration["applied"]:
+        lines.append(f"  odometry's heading calibrated by the laser: it drifts {calibration['drift_deg_per_m']:+.2f} "
+                     f"deg/m, turns read x{calibration['turn_scale']:.3f} ({calibration['steps_measured']} steps)")
     note = " (M degenerates: views by Davies-Bouldin)" if v["criterion"] == "davies-bouldin" else ""
     lines.append(f"  views: k = {v['k_by_M']} by M, {v['k_by_davies_bouldin']} by Davies-Bouldin; "
                  f"map uses k = {v['k']}{note}; U(V|S) {v['U'][v['k'] - 1]:.3f} against "

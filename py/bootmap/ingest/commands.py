@@ -46,6 +46,7 @@ def register(subparsers) -> None:
     p.add_argument("--scan-topic", help="ROS: the LaserScan topic (when the bag has several)")
     p.add_argument("--odom-topic", help="ROS: the Odometry topic (when the bag has several)")
     p.add_argument("--truth-topic", help="ROS: an Odometry topic of true poses")
+    arguments.add_calibrate(p)
     p.add_argument("--no-progress", action="store_true", help="no progress count")
     p.set_defaults(handler=cmd_ingest)
 
@@ -62,7 +63,7 @@ def cmd_ingest(args: argparse.Namespace) -> int:
         junctions = JunctionDetector() if args.junctions else None
         places = PlaceDetector() if args.dstates == "places" else None
         tableau = log_tableau(scans, detector, max_range=args.max_range, radius_m=args.radius, source=args.log,
-                              junctions=junctions, places=places)
+                              junctions=junctions, places=places, calibrate=not args.no_calibrate)
     except BadInput as e:
         print(error_line("ingest", e, EXIT_BAD_INPUT), file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -77,7 +78,7 @@ def cmd_ingest(args: argparse.Namespace) -> int:
         return EXIT_FAILURE
     seconds = time.perf_counter() - start
     print(f"{args.output}: {len(tableau)} dstates from {len(scans)} scans ({len(scans) / seconds:.0f} scans/s)"
-          + _recall_note(tableau.meta) + _gap_note(tableau.meta), file=sys.stderr)
+          + _recall_note(tableau.meta) + _gap_note(tableau.meta) + _calibration_note(tableau.meta), file=sys.stderr)
     return EXIT_OK
 
 
@@ -95,3 +96,11 @@ def _gap_note(meta: dict) -> str:
     laser = sum(g["read_as"] == "laser" for g in gaps)
     return (f"; the log holds no wheel odometry before {len(gaps)} scan(s) (first: scan {gaps[0]['scan']}): "
             f"{laser} read as the turn on the spot the laser shows, {len(gaps) - laser} as no motion")
+
+
+def _calibration_note(meta: dict) -> str:
+    found = meta.get("odometry", {}).get("calibration")
+    if not found or not found["applied"]:
+        return ""
+    return (f"; odometry's heading calibrated by the laser (drift {found['drift_deg_per_m']:+.2f} deg/m, turns "
+            f"x{found['turn_scale']:.3f}, from {found['steps_measured']} steps)")

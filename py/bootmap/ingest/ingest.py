@@ -27,6 +27,7 @@ import numpy as np
 
 from ..errors import LogError
 from ..tableau import Step, Tableau, Travel, Turn
+from .calibrate import OdometryCalibration
 from .dstates import (FoundTurn, JunctionDetector, TurnDetector, dstate_scans, find_passes, find_turns,
                       odometry_track, side_ranges)
 from .scans import IMAGE_ANGLE_MAX, IMAGE_ANGLE_MIN, IMAGE_BEAMS, Scan, to_image, wrap
@@ -74,7 +75,7 @@ def _shown(scans: Iterable[Scan], progress: bool) -> Iterator[Scan]:
 
 def log_tableau(scans: list[Scan], detector: TurnDetector = TurnDetector(), max_range: float = 20.0,
                 radius_m: float = 3.0, source: str = "log", junctions: JunctionDetector | None = None,
-                places: PlaceDetector | None = None) -> Tableau:
+                places: PlaceDetector | None = None, calibrate: bool = True) -> Tableau:
     """The tableau of a log: one step per dstate (see the module docstring).
 
     Parameters
@@ -96,10 +97,17 @@ def log_tableau(scans: list[Scan], detector: TurnDetector = TurnDetector(), max_
         Choose dstates at the places the laser shows (:mod:`bootmap.ingest.places`: every pass through a
         junction, corner or room is a visit) instead of at the turns odometry shows; ``detector`` and
         ``junctions`` are then not used.
+    calibrate : bool
+        Calibrate odometry's heading by the laser where it drifts (:mod:`bootmap.ingest.calibrate`): the
+        dstates are chosen, and their odometry recorded, on the calibrated track; ``meta.odometry`` says
+        what was found and whether it was applied.
     """
     if len(scans) < 2:
         raise LogError(f"{len(scans)} scan{'' if len(scans) == 1 else 's'}: a log needs at least 2 to have any "
                        "motion", source)
+    calibration = OdometryCalibration().fit(scans) if calibrate else None
+    if calibration is not None:
+        scans = calibration.transform(scans)
     distance, heading = odometry_track([s.odometry for s in scans])
     visits = None
     if places is None:
@@ -134,6 +142,8 @@ def log_tableau(scans: list[Scan], detector: TurnDetector = TurnDetector(), max_
                        pose=_rounded(scans[i].truth) if has_truth else None, odometry=_rounded(scans[i].odometry))
                   for k, i in enumerate(chosen))
     meta = _meta(scans, chosen, turns, detector, max_range, radius_m, source, has_truth, junctions, passes)
+    if calibration is not None:
+        meta["odometry"] = {"calibration": calibration.to_dict()}
     if visits is not None:
         meta["dstates"].update(detector=None, junctions=None, places=asdict(places),
                                visits=[[v.first, v.last] for v in visits])

@@ -1,0 +1,95 @@
+"""A laser image's returns as points, and the surfaces they lie on.
+
+An image is the tableau's 180 ranges from -90 to +90 degrees in the robot's frame. Its *returns* are the
+beams that saw something, as 2-D points; its *surfaces* join consecutive returns close enough to be one
+wall and sample them every few centimetres, as an occupancy map would draw them, so that a point of
+another scan that falls on the wall between two beams lies on a surface. Shared by scan matching
+(:mod:`bootmap.scan_match`, two visits aligned) and the log reader's odometry calibration
+(:mod:`bootmap.ingest.calibrate`, two consecutive scans aligned).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+def image_points(image, max_range: float = 20.0) -> np.ndarray:
+    """The returns of a laser image as 2-D points in the robot's frame.
+
+    Parameters
+    ----------
+    image : array-like of shape (n_beams,)
+        Ranges (m) at ``linspace(-pi/2, pi/2, n_beams)`` from the robot's heading, counter-clockwise.
+    max_range : float
+        The reading that means nothing was seen (m); beams at or beyond it, or not positive, give no point.
+
+    Returns
+    -------
+    ndarray of shape (n_returns, 2)
+        The returns in beam order.
+
+    Examples
+    --------
+    >>> image_points([1.0, 20.0, 2.0]).round(6).tolist()
+    [[0.0, -1.0], [0.0, 2.0]]
+    """
+    r = np.asarray(image, dtype=float).ravel()
+    a = np.linspace(-math.pi / 2, math.pi / 2, len(r))
+    seen = np.isfinite(r) & (r > 0.0) & (r < max_range)
+    return np.column_stack([r[seen] * np.cos(a[seen]), r[seen] * np.sin(a[seen])])
+
+
+def surface_points(image, max_range: float = 20.0, resolution_m: float = 0.05, max_incidence_deg: float = 75.0,
+                   slack_m: float = 0.10) -> np.ndarray:
+    """The surfaces a laser image saw, sampled every ``resolution_m``: its returns, and points between
+    consecutive returns close enough to be one wall.
+
+    Parameters
+    ----------
+    image : array-like of shape (n_beams,)
+        Ranges (m), as for :func:`image_points`.
+    max_range : float
+        The reading that means nothing was seen (m).
+    resolution_m : float
+        Spacing of the samples along a surface (m): a map cell.
+    max_incidence_deg : float
+        Two consecutive returns are one wall when they are no farther apart than a wall seen at this angle
+        from its normal spaces them: ``r * beam step / cos(max_incidence_deg)`` at range ``r``.
+    slack_m : float
+        Added to that gap for the range noise of both returns (m).
+
+    Returns
+    -------
+    ndarray of shape (n_samples, 2)
+
+    Examples
+    --------
+    A wall face on at 2 m (returns 3.5 cm apart, kept as they are) and a gap where nothing was seen:
+
+    >>> len(surface_points(np.full(180, 2.0))), len(surface_points([2.0, 20.0, 2.0]))
+    (180, 2)
+    """
+    r = np.asarray(image, dtype=float).ravel()
+    n = len(r)
+    a = np.linspace(-math.pi / 2, math.pi / 2, n)
+    seen = np.isfinite(r) & (r > 0.0) & (r < max_range)
+    xy = np.column_stack([r * np.cos(a), r * np.sin(a)])
+    if n < 2:
+        return xy[seen]
+    step = math.pi / (n - 1)
+    gap = np.linalg.norm(np.diff(xy, axis=0), axis=1)
+    reach = np.minimum(r[:-1], r[1:]) * step / math.cos(math.radians(max_incidence_deg)) + slack_m
+    joined = seen[:-1] & seen[1:] & (gap <= reach)
+    parts = [xy[seen]]
+    k = np.flatnonzero(joined)
+    if len(k):
+        # Interior samples of every joined segment: ceil(gap / resolution) - 1 of them, evenly spaced.
+        count = np.maximum(np.ceil(gap[k] / resolution_m).astype(int) - 1, 0)
+        seg = np.repeat(k, count)
+        if len(seg):
+            within = np.arange(len(seg)) - np.repeat(np.cumsum(count) - count, count)
+            t = (within + 1) / np.repeat(count + 1, count)
+            parts.append(xy[seg] + t[:, None] * (xy[seg + 1] - xy[seg]))
+    return np.concatenate(parts)
