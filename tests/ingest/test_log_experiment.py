@@ -185,3 +185,21 @@ def test_places_the_laser_shows_are_revisited_lap_after_lap_and_scan_matching_re
 def test_dstates_at_places_is_for_logs_only(capsys):
     assert main(["experiment", "notched_rectangle", "--dstates", "places"]) == 2
     assert "--dstates: for an experiment on a robot's log" in capsys.readouterr().err
+
+
+def test_no_calibrate_is_for_logs_only(capsys):
+    assert main(["experiment", "notched_rectangle", "--no-calibrate"]) == 2
+    assert "--no-calibrate: for an experiment on a robot's log" in capsys.readouterr().err
+
+
+def test_a_log_ingested_as_recorded_keeps_its_odometry(tmp_path, capsys):
+    # --no-calibrate: no calibration looked for, none recorded; by default it is looked for and recorded
+    log = write_drive_log(tmp_path / "ring.log", ring_walls(), ring_poses(laps=1))
+    assert main(["ingest", str(log), "-o", str(tmp_path / "as_recorded.json"), "--no-calibrate", "--no-progress"]) == 0
+    assert main(["ingest", str(log), "-o", str(tmp_path / "calibrated.json"), "--no-progress"]) == 0
+    as_recorded = json.loads((tmp_path / "as_recorded.json").read_text())["meta"]
+    calibrated = json.loads((tmp_path / "calibrated.json").read_text())["meta"]
+    assert "odometry" not in as_recorded
+    # the drive's odometry is exact: the laser finds no drift worth taking out
+    assert calibrated["odometry"]["calibration"]["applied"] is False
+    assert "calibrated by the laser" not in capsys.readouterr().err
