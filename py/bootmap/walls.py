@@ -90,12 +90,20 @@ def _line_fits(x: np.ndarray, y: np.ndarray, seen: np.ndarray, broken: np.ndarra
     return flat, np.degrees(0.5 * np.arctan2(2 * sxy, sxx - syy)) % 180.0
 
 
-def _smooth(hist: np.ndarray) -> np.ndarray:
-    """The histogram smoothed on the circle (a Gaussian of :data:`SMOOTH_DEG`)."""
+def _kernel_spectrum() -> np.ndarray:
+    """The spectrum of one vote's smoothing (a Gaussian of :data:`SMOOTH_DEG` on the circle of directions)."""
     k = np.arange(BINS)
     d = np.minimum(k, BINS - k) * (180.0 / BINS)
-    kernel = np.exp(-0.5 * (d / SMOOTH_DEG) ** 2)
-    return np.real(np.fft.ifft(np.fft.fft(hist) * np.fft.fft(kernel)))
+    return np.fft.fft(np.exp(-0.5 * (d / SMOOTH_DEG) ** 2))
+
+
+#: Computed once: every histogram is smoothed by the same kernel.
+_KERNEL_SPECTRUM = _kernel_spectrum()
+
+
+def _smooth(hist: np.ndarray) -> np.ndarray:
+    """The histogram smoothed on the circle (a Gaussian of :data:`SMOOTH_DEG`)."""
+    return np.real(np.fft.ifft(np.fft.fft(hist) * _KERNEL_SPECTRUM))
 
 
 def rotation_candidates(before: np.ndarray, after: np.ndarray) -> list[tuple[float, float]]:
@@ -110,11 +118,12 @@ def rotation_candidates(before: np.ndarray, after: np.ndarray) -> list[tuple[flo
     top = c.max()
     if top <= 0:
         return []
+    # the peaks, each refined by the parabola through it and its neighbours
+    y0, y2 = np.roll(c, 1), np.roll(c, -1)
     out = []
-    for d in range(BINS):
-        y0, y1, y2 = c[d - 1], c[d], c[(d + 1) % BINS]
-        if y1 >= y0 and y1 > y2 and y1 >= PEAK_SHARE * top:
-            den = y0 - 2 * y1 + y2
-            peak = (d + (0.5 * (y0 - y2) / den if den < 0 else 0.0)) * (180.0 / BINS)
-            out += [(wrap_deg(peak), y1 / top), (wrap_deg(peak + 180.0), y1 / top)]
+    for d in np.flatnonzero((c >= y0) & (c > y2) & (c >= PEAK_SHARE * top)).tolist():
+        a, b, e = float(y0[d]), float(c[d]), float(y2[d])
+        den = a - 2 * b + e
+        peak = (d + (0.5 * (a - e) / den if den < 0 else 0.0)) * (180.0 / BINS)
+        out += [(wrap_deg(peak), b / top), (wrap_deg(peak + 180.0), b / top)]
     return out
