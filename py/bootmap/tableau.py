@@ -21,7 +21,7 @@ from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from importlib import resources
 from pathlib import Path
-from typing import Any, Union
+from typing import Any, ClassVar, Union
 
 import jsonschema
 
@@ -35,9 +35,11 @@ class Turn:
     """Turn in place. Negative angles turn right (clockwise), positive left; near +-180 turns around."""
 
     angle_deg: float
+    #: The kind of action, as the tableau format and the action types name it.
+    kind: ClassVar[str] = "turn"
 
     def to_dict(self) -> dict:
-        return {"type": "turn", "angle_deg": self.angle_deg}
+        return {"type": self.kind, "angle_deg": self.angle_deg}
 
 
 @dataclass(frozen=True)
@@ -46,9 +48,11 @@ class Travel:
 
     distance_m: float
     heading_change_deg: float = 0.0
+    #: The kind of action, as the tableau format and the action types name it.
+    kind: ClassVar[str] = "travel"
 
     def to_dict(self) -> dict:
-        d = {"type": "travel", "distance_m": self.distance_m}
+        d = {"type": self.kind, "distance_m": self.distance_m}
         if self.heading_change_deg:
             d["heading_change_deg"] = self.heading_change_deg
         return d

@@ -125,7 +125,7 @@ class WallCompass:
             images = [s.image if isinstance(s.image, tuple) else tuple(s.image) for s in tableau.steps]
             for t in range(len(actions)):
                 candidates[t] = _candidates(images[t], images[t + 1], lo, hi, rmax)
-        kinds = ["turn" if isinstance(a, Turn) else "travel" for a in actions]
+        kinds = [a.kind for a in actions]
         self.spread_deg_ = {}
         for kind in ("turn", "travel"):
             off = [_nearest([a for a, _ in c], o)[1] for c, o, k in zip(candidates, odometry, kinds) if k == kind and c]

@@ -78,7 +78,7 @@ class Typing:
         for t, alt in self.alternatives.items():
             if t not in found and alt != angles[t]:
                 a = self.read[t]
-                found[t] = TypeSuspect(t, "turn" if isinstance(a, Turn) else "travel", measured_angle(a),
+                found[t] = TypeSuspect(t, a.kind, measured_angle(a),
                                        angles[t], alt)
         return [found[t] for t in sorted(found)]
 
@@ -120,7 +120,7 @@ def with_walls(types: list[ActionType], actions: Sequence[Action], angles: Seque
     """The action types, each saying how many of its actions' angles the walls read."""
     count: dict[tuple[str, int], int] = {}
     for a, angle, sure in zip(actions, angles, confirmed):
-        key = ("turn" if isinstance(a, Turn) else "travel", angle)
+        key = (a.kind, angle)
         count[key] = count.get(key, 0) + bool(sure)
     return [replace(t, from_walls=count.get((t.kind, t.angle), 0)) for t in types]
 
@@ -130,7 +130,7 @@ def action_symbol(action: Action | None, angle: int, length: int | None = None) 
     length type where the tableau passes through dstates), or None after the last step."""
     if action is None:
         return None
-    return action_term("turn" if isinstance(action, Turn) else "travel", angle, length)
+    return action_term(action.kind, angle, length)
 
 
 def passes_through(tableau: Tableau) -> bool:
