@@ -69,7 +69,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .surfaces import image_points, surface_points
+from .surfaces import image_points, in_3d, planar, se2, surface_points
 
 __all__ = ["Match", "ScanMatcher", "image_points", "surface_points"]
 
@@ -113,12 +113,12 @@ class _Scan:
         self.ranges = np.where(np.isfinite(r) & (r > 0.0) & (r < matcher.max_range), r, -np.inf)
         self.step = math.pi / max(len(r) - 1, 1)
         self.points = image_points(image, matcher.max_range)
-        self.points3 = np.column_stack([self.points, np.zeros(len(self.points))])
+        self.points3 = in_3d(self.points)
         self.sparse = self.points[::matcher.search_stride]
         surface = surface_points(image, matcher.max_range, matcher.resolution_m, matcher.max_incidence_deg,
                                  matcher.inlier_m)
         if len(surface):
-            surface3 = np.column_stack([surface, np.zeros(len(surface))])
+            surface3 = in_3d(surface)
             self.surface_cloud = small_gicp.PointCloud(surface3)
             self.surface_tree = small_gicp.KdTree(self.surface_cloud)
             self.field, self.origin = _likelihood_field(surface, matcher.search_step_m, matcher.place_radius_m)
@@ -173,20 +173,6 @@ def _likelihood_field(surface: np.ndarray, sigma_m: float, pad_m: float) -> tupl
     occupied[ij[:, 0], ij[:, 1]] = False
     d = distance_transform_edt(occupied) * _FIELD_CELL_M
     return np.exp(-0.5 * (d / sigma_m) ** 2).astype(np.float32), origin
-
-
-def _se2(x: float, y: float, theta: float) -> np.ndarray:
-    T = np.eye(4)
-    c, s = math.cos(theta), math.sin(theta)
-    T[:2, :2] = [[c, -s], [s, c]]
-    T[:2, 3] = x, y
-    return T
-
-
-def _planar(T: np.ndarray) -> tuple[float, float, float]:
-    """The plane motion of a 4 x 4 transform (its x, y shift and its heading)."""
-    theta = math.atan2(T[1, 0], T[0, 0])
-    return float(T[0, 3]), float(T[1, 3]), (theta + math.pi) % (2 * math.pi) - math.pi
 
 
 def _inverse(t: tuple[float, float, float]) -> tuple[float, float, float]:
@@ -298,7 +284,7 @@ class ScanMatcher:
         shifts = shifts[np.hypot(shifts[:, 0], shifts[:, 1]) <= self.place_radius_m + 1e-9]  # (S, 2)
         fit = a.correlate(turned, shifts)  # (R, S)
         top = np.argsort(fit, axis=None)[::-1][:self.refine]
-        coarse = [(0, _se2(*shifts[j], rot[i])) for i, j in zip(*np.unravel_index(top, fit.shape))]
+        coarse = [(0, se2(*shifts[j], rot[i])) for i, j in zip(*np.unravel_index(top, fit.shape))]
         # Refine: the best candidates by ICP on all returns; the best by the symmetric score.
         best = None
         source = small_gicp.PointCloud(b.points3)
@@ -314,7 +300,7 @@ class ScanMatcher:
             if best is None or net > best[0]:
                 best = (net, T, (exp_a, exp_b), (ref_a, ref_b))
         net, T, explained, refuted = best
-        return Match(net, _planar(T), explained, (na, nb), refuted)
+        return Match(net, planar(T), explained, (na, nb), refuted)
 
     def scores(self, images) -> np.ndarray:
         """Scores of all pairs of images.

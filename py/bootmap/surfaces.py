@@ -5,7 +5,9 @@ beams that saw something, as 2-D points; its *surfaces* join consecutive returns
 wall and sample them every few centimetres, as an occupancy map would draw them, so that a point of
 another scan that falls on the wall between two beams lies on a surface. Shared by scan matching
 (:mod:`bootmap.scan_match`, two visits aligned) and the log reader's odometry calibration
-(:mod:`bootmap.ingest.calibrate`, two consecutive scans aligned).
+(:mod:`bootmap.ingest.calibrate`, two consecutive scans aligned), with what both hand to and take from
+ICP (``small_gicp`` works in 3-D): the points at z = 0 (:func:`in_3d`), a plane motion as a 4 x 4
+transform (:func:`se2`) and back (:func:`planar`).
 """
 
 from __future__ import annotations
@@ -93,3 +95,32 @@ def surface_points(image, max_range: float = 20.0, resolution_m: float = 0.05, m
             t = (within + 1) / np.repeat(count + 1, count)
             parts.append(xy[seg] + t[:, None] * (xy[seg + 1] - xy[seg]))
     return np.concatenate(parts)
+
+
+def in_3d(xy: np.ndarray) -> np.ndarray:
+    """2-D points as 3-D ones at z = 0.
+
+    >>> in_3d(np.array([[1.0, 2.0]])).tolist()
+    [[1.0, 2.0, 0.0]]
+    """
+    xy = np.asarray(xy, dtype=float).reshape(-1, 2)
+    return np.column_stack([xy, np.zeros(len(xy))])
+
+
+def se2(x: float, y: float, theta: float) -> np.ndarray:
+    """The plane motion (a shift, then a turn of ``theta`` radians) as a 4 x 4 homogeneous transform."""
+    T = np.eye(4)
+    c, s = math.cos(theta), math.sin(theta)
+    T[:2, :2] = [[c, -s], [s, c]]
+    T[:2, 3] = x, y
+    return T
+
+
+def planar(T: np.ndarray) -> tuple[float, float, float]:
+    """The plane motion of a 4 x 4 transform (its x, y shift and its heading in [-pi, pi)).
+
+    >>> [round(v, 6) for v in planar(se2(1.0, 2.0, 0.5))]
+    [1.0, 2.0, 0.5]
+    """
+    theta = math.atan2(T[1, 0], T[0, 0])
+    return float(T[0, 3]), float(T[1, 3]), (theta + math.pi) % (2 * math.pi) - math.pi

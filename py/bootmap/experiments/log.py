@@ -42,6 +42,7 @@ from ..mapping.api import Mapper
 from ..mapping.loops import MAPPERS
 from ..metrics import dstate_accuracy
 from ..views import ViewClusterer, davies_bouldin_k, view_labels, view_table
+from ..ingest.calibrate import calibration_text
 from ..ingest.dstates import JunctionDetector, TurnDetector
 from ..ingest.places import PlaceDetector
 from .evaluate import (DESCRIPTORS, against_baselines, dead_reckoned_dstates, descriptor_scores, loop_closure,
@@ -276,10 +277,8 @@ def headline(r: dict) -> list[str]:
     lines = [f"{r['world']}: {r['scans']} scans, {r['images']} dstates chosen; turns at "
              f"{t['corner_recall']['found']} of {t['corner_recall']['corners']} corners; truth: "
              f"{t['true_dstates']} true dstates"]
-    calibration = r.get("odometry_calibration")
-    if calibration and calibration["applied"]:
-        lines.append(f"  odometry's heading calibrated by the laser: it drifts {calibration['drift_deg_per_m']:+.2f} "
-                     f"deg/m, turns read x{calibration['turn_scale']:.3f} ({calibration['steps_measured']} steps)")
+    if calibrated := calibration_text(r.get("odometry_calibration")):
+        lines.append(f"  {calibrated}")
     note = " (M degenerates: views by Davies-Bouldin)" if v["criterion"] == "davies-bouldin" else ""
     lines.append(f"  views: k = {v['k_by_M']} by M, {v['k_by_davies_bouldin']} by Davies-Bouldin; "
                  f"map uses k = {v['k']}{note}; U(V|S) {v['U'][v['k'] - 1]:.3f} against "

@@ -72,7 +72,7 @@ from typing import Sequence
 
 import numpy as np
 
-from ..surfaces import image_points, surface_points
+from ..surfaces import image_points, in_3d, planar, se2, surface_points
 from .scans import IMAGE_BEAMS, Scan, between, compose, to_image, wrap
 
 #: Steps the laser must read before a rate is fitted (and turning steps before the turn scale is).
@@ -177,19 +177,19 @@ class OdometryCalibration:
         previous = None
         for before, scan in zip([None, *scans], scans):
             image = to_image(scan, IMAGE_BEAMS, self.max_range)
-            points = _flat(image_points(image, self.max_range))
+            points = in_3d(image_points(image, self.max_range))
             cloud = small_gicp.PointCloud(points) if len(points) >= 20 else None
-            surface = small_gicp.PointCloud(_flat(surface_points(image, self.max_range))) if cloud is not None else None
+            surface = small_gicp.PointCloud(in_3d(surface_points(image, self.max_range))) if cloud is not None else None
             tree = small_gicp.KdTree(surface) if surface is not None else None
             if before is not None and previous is not None and cloud is not None:
                 step = between(before.odometry, scan.odometry)
-                T = _se2(*step)
+                T = se2(*step)
                 for reach in (1.0, 0.3, self.inlier_m):
                     result = small_gicp.align(previous[0], cloud, previous[1], init_T_target_source=T,
                                               registration_type="ICP", max_correspondence_distance=reach,
                                               max_iterations=100, rotation_epsilon=1e-6, translation_epsilon=1e-6)
                     T = result.T_target_source
-                off = math.degrees(wrap(math.atan2(T[1, 0], T[0, 0]) - step[2]))
+                off = math.degrees(wrap(planar(T)[2] - step[2]))
                 if result.num_inliers >= self.min_inlier_share * len(points) and abs(off) <= self.max_turn_deg:
                     turn = math.degrees(step[2])
                     read.append((turn + off, math.hypot(step[0], step[1]), turn))
@@ -197,15 +197,14 @@ class OdometryCalibration:
         return read
 
 
-def _flat(xy: np.ndarray) -> np.ndarray:
-    """2-D points as 3-D ones at z = 0 (ICP works in 3-D)."""
-    return np.column_stack([xy, np.zeros(len(xy))])
+def calibration_text(found: dict | None) -> str:
+    """What a tableau's ``meta.odometry.calibration`` (:meth:`OdometryCalibration.to_dict`) says, in words,
+    where it was applied; "" where it was not (or was not looked for).
 
-
-def _se2(x: float, y: float, theta: float) -> np.ndarray:
-    """The planar motion as a 4 x 4 homogeneous transform."""
-    T = np.eye(4)
-    c, s = math.cos(theta), math.sin(theta)
-    T[:2, :2] = [[c, -s], [s, c]]
-    T[:2, 3] = [x, y]
-    return T
+    >>> calibration_text({"applied": True, "drift_deg_per_m": 0.7726, "turn_scale": 0.99813, "steps_measured": 452})
+    "odometry's heading calibrated by the laser (drift +0.77 deg/m, turns x0.998, from 452 steps)"
+    """
+    if not found or not found["applied"]:
+        return ""
+    return (f"odometry's heading calibrated by the laser (drift {found['drift_deg_per_m']:+.2f} deg/m, turns "
+            f"x{found['turn_scale']:.3f}, from {found['steps_measured']} steps)")

@@ -99,8 +99,7 @@ def _gap_note(meta: dict) -> str:
 
 
 def _calibration_note(meta: dict) -> str:
-    found = meta.get("odometry", {}).get("calibration")
-    if not found or not found["applied"]:
-        return ""
-    return (f"; odometry's heading calibrated by the laser (drift {found['drift_deg_per_m']:+.2f} deg/m, turns "
-            f"x{found['turn_scale']:.3f}, from {found['steps_measured']} steps)")
+    from .calibrate import calibration_text
+
+    said = calibration_text(meta.get("odometry", {}).get("calibration"))
+    return f"; {said}" if said else ""
