@@ -31,17 +31,24 @@ def _add_theory_options(p: argparse.ArgumentParser) -> None:
 
 def cmd_map(args: argparse.Namespace) -> int:
     from .mapping.api import Mapper
+    from .mapping.assertions import load_assertions
     from .mapping.bounded import run_within
     from .mapping.grounding import Deadline
     from .tableau import load
 
-    tableau = _with_views(load(args.tableau))
+    tableau = load(args.tableau)
+    assertions = load_assertions(args.assertions, len(tableau)) if args.assertions else None
+    tableau = _with_views(tableau)
     mapper = Mapper(axioms=args.axioms, levels=args.levels, quantum_deg=args.quantum, time_limit=args.time_limit,
                     max_models=args.max_models, misreads=args.misreads, how=args.map)
     left = _time_left(args)
     deadline = Deadline.after(None) if left is None else Deadline(time.perf_counter() + left, args.time_limit)
     try:
         # Stopped for sure a little after --time-limit, counted from the command's start.
+        if assertions is not None:
+            asserted = run_within(lambda: mapper.honour(tableau, assertions, deadline, source=args.assertions), left,
+                                  stated_s=args.time_limit)
+            return _print_asserted(asserted, args)
         cmap = run_within(lambda: mapper.map(tableau, deadline), left, stated_s=args.time_limit)
     except SolveTimeout as e:
         if e.best_map is None:
@@ -70,6 +77,20 @@ def _with_views(tableau):
     if k is not None:
         print(f"bootmap: clustered {len(tableau)} images into {k} views (k chosen by M)", file=sys.stderr)
     return tableau
+
+
+def _print_asserted(asserted, args: argparse.Namespace) -> int:
+    """The map that honours a person's assertions and what they changed, or the conflict (exit 1)."""
+    if args.format == "json":
+        print(json.dumps(asserted.to_dict(), indent=1))
+    elif asserted.conflict is not None:
+        print(asserted.to_text())
+    elif args.format in GRAPH_FORMATS:
+        _print_map(asserted.after, args)
+    else:
+        _print_map(asserted.after, args)
+        print("\n" + asserted.to_text())
+    return EXIT_FAILURE if asserted.conflict is not None else EXIT_OK
 
 
 def _print_map(cmap, args: argparse.Namespace) -> int:
@@ -291,6 +312,12 @@ def build_parser() -> argparse.ArgumentParser:
                    help="read every view as seen; by default a few suspect views may be taken as misclustered "
                         "images when that explains the experience with far fewer dstates (listed as "
                         "suspect_steps)")
+    p.add_argument("--assert", dest="assertions", metavar="FILE",
+                   help="a person's assertions (JSON, format bootmap.assertions/1): time points (t3) or dstates "
+                        "(S4, of the map without them) that are one dstate ({\"same\": [\"t3\", \"t45\"]}) or not "
+                        "({\"apart\": ...}), hard or soft (\"soft\": true, \"cost\": 5; a dstate costs 4). Prints the "
+                        "map that honours them and what they changed, or, where none does, the clash: the "
+                        "assertions, steps and axioms (exit 1)")
     p.add_argument("--map", choices=("auto", "loops", "fewest"), default="auto",
                    help="how the map is found: fewest (the paper's fewest dstates), loops (loop closing: visits "
                         "that dead reckoning, from the steps' odometry or else the actions, puts at one place, "

@@ -83,6 +83,16 @@ class ExplainError(BadInput, ValueError):
     """A question the explainer cannot take, e.g. a time point or dstate the map does not have."""
 
 
+class AssertionsError(BadInput, ValueError):
+    """A person's assertions about a map are malformed: bad JSON, an unknown time point, a time point said
+    to be apart from itself. ``where`` names the file and the field (``notes.json: assertions[2].apart``)."""
+
+    def __init__(self, message: str, where: str = ""):
+        self.where = where
+        self.reason = message
+        super().__init__(f"{where}: {message}" if where else message)
+
+
 class InconsistentTableau(BootmapError):
     """No map satisfies the axioms for this tableau, whatever the number of dstates.
 
@@ -98,6 +108,17 @@ class InconsistentTableau(BootmapError):
         self.failing_levels = list(failing_levels)
         self.diagnosed = diagnosed
         super().__init__(message)
+
+
+class AssertionConflict(InconsistentTableau):
+    """A person's assertions contradict the experience (or each other): no map satisfies the axioms with
+    them. ``conflict`` (:class:`bootmap.mapping.assertions.Conflict`) is a minimal clash: the assertions,
+    the steps of experience and the axioms (file:line) it needs."""
+
+    def __init__(self, message: str, conflict=None, levels: tuple[str, ...] = (), text: str | None = None):
+        self.conflict = conflict  # a Conflict, or its to_dict() where it crossed a process
+        self.text = text if text is not None or conflict is None or isinstance(conflict, dict) else conflict.to_text()
+        super().__init__(message, levels=levels)
 
 
 class SolveTimeout(BootmapError):

@@ -19,6 +19,7 @@ import pytest
 from bootmap import examples
 from bootmap.errors import BootmapError, InconsistentTableau, SolveTimeout
 from bootmap.mapping import Explainer, Resolver, load_theory
+from bootmap.mapping.assertions import parse_assertions
 from bootmap.mapping.loops import LoopCloser
 from bootmap.mapping.theory import default_axioms_dir, rule_lines
 from bootmap.tableau import Step, Tableau, Travel, Turn
@@ -106,6 +107,24 @@ def resolved(tableau: Callable[[], Tableau], levels=None, mutant_limit: float = 
     return run
 
 
+def undecided() -> Tableau:
+    """t0 and t2 look alike but what followed differs; t4 looks alike and did nothing more: two minimal maps
+    (t4 with t0, or with t2; test_explain.py)."""
+    travel = Travel(1.0)
+    return steps([("A", travel), ("B", travel), ("A", travel), ("C", travel), ("A", None)])
+
+
+def asserted(tableau: Callable[[], Tableau], assertions: list, levels=None):
+    """The map the resolver gives with a person's assertions (core/assert.lp)."""
+    def run(axioms: Path, shipped: bool):
+        said = parse_assertions(assertions, len(tableau()))
+        try:
+            return observe_map(Resolver(axioms=axioms, levels=levels, time_limit=60).resolve(tableau(), assertions=said))
+        except InconsistentTableau:
+            return ("inconsistent",)
+    return run
+
+
 def can_be_same(tableau: Callable[[], Tableau], a: int, b: int, keep, levels=None):
     """The explainer's question: can a and b be one dstate in some map of the kept steps?"""
     def run(axioms: Path, shipped: bool):
@@ -146,6 +165,10 @@ SCENARIOS = {
     "S0_S4_apart": can_be_same(PAPER2, 0, 4, range(9), CT),
     "headings_after_a_gap": can_be_same(PAPER2, 4, 8, [0, *range(2, 10)], CM),
     "loop_closing": loop_closed(lambda: grid_walk(0)),
+    "asserted_same": asserted(PAPER2, [{"same": [0, 4]}], CT),
+    "asserted_apart": asserted(PAPER1, [{"apart": [0, 8]}]),
+    "preferred_same": asserted(undecided, [{"same": [2, 4], "soft": True}], ("causal",)),
+    "preferred_apart": asserted(PAPER1, [{"apart": [0, 8], "soft": True, "cost": 9}]),
 }
 
 #: rule -> the scenario whose answer changes without it (what changes, in a word).
@@ -199,6 +222,10 @@ CASES = {
     "sides_turn_around": "walk148",
     "on_path_no_side": "paper_without_headings",
     "one_side": "both_sides",
+    "asserted_same": "asserted_same",           # the person's join is not made: a map instead of the clash
+    "asserted_apart": "asserted_apart",         # S0's visits stay one dstate
+    "preferred_same": "preferred_same",         # both minimal maps instead of the one that keeps it
+    "preferred_apart": "preferred_apart",       # not worth a dstate to anybody: 8 dstates, not 9
 }
 
 #: Rules whose deletion alone changes nothing found; each with why (and, for a pair, the case that deletes

@@ -293,6 +293,11 @@ ROUTES = {
     ("DELETE", "/tableaux/{tableau_id}"): (WRITE, {}),
     ("PUT", "/tableaux/{tableau_id}/sharing"): (WRITE, {"json": {"public": False}}),
     ("POST", "/tableaux/{tableau_id}/steps"): (WRITE, {"json": MORE}),
+    # a person's assertions are their owner's, to read as to change
+    ("GET", "/tableaux/{tableau_id}/assertions"): (WRITE, {}),
+    ("POST", "/tableaux/{tableau_id}/assertions"): (WRITE, {"json": {"apart": [0, 1]}}),
+    ("DELETE", "/tableaux/{tableau_id}/assertions/{assertion_id}"): (
+        WRITE, {"path": "/tableaux/{tableau_id}/assertions/1"}),
     ("POST", "/axioms/reload"): (ADMIN, {}), ("POST", "/tokens"): (ADMIN, {"json": {"name": "mallory"}}),
     ("DELETE", "/tokens/{name}"): (ADMIN, {"path": "/tokens/bob"}),
 }

@@ -30,9 +30,11 @@ from functools import cached_property
 from pathlib import Path
 from typing import Sequence
 
-from ..errors import ExplainError
+from ..errors import AssertionConflict, ExplainError, InconsistentTableau
 from ..tableau import Tableau
+from .assertions import AssertedMap, Assertion, hard, resolve_names
 from .cogmap import CognitiveMap
+from .diff import MapDiff
 from .explain import Explainer
 from .grounding import Deadline
 from .loops import MAPPERS, LoopCloser, closes_loops
@@ -88,14 +90,63 @@ class Mapper:
         """Whether the map of ``tableau`` is found by loop closing."""
         return closes_loops(tableau, self.how)
 
-    def map(self, tableau: Tableau, deadline: Deadline | None = None, stream: MapStream | None = None) -> CognitiveMap:
+    def map(self, tableau: Tableau, deadline: Deadline | None = None, stream: MapStream | None = None,
+            assertions: Sequence[Assertion] = ()) -> CognitiveMap:
         """The map of ``tableau``. With a ``stream`` (:meth:`stream`) that saw an earlier prefix of it, the
-        same map sooner where the new steps repeat what it knew (loop-closed maps are found afresh)."""
+        same map sooner where the new steps repeat what it knew (loop-closed maps are found afresh). With a
+        person's ``assertions`` (time points, :mod:`.assertions`), the map that honours them (no stream),
+        or :class:`~bootmap.errors.AssertionConflict` with the clash; :meth:`honour` also says what they
+        changed."""
+        if assertions:
+            return self._honoured(tableau, assertions, deadline or Deadline.after(self.time_limit))
         if self.closes_loops(tableau):
             return self.closer.resolve(tableau, deadline)
         if stream is not None:
             return stream.update(tableau, deadline)
         return self.resolver.resolve(tableau, deadline)
+
+    def honour(self, tableau: Tableau, assertions: Sequence[Assertion], deadline: Deadline | None = None,
+               before: CognitiveMap | None = None, source: str | None = None) -> AssertedMap:
+        """The map of ``tableau`` that honours a person's ``assertions`` (:mod:`.assertions`), beside the
+        map ``before`` them (resolved here without them unless given) and what changed; or, where no map
+        honours the hard ones, the conflict: which assertions clash, with the steps and axioms. Dstate
+        names are those of ``before`` (an error names the file, ``source``, they were read from)."""
+        deadline = deadline or Deadline.after(self.time_limit)
+        before = before or self.map(tableau, deadline)
+        assertions = resolve_names(assertions, before, source)
+        try:
+            after = self._honoured(tableau, assertions, deadline, before)
+        except AssertionConflict as e:
+            return AssertedMap(before, assertions, conflict=e.conflict)
+        return AssertedMap(before, assertions, after, MapDiff.between(before, after))
+
+    def _honoured(self, tableau: Tableau, assertions: Sequence[Assertion], deadline: Deadline,
+                  before: CognitiveMap | None = None) -> CognitiveMap:
+        """The map that honours ``assertions`` (time points), or AssertionConflict with the clash (``before``,
+        the map without them, is resolved for it when needed and not given)."""
+        levels = tuple(self.resolver.theory.levels)
+        if self.closes_loops(tableau):
+            try:
+                return self.closer.resolve(tableau, deadline, assertions)
+            except InconsistentTableau:
+                if not hard(assertions):
+                    raise
+                before = before or self.closer.resolve(tableau, deadline)
+                conflict = self.closer.conflict(tableau, assertions, before, deadline)
+                raise AssertionConflict(conflict.sentence, conflict, levels) from None
+        if any(x.kind == "same" for x in hard(assertions)):
+            # a clash the steps around a "same" show is found in a few small groundings; the search would
+            # look for a map through ever larger ones before it gave up
+            conflict = self.explainer.conflict(tableau, assertions, deadline, before, local=True)
+            if conflict is not None:
+                raise AssertionConflict(conflict.sentence, conflict, levels)
+        try:
+            return self.resolver.resolve(tableau, deadline, assertions)
+        except InconsistentTableau:
+            conflict = self.explainer.conflict(tableau, assertions, deadline, before) if hard(assertions) else None
+            if conflict is None:
+                raise
+            raise AssertionConflict(conflict.sentence, conflict, levels) from None
 
     def remember(self, tableau: Tableau, cmap: CognitiveMap) -> None:
         """Keep ``cmap`` (found by :meth:`map`) as the minimal map questions about ``tableau`` are about,
@@ -105,17 +156,20 @@ class Mapper:
             self.explainer.remember(tableau, cmap)
 
     def explain(self, tableau: Tableau, a: int | str, b: int | str | None = None,
-                deadline: Deadline | None = None):
+                deadline: Deadline | None = None, assertions: Sequence[Assertion] = ()):
         """Why time points (``t4``, ``4``) or dstates (``S4``) ``a`` and ``b`` are one dstate or not; with
-        ``b`` None, whether time point ``a``'s view is read as seen or as a misread."""
+        ``b`` None, whether time point ``a``'s view is read as seen or as a misread. With a person's
+        ``assertions`` (time points), in the map that honours them."""
         if self.closes_loops(tableau):
             if b is None:
                 raise ExplainError("a loop-closed map lists its misreads (bootmap map); ask why about two time "
                                    "points or dstates")
-            return self.closer.explain(tableau, a, b, deadline)
+            return self.closer.explain(tableau, a, b, deadline, assertions)
         if b is None:
+            if assertions:
+                raise ExplainError("ask why about two time points or dstates of a map with assertions")
             return self.explainer.explain_step(tableau, a, deadline)
-        return self.explainer.explain(tableau, a, b, deadline)
+        return self.explainer.explain(tableau, a, b, deadline, assertions)
 
     def stream(self) -> MapStream:
         """A map kept current as steps are appended (give it to :meth:`map`, or ``update`` it)."""

@@ -40,8 +40,9 @@ from typing import Callable, Hashable, Sequence
 
 from clingo import String, Symbol
 
-from ..errors import ExplainError, SolveTimeout
+from ..errors import ExplainError, InconsistentTableau, SolveTimeout
 from ..tableau import Tableau
+from .assertions import Assertion, Conflict, assertion_facts
 from .cogmap import CognitiveMap, action_text
 from .facts import action_symbol, action_symbols, excerpt_facts, read_actions, tableau_facts
 from .grounding import Classes, Deadline, Grounding, key_with_view, prepass
@@ -208,14 +209,22 @@ class Explainer:
         settings), so that questions about it need not resolve it again."""
         self.maps.get(_experience(tableau), lambda: cmap)
 
-    def explain(self, tableau: Tableau, a: int | str, b: int | str, deadline: Deadline | None = None) -> Explanation:
+    def explain(self, tableau: Tableau, a: int | str, b: int | str, deadline: Deadline | None = None,
+                assertions: Sequence[Assertion] = ()) -> Explanation:
         """Explain whether ``a`` and ``b`` (time points, ``"t4"``, or dstate names such as ``"S4"``) are
-        one dstate, by ``deadline`` (default: ``time_limit`` from now). Raises :class:`ExplainError` for
-        names the map does not have, :class:`SolveTimeout` when out of time."""
+        one dstate, by ``deadline`` (default: ``time_limit`` from now); with a person's ``assertions``, in
+        the map that honours them, whose proofs may cite them as evidence. Raises :class:`ExplainError`
+        for names the map does not have, :class:`SolveTimeout` when out of time."""
         start = time.perf_counter()
         deadline = deadline or Deadline.after(self.time_limit)
-        cmap = self.minimal_map(tableau, deadline)
+        if assertions:
+            facts = tuple(assertion_facts(assertions))
+            cmap = self.maps.get((_experience(tableau), facts),
+                                 lambda: self.resolver.resolve(tableau, deadline, assertions))
+        else:
+            cmap = self.minimal_map(tableau, deadline)
         q = _Question(self, tableau, deadline, cmap)
+        q.assume(assertions, pin=False)
         a, b = time_points(cmap, a, b)
         maps = [cmap.dstate_of] + cmap.alternatives
         apart = [m[a] != m[b] for m in maps]
@@ -245,6 +254,43 @@ class Explainer:
         return StepExplanation(t, tableau.steps[t].view, d, cmap.views[d], taken is not None,
                                taken and taken["cost"], suspect and suspect.reason,
                                suspect.evidence if suspect else (), cmap.n_dstates, cmap.stats.as_seen_lower_bound)
+
+    def conflict(self, tableau: Tableau, assertions: Sequence[Assertion], deadline: Deadline | None = None,
+                 cmap: CognitiveMap | None = None, local: bool = False) -> Conflict | None:
+        """Why no map honours a person's hard ``assertions`` (None if some map does): a subset-minimal set
+        of them that no map honours (deletion: each dropped in turn stays dropped if the rest still
+        clash), and the proof that a ``same`` of that set cannot hold beside the others, as
+        :meth:`explain` proves two time points different: the fewest steps, the axioms, the chain of rule
+        instances. ``cmap`` is the map made without the assertions (default: resolved here).
+
+        With ``local``, only clashes that the steps around each ``same`` show (up to ``max_window`` on
+        either side, beside the other assertions) are looked for: a few small groundings, where the
+        whole experience with every partition allowed may be far beyond the deadline. None then says
+        only that no clash is that near."""
+        start = time.perf_counter()
+        deadline = deadline or Deadline.after(self.time_limit)
+        cmap = cmap or self.minimal_map(tableau, deadline)
+        q = _Question(self, tableau, deadline, cmap)
+        clash = [x for x in assertions if not x.soft]
+        clashes = q.clash_nearby if local else (lambda xs: not q.can_hold(xs))
+        if not clashes(clash):
+            return None
+        for x in list(clash):
+            trial = [y for y in clash if y is not x]
+            if clashes(trial):
+                clash = trial
+        same = next((x for x in clash if x.kind == "same" and q.clash_nearby(clash, x)), None) or \
+            next((x for x in clash if x.kind == "same"), None)
+        if same is None:  # apart alone never clashes: the experience itself has no map
+            raise InconsistentTableau("no map satisfies the axioms for this experience, assertions aside",
+                                      levels=tuple(self.resolver.theory.levels))
+        q.assume([x for x in clash if x is not same])
+        names = (cmap.dstate_of[same.a], cmap.dstate_of[same.b])
+        answer = q.prove_apart(cmap, same.a, same.b, names)
+        explanation = Explanation(same.a, same.b, names, levels=list(self.resolver.theory.levels),
+                                  total_s=round(time.perf_counter() - start, 4), **answer)
+        return Conflict([same] + [x for x in clash if x is not same], explanation,
+                        list(self.resolver.theory.levels))
 
     def can_be_same(self, tableau: Tableau, a: int, b: int, keep: Sequence[int] | None = None,
                     deadline: Deadline | None = None) -> bool:
@@ -297,6 +343,44 @@ class _Question:
             self.angles[step["t"]] = step["abduced_deg"]  # the map's evidence: actions as it typed them
         self.facts = tableau_facts(tableau, angles=self.angles)
         self.misreads = self.misread_facts(cmap) if cmap is not None and cmap.suspect_steps else {}
+        self.assumed: list[Assertion] = []  # a person's assertions the question takes as given
+        self.pinned: set[int] = set()       # time points part of every excerpt
+
+    def assume(self, assertions: Sequence[Assertion], pin: bool = True) -> None:
+        """Take these assertions as given: with ``pin``, in every excerpt tried (their time points always
+        kept: a clash's proof must use them); else as evidence like any step, in the excerpts that keep
+        both their time points."""
+        self.assumed = list(assertions)
+        self.pinned = {t for x in assertions for t in x.pair} if pin else set()
+
+    def assumed_in(self, keep: Sequence[int]) -> list[Symbol]:
+        """The assumed assertions an excerpt keeping ``keep`` holds, as facts."""
+        kept = set(keep)
+        return assertion_facts([x for x in self.assumed if x.a in kept and x.b in kept])
+
+    def clash_nearby(self, assertions: Sequence[Assertion], only: Assertion | None = None) -> bool:
+        """Whether the steps around some ``same`` of these assertions (or around ``only``) show it cannot
+        hold beside the others (:meth:`window`)."""
+        for x in assertions:
+            if x.kind != "same" or (only is not None and x is not only):
+                continue
+            self.assume([y for y in assertions if y is not x])
+            try:
+                if self.window(x.a, x.b) is not None:
+                    return True
+            finally:
+                self.assume([])
+        return False
+
+    def can_hold(self, assertions: Sequence[Assertion]) -> bool:
+        """Can every one of these assertions hold in some map of the whole experience that satisfies the
+        axioms, however many dstates it needs?"""
+        keep = list(range(len(self.tableau)))
+        facts, classes = self.with_misreads(self.facts + assertion_facts(assertions), keep)
+        if None in classes.keys or any(x.kind == "same" and not classes.same_class(x.a, x.b) for x in assertions):
+            return False
+        grounding = Grounding(self.theory, facts + classes.layout(len(keep)), self.depth, ["1"]).ground()
+        return bool(self._solve(grounding).satisfiable)
 
     @staticmethod
     def misread_facts(cmap: CognitiveMap) -> dict[int, tuple[Symbol, Symbol]]:
@@ -338,7 +422,8 @@ class _Question:
         n, w = len(self.tableau), 0
         while True:
             keep = sorted({t for c in (a, b) for t in range(max(0, c - w), min(n, c + w + 1))}
-                          | (set(range(min(a, b), max(a, b) + 1)) if abs(a - b) <= 2 * w + 4 else set()))
+                          | (set(range(min(a, b), max(a, b) + 1)) if abs(a - b) <= 2 * w + 4 else set())
+                          | self.pinned)
             if not self.can_be_same(a, b, keep):
                 return keep
             if w >= self.explainer.max_window or len(keep) == n:
@@ -348,7 +433,7 @@ class _Question:
     def minimal_evidence(self, a: int, b: int, keep: Sequence[int]) -> list[int]:
         kept = list(keep)
         for t in sorted(kept, key=lambda t: -min(abs(t - a), abs(t - b))):
-            if t in (a, b):
+            if t in (a, b) or t in self.pinned:
                 continue
             trial = [s for s in kept if s != t]
             if not self.can_be_same(a, b, trial):
@@ -367,7 +452,7 @@ class _Question:
         allowed (as many dstates as time points), so "cannot be one dstate" means in no map at all.
         None when a and b are not even in one class (they differ in a feature every time point shows,
         e.g. the view)."""
-        facts, classes = self.with_misreads(excerpt_facts(self.facts, keep), keep)
+        facts, classes = self.with_misreads(excerpt_facts(self.facts, keep) + self.assumed_in(keep), keep)
         if None in classes.keys or not classes.same_class(a, b):
             return None
         return facts + classes.layout(len(keep)) + [SAME_ASKED(a, b)]
@@ -395,7 +480,7 @@ class _Question:
     def feature_failure(self, a: int, b: int, evidence: list[int]) -> tuple[list[RuleRef], list[Failure]]:
         """a and b differ in a feature every time point shows: no supposition needed, the features'
         own derivations are the proof."""
-        facts = excerpt_facts(self.facts, evidence)
+        facts = excerpt_facts(self.facts, evidence) + self.assumed_in(evidence)
         if any(t in self.misreads for t in evidence):  # else no prepass is needed: nothing to add
             facts, _ = self.with_misreads(facts, evidence)
         traced = Grounding(self.theory, facts, self.depth, instrumented=True).ground()

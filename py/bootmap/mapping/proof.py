@@ -19,7 +19,7 @@ from clingo import Symbol
 
 from .cogmap import CognitiveMap
 from .trace import Derivations, Instrumented, RuleRef
-from .vocabulary import IS, PLACE_OF, QUIET, TURN_ACTION, action_word, predicate
+from .vocabulary import DSTATE_FEATURE, FEATURE, IS, PLACE_OF, QUIET, TOLD_APART, TURN_ACTION, action_word, predicate
 
 
 @dataclass
@@ -140,6 +140,13 @@ class Names:
         if p is None or p.phrase is None:
             return self.atom(atom)
         args = atom.arguments
+        if p in (FEATURE, DSTATE_FEATURE) and TOLD_APART.matches(args[1]):
+            # a person's word as a feature (core/assert.lp): value 1 at the first time point, 2 at the second
+            ends = [x.number for x in args[1].arguments]
+            mine, other = (ends[0], ends[1]) if args[2].number == 1 else (ends[1], ends[0])
+            if p is FEATURE:
+                return f"a person told t{mine} apart from t{other}"
+            return f"{self.term(args[0])} holds t{mine}, which a person told apart from t{other}"
         return re.sub(r"\{(P?)(\d)\}", lambda m: (self.place(args[int(m[2])]) if m[1] else self.term(args[int(m[2])])),
                       p.phrase)
 

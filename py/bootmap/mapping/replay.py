@@ -23,8 +23,9 @@ classes whose time points a step changed.
 These arguments are about the stock files, which :func:`covers` recognises by their digests (a test pins
 them to ``asp/``), on tableaux of a robot that stopped at every dstate: their rules for a log that drove
 through dstates (``passes_through``) never fire here, since :class:`~.stream.MapStream` resolves such a
-tableau anew. A theory with a file a user added or edited is checked by clingo instead, so the axioms
-a user writes are always honoured.
+tableau anew; nor do core/assert.lp's, which a person's assertions switch on and a stream never has. A
+theory with a file a user added or edited is checked by clingo instead, so the axioms a user writes are
+always honoured.
 """
 
 from __future__ import annotations
@@ -48,6 +49,7 @@ STOCK_DIGESTS = {
     "topological.lp": "df80192cb9c27380cf518bbc4e1f298006fdaf1d07d5fded8971fa6a25c41512",
     "core/ask.lp": "2e8adf403568adf1bc5e166b19bde32ba2fdaac7f873adef0930bb9071c939ca",
     "core/partition.lp": "5a5041dcda4ff90134c77b13f5c751ef32325af467a675c6f5272a5a5f7f41c0",
+    "core/assert.lp": "a92b4b19ecc25704f432fba835c495cf324fc1a10bf335cadeca63aacd4c0f9f",
 }
 
 

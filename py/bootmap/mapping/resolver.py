@@ -41,6 +41,7 @@ from typing import Sequence
 
 from ..errors import InconsistentTableau
 from ..tableau import Tableau
+from .assertions import Assertion
 from .cogmap import CognitiveMap
 from .diagnosis import diagnosed
 from .grounding import Deadline
@@ -118,21 +119,25 @@ class Resolver:
         """The same resolver (same axiom directory and settings) on other levels, without a diagnosis."""
         return replace(self, axioms=self.theory.directory, levels=tuple(levels), diagnose=False)
 
-    def resolve(self, tableau: Tableau, deadline: Deadline | None = None) -> CognitiveMap:
-        """The minimal map(s) of the tableau, by ``deadline`` (default: ``time_limit`` from now).
+    def resolve(self, tableau: Tableau, deadline: Deadline | None = None,
+                assertions: Sequence[Assertion] = ()) -> CognitiveMap:
+        """The minimal map(s) of the tableau, by ``deadline`` (default: ``time_limit`` from now); with a
+        person's ``assertions`` (:mod:`.assertions`), the minimal maps that honour the hard ones and keep
+        the soft ones unless breaking them saves more than they cost.
 
         Raises
         ------
         InconsistentTableau
-            No map satisfies the axioms (with the failing levels, when ``diagnose``).
+            No map satisfies the axioms (with the failing levels, when ``diagnose`` and there are no
+            hard assertions: where there are, :meth:`.explain.Explainer.conflict` says which clash).
         SolveTimeout
             Out of time; it carries the dstates proved necessary and, if one was found on the way,
             a valid map that is not proved minimal (``best_map``).
         """
         deadline = deadline or Deadline.after(self.time_limit)
         try:
-            return Search(self, tableau, deadline).run()
+            return Search(self, tableau, deadline, assertions).run()
         except InconsistentTableau as e:
-            if not self.diagnose:
+            if not self.diagnose or any(not x.soft for x in assertions):
                 raise
             raise diagnosed(e, self, tableau, deadline) from None

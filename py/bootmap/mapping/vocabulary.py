@@ -13,6 +13,7 @@ Roles:
 * ``tableau``: facts of the experience, built by :mod:`bootmap.mapping.facts` (the axioms read them);
 * ``layout``: facts that lay out one search (core/partition.lp reads them);
 * ``question``: facts an explanation adds (core/ask.lp reads them);
+* ``assertion``: what a person says about the map (core/assert.lp reads them);
 * ``derived``: what the axioms derive, read back by Python or shown in a proof.
 
 Phrases are ``str.format`` patterns over the atom's arguments; ``{P1}`` names argument 1 as a place.
@@ -145,6 +146,16 @@ SAME_ASKED = Predicate("same_asked", 2, "question", "suppose t{0} and t{1} are o
 FINEST_MAP = Predicate("finest_map", 0, "question")
 
 # --------------------------------------------------------------------------------------------------
+# A person's assertions (core/assert.lp reads these; bootmap.mapping.assertions builds them)
+# --------------------------------------------------------------------------------------------------
+ASSERTED_SAME = Predicate("asserted_same", 2, "assertion", "a person says t{0} and t{1} are one dstate")
+ASSERTED_APART = Predicate("asserted_apart", 2, "assertion", "a person says t{0} and t{1} are different dstates")
+PREFERRED_SAME = Predicate("preferred_same", 3, "assertion",
+                           "a person prefers t{0} and t{1} one dstate (keeping them apart costs {2})")
+PREFERRED_APART = Predicate("preferred_apart", 3, "assertion",
+                            "a person prefers t{0} and t{1} apart (one dstate costs {2})")
+
+# --------------------------------------------------------------------------------------------------
 # What the axioms derive: read back by Python, or shown in proofs
 # --------------------------------------------------------------------------------------------------
 # core/partition.lp
@@ -200,6 +211,10 @@ HEADING_SINCE = Term("heading_since", 1, "the feature: the heading counted from 
 LENGTH_FEATURE = Term("length", 0, "the feature: a travel's length type (metrical.lp)")
 SAME, OPPOSITE = Term("same", 0, "one way along a path"), Term("opposite", 0, "the other way along a path")
 POS, NEG = Term("pos", 0, "the way a path's least dstate faces"), Term("neg", 0, "the other way")
+TOLD_APART = Term("told_apart", 2, "the feature: a person's word that T1 and T2 differ, told_apart(T1, T2); "
+                                   "T1 shows it with value 1, T2 with value 2 (core/assert.lp)")
+BROKEN_SAME = Term("broken_same", 0, "a preference for one dstate, broken (what core/assert.lp's cost counts)")
+BROKEN_APART = Term("broken_apart", 0, "a preference for two dstates, broken (what core/assert.lp's cost counts)")
 TURN_ACTION = Term("turn", 1, "a turn by its angle type, turn(A) (causal.lp's action/2)")
 TRAVEL_ACTION = Term("travel", 0, "a travel, whatever its length (causal.lp's action/2)")
 TRAVEL_BY_LENGTH = Term("travel", 1, "a travel by its length type, travel(L), where the robot drove through dstates")

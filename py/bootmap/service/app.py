@@ -23,12 +23,12 @@ from .connections import SendTimeout
 from .deps import Services
 from .models import AppendIn, TableauIn
 from .models import Problem as ProblemModel
-from .routers import axioms, explanations, health, maps, recognise, rehearsals, tableaux, tokens
+from .routers import assertions, axioms, explanations, health, maps, recognise, rehearsals, tableaux, tokens
 from .routers import layout, viewer
 from .settings import Settings
 
-ROUTERS = (tableaux.router, maps.router, explanations.router, rehearsals.router, recognise.router, axioms.router, tokens.router,
-           health.router)
+ROUTERS = (tableaux.router, maps.router, assertions.router, explanations.router, rehearsals.router, recognise.router,
+           axioms.router, tokens.router, health.router)
 # The map viewer: the page at /, its files, the layout it draws, experiment runs' figures.
 ROUTERS += (layout.router, viewer.router)
 

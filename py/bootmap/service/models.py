@@ -146,6 +146,28 @@ class AppendIn(BaseModel):
                                                           "last has an action.")
 
 
+# A time point (t3 or 3) or a dstate of the tableau's map (S4).
+AssertedPoint = Union[Annotated[StrictStr, Field(pattern=r"^(t?[0-9]{1,9}|S[0-9]{1,9})$")],
+                      Annotated[StrictInt, Field(ge=0, le=10**9)]]
+
+
+class AssertionIn(BaseModel):
+    """A person's word about the map: two time points (or dstates of the map as it stands) are one dstate
+    (``same``: a manual loop closure) or not (``apart``); hard, or soft at a cost (a dstate costs 4)."""
+
+    model_config = ConfigDict(**STRICT, json_schema_extra={"oneOf": [{"required": ["same"]},
+                                                                     {"required": ["apart"]}]})
+    same: list[AssertedPoint] = optional(min_length=2, max_length=2,
+                                         description="Two time points (t3 or 3) or dstates (S4) that are one dstate.")
+    apart: list[AssertedPoint] = optional(min_length=2, max_length=2,
+                                          description="Two time points or dstates that are different dstates.")
+    soft: bool = Field(False, description="Prefer it rather than require it: kept unless breaking it saves more "
+                                          "than its cost.")
+    cost: int = optional(ge=1, le=1000, description="What breaking a soft assertion costs (default 5; a dstate "
+                                                     "costs 4).")
+    note: str = optional(max_length=2000, pattern=NO_NUL, description="Why, in the person's words.")
+
+
 class RecogniseIn(BaseModel):
     """An image to recognise."""
 
@@ -269,6 +291,51 @@ class MapOut(Out):
     retyped_steps: list[RetypedStep] = Field(description="Actions the map takes as mistyped: read far from "
                                                           "their learned type, and typed as its neighbour.")
     stats: dict[str, Any] = Field(description="Solver figures (seconds, bounds tried).")
+
+
+class AssertionOut(Out):
+    """A stored assertion: what was said, by which token, when."""
+
+    id: int
+    same: list[str] | None = Field(None, description="The two time points said to be one dstate.")
+    apart: list[str] | None = Field(None, description="The two time points said to be different dstates.")
+    soft: bool
+    cost: int | None = Field(description="What breaking it costs (soft ones), else null.")
+    note: str | None
+    by: str = Field(description="The token (its name) that made it.")
+    at: datetime = Field(description="When it was made.")
+    held: bool = Field(description="Whether the stored map does what it says (a soft one may be broken).")
+
+
+class AssertionList(Out):
+    """A tableau's assertions, oldest first, and whether the stored map honours each."""
+
+    assertions: list[AssertionOut]
+
+
+class MapDiffOut(Out):
+    """What changed in the map: dstates, places and paths joined or split (named as in each map)."""
+
+    changed: bool
+    joined: list[dict[str, Any]] = Field(description="{now, was}: a dstate of the new map made of several of the old.")
+    split: list[dict[str, Any]] = Field(description="{was, now}: a dstate of the old map now several.")
+    places_joined: list[dict[str, Any]]
+    places_split: list[dict[str, Any]]
+    paths_joined: list[dict[str, Any]]
+    paths_split: list[dict[str, Any]]
+    renamed: dict[str, str] = Field(description="Dstates unchanged but for their name: old -> new.")
+    dstates: list[int] = Field(description="[before, after].")
+    places: list[int]
+    paths: list[int]
+
+
+class AssertedOut(Out):
+    """The tableau's map re-solved after its assertions changed, what changed, and the assertions now."""
+
+    assertion: AssertionOut | None = Field(description="The assertion made (null after a removal).")
+    assertions: list[AssertionOut]
+    diff: MapDiffOut
+    map: MapOut
 
 
 class MinimalMap(Out):

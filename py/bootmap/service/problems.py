@@ -26,7 +26,8 @@ from fastapi.routing import APIRoute
 from starlette.exceptions import HTTPException
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from ..errors import AxiomError, BootmapError, ExplainError, InconsistentTableau, SolveTimeout, TableauError
+from ..errors import (AssertionConflict, AxiomError, BootmapError, ExplainError, InconsistentTableau, SolveTimeout,
+                      TableauError)
 from .store import Conflict, NotFound, NotOwner, QuotaExceeded
 from .worker import SolveCancelled, SolverBusy, SolverCrashed, SolverKilled, SolverOutOfMemory
 
@@ -78,6 +79,7 @@ _KINDS: list[tuple[type, int, str, str]] = [
     (QuotaExceeded, 429, "quota-exceeded", "Over this token's limit"),
     (SolveCancelled, 400, "client-gone", "The client went away"),
     (SolverBusy, 503, "solvers-busy", "Every solver is busy"),
+    (AssertionConflict, 409, "assertion-conflict", "The assertions clash with the experience"),
     (InconsistentTableau, 422, "inconsistent-tableau", "No map satisfies the axioms"),
     (SolveTimeout, 422, "solve-timeout", "Solve ran past its time limit"),
     (SolverOutOfMemory, 422, "solver-memory", "Solve needed more memory than allowed"),
@@ -104,6 +106,9 @@ def from_bootmap_error(e: BootmapError) -> Problem:
 
 def _extensions(e: BootmapError) -> dict[str, Any]:
     """What a client can use beyond the message: the failing levels, the bound proved, the best map."""
+    if isinstance(e, AssertionConflict):
+        conflict = e.conflict if isinstance(e.conflict, dict) or e.conflict is None else e.conflict.to_dict()
+        return {"conflict": conflict, "text": e.text}
     if isinstance(e, InconsistentTableau):
         return {"failing_levels": e.failing_levels}
     if isinstance(e, SolverKilled):

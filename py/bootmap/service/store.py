@@ -168,6 +168,44 @@ class MapRow(Base):
     text: Mapped[str] = mapped_column(Text)
 
 
+class AssertionRow(Base):
+    """A person's assertion about a tableau's map (bootmap.mapping.assertions): two time points are one
+    dstate (``same``) or not (``apart``), hard or at a cost; who made it (the token's name) and when."""
+
+    __tablename__ = "assertions"
+    __table_args__ = {"sqlite_autoincrement": True}
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
+    tableau_id: Mapped[int] = mapped_column(ForeignKey("tableaux.id", ondelete="CASCADE"), index=True)
+    kind: Mapped[str] = mapped_column(String(8))
+    a: Mapped[int] = mapped_column(Integer)
+    b: Mapped[int] = mapped_column(Integer)
+    soft: Mapped[bool] = mapped_column(Boolean, default=False)
+    cost: Mapped[int] = mapped_column(Integer)
+    note: Mapped[str | None] = mapped_column(Text, nullable=True)
+    made_by: Mapped[str] = mapped_column(String(100))
+    created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True))
+
+
+@dataclass(frozen=True)
+class AssertionRecord:
+    id: int
+    tableau_id: int
+    kind: str
+    a: int
+    b: int
+    soft: bool
+    cost: int
+    note: str | None
+    made_by: str
+    created_at: datetime
+
+    @property
+    def entry(self) -> dict:
+        """The assertion as a solver reads it (a bootmap.assertions/1 entry of time points)."""
+        return {self.kind: [self.a, self.b], "soft": self.soft, **({"cost": self.cost} if self.soft else {})}
+
+
 @dataclass(frozen=True)
 class MapRecord:
     """A solved map, ready to serve: ``document`` is the JSON the API returns."""
@@ -434,12 +472,49 @@ class Store:
                 _why_not_written(s, tableau_id, owner)
 
     def delete(self, tableau_id: int, owner: int | None = ANY) -> None:
-        """Delete the tableau and its map, if ``owner`` (a token id; ANY for an admin) owns it."""
+        """Delete the tableau, its map and its assertions, if ``owner`` (a token id; ANY for an admin) owns it."""
         with self._session.begin() as s:
             done = s.execute(delete(TableauRow).where(TableauRow.id == tableau_id, *_owned_by(owner)))
             if done.rowcount != 1:
                 _why_not_written(s, tableau_id, owner)
             s.execute(delete(MapRow).where(MapRow.tableau_id == tableau_id))
+            s.execute(delete(AssertionRow).where(AssertionRow.tableau_id == tableau_id))
+
+    # --- A person's assertions -----------------------------------------------------------------------
+
+    def assertions(self, tableau_id: int) -> list[AssertionRecord]:
+        """The tableau's assertions, oldest first."""
+        with self._session() as s:
+            rows = s.scalars(select(AssertionRow).where(AssertionRow.tableau_id == tableau_id)
+                             .order_by(AssertionRow.id)).all()
+        return [_assertion_record(r) for r in rows]
+
+    def add_assertion(self, tableau_id: int, kind: str, a: int, b: int, soft: bool, cost: int, note: str | None,
+                      made_by: str, cmap: MapRecord, owner: int | None = ANY) -> AssertionRecord:
+        """Keep a new assertion and the map solved with it and the tableau's other assertions, as revision
+        ``cmap.revision`` (an assertion changes the map as an append does), unless another request stored
+        that revision first (:class:`Conflict`), the tableau is gone (:class:`NotFound`) or ``owner`` no
+        longer owns it (:class:`NotOwner`)."""
+        now = datetime.now(timezone.utc)
+        with self._session.begin() as s:
+            _next_revision(s, tableau_id, cmap.revision, owner, now)
+            row = AssertionRow(tableau_id=tableau_id, kind=kind, a=a, b=b, soft=soft, cost=cost, note=note,
+                               made_by=made_by, created_at=now)
+            s.add(row)
+            s.merge(_map_row(tableau_id, cmap))
+            s.flush()
+            return _assertion_record(row)
+
+    def delete_assertion(self, tableau_id: int, assertion_id: int, cmap: MapRecord, owner: int | None = ANY) -> None:
+        """Remove an assertion and keep the map solved without it as revision ``cmap.revision``, on the
+        same terms as :meth:`add_assertion`."""
+        with self._session.begin() as s:
+            _next_revision(s, tableau_id, cmap.revision, owner, datetime.now(timezone.utc))
+            done = s.execute(delete(AssertionRow).where(AssertionRow.id == assertion_id,
+                                                        AssertionRow.tableau_id == tableau_id))
+            if done.rowcount != 1:
+                raise NotFound(0, f"tableau {tableau_id} has no assertion {assertion_id}")
+            s.merge(_map_row(tableau_id, cmap))
 
     def list(self, limit: int, offset: int, owner_id: int | None = None,
              everyone: bool = True) -> tuple[int, list[TableauSummary]]:
@@ -688,6 +763,21 @@ def _chunks(conn, table, column: str, key: str, tableau_id: int) -> Iterator[byt
 def _head_record_or_none(conn, tableau_id: int) -> TableauRecord | None:
     row = conn.execute(select(*_HEAD).where(TableauRow.id == tableau_id)).first()
     return None if row is None else _head_record(row)
+
+
+def _next_revision(s, tableau_id: int, revision: int, owner: int | None, now: datetime) -> None:
+    """Move the tableau to ``revision`` from the one before it (taking its row lock), or say why not."""
+    done = s.execute(update(TableauRow).where(TableauRow.id == tableau_id, TableauRow.revision == revision - 1,
+                                              *_owned_by(owner)).values(revision=revision, updated_at=now))
+    if done.rowcount != 1:
+        _why_not_written(s, tableau_id, owner)
+        raise Conflict(f"tableau {tableau_id} changed while this request was solved (it is no longer at "
+                       f"revision {revision - 1}); send the request again")
+
+
+def _assertion_record(row: AssertionRow) -> AssertionRecord:
+    return AssertionRecord(row.id, row.tableau_id, row.kind, row.a, row.b, bool(row.soft), row.cost, row.note,
+                           row.made_by, _utc(row.created_at))
 
 
 def _map_row(tableau_id: int, m: MapRecord) -> MapRow:

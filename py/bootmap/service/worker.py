@@ -27,7 +27,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Awaitable, Callable
 
-from ..errors import AxiomError, BootmapError, ExplainError, InconsistentTableau, SolveTimeout, TableauError
+from ..errors import (AssertionConflict, AxiomError, BootmapError, ExplainError, InconsistentTableau, SolveTimeout,
+                      TableauError)
 from ..tableau import Tableau
 
 log = logging.getLogger("bootmap.service")
@@ -85,6 +86,10 @@ class SolveJob:
     quantum_deg: float | None = None
     max_models: int = 10
     stream: int | None = None  # a stored tableau's id: its map is kept current as steps are appended
+    # A person's assertions (bootmap.assertions/1 entries, time points): the map honours them. ``baseline``,
+    # when a request changes them, is the assertions before: the reply then says what changed.
+    assertions: tuple[dict, ...] = ()
+    baseline: tuple[dict, ...] | None = None
 
 
 @dataclass(frozen=True)
@@ -99,6 +104,7 @@ class ExplainJob:
     b: str
     levels: tuple[str, ...] | None = None
     quantum_deg: float | None = None
+    assertions: tuple[dict, ...] = ()  # the stored tableau's: questions are about the map that honours them
 
 
 @dataclass(frozen=True)
@@ -132,6 +138,7 @@ class Solved:
     text: str             # CognitiveMap.to_text(): the annotated tableau, as `bootmap map` prints it
     views_k: int | None   # views found by clustering images, or None when the tableau had labels
     seconds: float
+    diff: dict | None = None  # MapDiff.to_dict(): what changing the assertions changed (SolveJob.baseline)
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -226,6 +233,8 @@ def _solve(job: SolveJob, cache: dict) -> tuple:
     try:
         tableau, k = _views(_tableau(job.document))
         mapper = _mapper(cache, job.axioms, None, job.quantum_deg, job.max_models)
+        if job.assertions or job.baseline is not None:
+            return _asserted(job, mapper, tableau, k, deadline, start)
         # A stored tableau's stream: the same map as a fresh one, sooner when the steps repeat what this
         # solver saw last time (bootmap.mapping.stream).
         stream = None if job.stream is None else _cached(
@@ -240,6 +249,25 @@ def _solve(job: SolveJob, cache: dict) -> tuple:
         return "timeout", str(e), e.lower_bound, e.best_map
 
 
+def _asserted(job: SolveJob, mapper, tableau: Tableau, k: int | None, deadline, start: float) -> tuple:
+    """The map that honours the job's assertions (and, when they changed, what changed), or the clash."""
+    from ..mapping.assertions import parse_assertions
+
+    said = parse_assertions(list(job.assertions), len(tableau))
+    try:
+        if job.baseline is None:
+            cmap, diff = mapper.map(tableau, deadline, assertions=said), None
+        else:
+            before = mapper.map(tableau, deadline, assertions=parse_assertions(list(job.baseline), len(tableau)))
+            result = mapper.honour(tableau, said, deadline, before=before)
+            if result.conflict is not None:
+                raise AssertionConflict(result.conflict.sentence, result.conflict)
+            cmap, diff = result.after, result.diff.to_dict()
+    except AssertionConflict as e:
+        return "conflict", str(e), e.conflict.to_dict(), e.conflict.to_text()
+    return "ok", Solved(cmap.to_dict(), cmap.to_text(), k, time.perf_counter() - start, diff)
+
+
 def _explain(job: ExplainJob, cache: dict) -> tuple:
     from ..mapping import Deadline
 
@@ -247,7 +275,8 @@ def _explain(job: ExplainJob, cache: dict) -> tuple:
     deadline = Deadline.after(job.time_limit_s)
     try:
         tableau, _ = _views(_tableau(job.document))
-        e = _mapper(cache, job.axioms, job.levels, job.quantum_deg).explain(tableau, job.a, job.b, deadline)
+        said = _said(job.assertions, tableau)
+        e = _mapper(cache, job.axioms, job.levels, job.quantum_deg).explain(tableau, job.a, job.b, deadline, said)
         return "ok", Explained(e.to_dict(), e.to_text(), time.perf_counter() - start)
     except ExplainError as e:
         return "question", str(e)
@@ -270,6 +299,14 @@ def _rehearse(job: RehearseJob, cache: dict) -> tuple:
         return "inconsistent", str(e), e.failing_levels, e.diagnosed
     except SolveTimeout as e:
         return "timeout", str(e), e.lower_bound, None
+
+
+def _said(assertions: tuple[dict, ...], tableau: Tableau) -> list:
+    if not assertions:
+        return []
+    from ..mapping.assertions import parse_assertions
+
+    return parse_assertions(list(assertions), len(tableau))
 
 
 def _mapper(cache: dict, axioms: str, levels: tuple[str, ...] | None, quantum_deg: float | None,
@@ -458,6 +495,8 @@ def _outcome(reply: tuple, memory_mb: int) -> Solved | Explained | Rehearsed:
         raise AxiomError(rest[0])
     if kind == "question":
         raise ExplainError(rest[0])
+    if kind == "conflict":
+        raise AssertionConflict(rest[0], conflict=rest[1], text=rest[2])
     if kind == "memory":
         raise SolverOutOfMemory(f"the solve needed more than this server's solver memory of {memory_mb} MiB "
                                 "(BOOTMAP_SOLVER_MEMORY_MB)")

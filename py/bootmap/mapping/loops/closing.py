@@ -18,6 +18,7 @@ from clingo import Symbol
 
 from ...errors import InconsistentTableau, SolveTimeout
 from ...tableau import Tableau, Travel, Turn
+from ..assertions import Assertion, Conflict, assertion_facts, hard
 from ..cogmap import CognitiveMap, SolveStats, Try, build_map
 from ..explain import time_points
 from ..facts import action_symbols, passes_through, tableau_facts, travel_lengths, typed_actions
@@ -25,7 +26,7 @@ from ..grounding import Deadline, check_fixed
 from ..motion import measured_angle
 from ..resolver import Resolver
 from ..vocabulary import FIXED, VIEW, Predicate, action_word, fixed_dstate
-from .explain import Join, LoopExplanation, explain
+from .explain import Join, LoopExplanation, explain, why_apart
 
 #: How a map is found: ``auto`` (loop closing where the robot drove through dstates, as a log's tableau
 #: says, else the fewest dstates), ``loops`` or ``fewest`` (the paper's,
@@ -58,8 +59,13 @@ class LoopCloser:
     drift_share: float = 0.05
     context: int = 3
 
-    def resolve(self, tableau: Tableau, deadline: Deadline | None = None) -> CognitiveMap:
-        """The loop-closed map of ``tableau`` by ``deadline`` (default: the resolver's time limit).
+    def resolve(self, tableau: Tableau, deadline: Deadline | None = None,
+                assertions: Sequence[Assertion] = ()) -> CognitiveMap:
+        """The loop-closed map of ``tableau`` by ``deadline`` (default: the resolver's time limit). A person's
+        ``assertions`` (time points): each hard ``same`` is joined first, with what determinism then joins,
+        whatever odometry's drift (the person knows where the robot was); each ``apart`` refuses every join
+        that would make the two one. A soft ``same`` is the first proposal, kept where the axioms accept it;
+        a soft ``apart`` refuses odometry's proposals as a hard one does (loop closing weighs no costs).
 
         Raises
         ------
@@ -69,14 +75,39 @@ class LoopCloser:
             Out of time; ``best_map`` is the last map the axioms accepted, if any.
         """
         tableau.require_views()
-        return Closing(self, tableau, deadline or Deadline.after(self.resolver.time_limit)).run()
+        return Closing(self, tableau, deadline or Deadline.after(self.resolver.time_limit), assertions).run()
 
-    def explain(self, tableau: Tableau, a, b, deadline: Deadline | None = None) -> LoopExplanation:
+    def conflict(self, tableau: Tableau, assertions: Sequence[Assertion], before: CognitiveMap,
+                 deadline: Deadline) -> Conflict:
+        """Why no loop-closed map honours the hard ``assertions``: a subset-minimal set of them that loop
+        closing cannot join (each dropped in turn stays dropped if the rest still clash), and why the first
+        ``same`` of it cannot be joined beside the others (headings, what determinism joins, or the axioms
+        that reject the map, by name and line)."""
+        start = time.perf_counter()
+        clash = hard(assertions)
+        for x in list(clash):
+            trial = [y for y in clash if y is not x]
+            if trial and not Closing(self, tableau, deadline, trial).asserted():
+                clash = trial
+        same = next(x for x in clash if x.kind == "same")  # apart alone refuses joins, never the map
+        others = [x for x in clash if x is not same]
+        closing = Closing(self, tableau, deadline, others)
+        closing.asserted()
+        closing.odometry_bound = False
+        names = (before.dstate_of[same.a], before.dstate_of[same.b])
+        sentence, axioms = why_apart(closing, same.a, same.b)
+        levels = list(self.resolver.theory.levels)
+        explanation = LoopExplanation(same.a, same.b, names, "different", sentence, axioms=axioms, levels=levels,
+                                      total_s=time.perf_counter() - start)
+        return Conflict([same] + others, explanation, levels)
+
+    def explain(self, tableau: Tableau, a, b, deadline: Deadline | None = None,
+                assertions: Sequence[Assertion] = ()) -> LoopExplanation:
         """Why time points (``t4``, ``4``) or dstates (``S4``) ``a`` and ``b`` are one dstate of the loop-closed
         map, or not: the joins that made them one (each proposed by odometry or forced by determinism), or
         what keeps them apart (odometry, or the axioms that reject the map joining them)."""
         tableau.require_views()
-        closing = Closing(self, tableau, deadline or Deadline.after(self.resolver.time_limit))
+        closing = Closing(self, tableau, deadline or Deadline.after(self.resolver.time_limit), assertions)
         cmap = closing.run()
         x, y = time_points(cmap, a, b)
         return explain(closing, cmap, x, y)
@@ -122,7 +153,8 @@ class Closing:
     """One loop closing: the evidence, the partition (with every join undoable) and the last map the axioms
     accepted."""
 
-    def __init__(self, closer: LoopCloser, tableau: Tableau, deadline: Deadline):
+    def __init__(self, closer: LoopCloser, tableau: Tableau, deadline: Deadline,
+                 assertions: Sequence[Assertion] = ()):
         self.closer, self.tableau, self.deadline = closer, tableau, deadline
         self.resolver = closer.resolver
         self.start = time.perf_counter()
@@ -140,6 +172,12 @@ class Closing:
         self.views = tableau.views
         # What every check of a partition shares: the actions as the axioms see them (not the views)
         self.action_facts = [f for f in tableau_facts(tableau, angles=self.angles) if not VIEW.matches(f)]
+        # A person's word: joins to make first, joins to refuse (.assertions); the axioms check it too
+        self.asserted_same = [x.pair for x in assertions if x.kind == "same" and not x.soft]
+        self.preferred_same = [x.pair for x in assertions if x.kind == "same" and x.soft]
+        self.told_apart = {x.pair for x in assertions if x.kind == "apart"}
+        self.action_facts += assertion_facts([x for x in assertions if not x.soft])
+        self.odometry_bound = True  # whether dead reckoning's drift bound keeps visits apart
         self.made: dict[tuple, Symbol] = {}  # the views' and the partition's facts made so far (_fact)
         self.dstates = _Partition(n)
         self.kinds: dict[tuple[int, int], str] = {}  # each proposal: "near" or "retraced"
@@ -154,12 +192,18 @@ class Closing:
         # accepts (two dstates of one place facing one way, until their other dstates are joined too).
         if self.deadline.passed():
             raise self.timed_out()
-        self._fold_all(self.proposals)
+        if not self.asserted():
+            raise InconsistentTableau("no map found by loop closing with the assertions: the joins a person "
+                                      "asserted cannot be made, or the axioms reject them",
+                                      levels=tuple(self.resolver.theory.levels))
+        base = self.dstates.mark()
+        proposals = self.preferred + self.proposals
+        self._fold_all(proposals)
         if not self._accepted():
             # Else one proposal at a time, each kept only where the axioms accept the partition it makes.
-            self.dstates.undo(0)
+            self.dstates.undo(base)
             self._accepted()
-            for i, j in self.proposals:
+            for i, j in proposals:
                 if self.deadline.passed():
                     raise self.timed_out()
                 if self.dstates.root[i] == self.dstates.root[j]:
@@ -171,6 +215,27 @@ class Closing:
             raise InconsistentTableau("no map found by loop closing: no partition it reached satisfies the axioms",
                                       levels=tuple(self.resolver.theory.levels))
         return replace(self.best, stats=self._stats())
+
+    def asserted(self) -> bool:
+        """Make the joins a person asserted, with what determinism then joins, whatever odometry's drift;
+        False if some join they make is refused (``refused`` says which) or the axioms reject the map."""
+        if not self.asserted_same:
+            return True
+        self.odometry_bound = False
+        try:
+            for a, b in self.asserted_same:
+                if self.dstates.root[a] != self.dstates.root[b] and not self.fold(a, b, Join(a, b, "asserted")):
+                    return False
+        finally:
+            self.odometry_bound = True
+        return self._accepted()
+
+    @cached_property
+    def preferred(self) -> list[tuple[int, int]]:
+        """A person's soft ``same``: proposals before odometry's, joined whatever its drift."""
+        for pair in self.preferred_same:
+            self.kinds[pair] = "preferred"
+        return list(self.preferred_same)
 
     def _fold_all(self, proposals: list[tuple[int, int]]) -> None:
         """Fold each proposal in turn, dropping those the fold refuses."""
@@ -268,13 +333,16 @@ class Closing:
     def kept_apart(self, x: int, y: int) -> str:
         """What keeps visits x and y from being one dstate before any axiom is asked ("" if nothing): they
         face two ways, travel on unequally far (where the robot stopped at every dstate), or lie beyond the
-        drift bound."""
+        drift bound, or a person said they differ."""
+        if (min(x, y), max(x, y)) in self.told_apart:
+            return "a person said they are different dstates"
         if self.heading[x] != self.heading[y]:
             return f"they face different ways (headings {self.heading[x]} and {self.heading[y]}: metrical level)"
         lx, ly = self.length_of.get(x), self.length_of.get(y)
         if lx is not None and ly is not None and lx != ly:
             return f"the travels from them differ ({lx} and {ly} dm: length_is_feature)"
-        if self._apart(x, y, self.closer.drift_share) > 1.0:
+        if self.odometry_bound and self.kinds.get((min(x, y), max(x, y))) != "preferred" \
+                and self._apart(x, y, self.closer.drift_share) > 1.0:
             return (f"{self.odometry(x, y)}, more than odometry may drift "
                     f"({self.drift_bound(x, y, self.closer.drift_share):.1f} m)")
         return ""

@@ -66,6 +66,8 @@ class Join:
     after: tuple[int, int] | None = None     # forced: the time points that took it
 
     def text(self, evidence: Callable[[int, int], str]) -> str:
+        if self.how == "asserted":
+            return f"t{self.x} = t{self.y}: a person said they are one dstate"
         if self.how == "proposed":
             return f"t{self.x} = t{self.y}: proposed ({self.kind}): {evidence(self.x, self.y)}"
         u, v = self.after
@@ -76,6 +78,12 @@ class Join:
 def explain(closing: Closing, cmap: CognitiveMap, a: int, b: int) -> LoopExplanation:
     """Why a and b are one dstate of ``cmap`` (the map ``closing`` found), or not."""
     return _Explaining(closing).explain(cmap, a, b)
+
+
+def why_apart(closing: Closing, a: int, b: int) -> tuple[str, list[RuleRef]]:
+    """What keeps a and b apart in ``closing``'s partition as it stands, in words, and the constraints
+    joining them would break (if any)."""
+    return _Explaining(closing)._kept_apart_why(a, b)
 
 
 class _Explaining:
@@ -101,6 +109,8 @@ class _Explaining:
         """The odometry behind a proposal, in words."""
         closing, closer = self.closing, self.closing.closer
         i, j = min(x, y), max(x, y)
+        if closing.kinds.get((i, j)) == "preferred":
+            return f"a person prefers them one dstate ({closing.odometry(x, y)})"
         if closing.kinds.get((i, j)) == "retraced":
             return (f"the same {closing.agreeing(i, j)} actions around them, one view, and {closing.odometry(x, y)} "
                     f"(within {closing.drift_bound(x, y, closer.drift_share):.1f} m)")

@@ -13,9 +13,10 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Sequence
 
 from ...tableau import Tableau
+from ..assertions import Assertion
 from ..cogmap import CognitiveMap
 from ..grounding import Deadline
 from .abduction import MisreadAbduction
@@ -33,8 +34,9 @@ __all__ = ["Search"]
 class Search:
     """One resolution: the search state and budget it shares, and the concerns that work on them."""
 
-    def __init__(self, resolver: Resolver, tableau: Tableau, deadline: Deadline):
-        self.state = SearchState(resolver, tableau)
+    def __init__(self, resolver: Resolver, tableau: Tableau, deadline: Deadline,
+                 assertions: Sequence[Assertion] = ()):
+        self.state = SearchState(resolver, tableau, assertions)
         self.budget = Budget(deadline, self.state.timed_out)
         self.retyping = Retyping(self.state, self.budget)
         self.exact = ExactSearch(self.state, self.budget)
@@ -43,7 +45,10 @@ class Search:
     def run(self) -> CognitiveMap:
         """Retype the actions the theory finds mistyped; try one dstate per class; where that does not
         settle it (or some views are suspect), weigh misreads, else bound the classes from below and
-        find the minimal maps."""
+        find the minimal maps. Then, where a person made soft assertions, keep those worth their cost."""
+        return self.exact.preferring(self.fewest())
+
+    def fewest(self) -> CognitiveMap:
         resolver = self.state.resolver
         if resolver.retype and self.state.grid is not None:
             self.retyping.retype()
@@ -53,5 +58,6 @@ class Search:
             return found
         if suspects:
             return self.abduction.robust(suspects, found)
+        self.exact.check_asserted_same()
         self.exact.bound_classes_from_below()
         return self.exact.minimal_maps()

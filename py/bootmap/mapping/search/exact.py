@@ -19,7 +19,7 @@ from clingo import Symbol
 from ...errors import InconsistentTableau
 from ..cogmap import CognitiveMap, Try
 from ..grounding import Grounding, prepass
-from ..vocabulary import MINIMISE_DSTATES, ONE_PER_CLASS
+from ..vocabulary import DSTATE_COST, MINIMISE_DSTATES, ONE_PER_CLASS
 from .budget import grounding_size
 
 if TYPE_CHECKING:
@@ -129,6 +129,31 @@ class ExactSearch:
             return None
         cmap = self._map(outcome)
         return replace(cmap, stats=replace(cmap.stats, lower_bound=cmap.n_dstates))  # the optimiser proved it
+
+    def check_asserted_same(self) -> None:
+        """A person's hard ``same`` of two time points of different classes (their views, or headings,
+        differ) holds in no map: say so before any search (where no view may be a misread)."""
+        classes = self.state.classes
+        for x in self.state.assertions:
+            if x.kind == "same" and not x.soft and not classes.same_class(x.a, x.b):
+                levels = tuple(self.state.resolver.theory.levels)
+                raise InconsistentTableau(f"no map satisfies the axioms with {x}: t{x.a} and t{x.b} differ in a "
+                                          "feature every dstate shows one value of (the view, or the heading)",
+                                          levels=levels)
+
+    def preferring(self, found: CognitiveMap) -> CognitiveMap:
+        """The maps that keep a person's soft assertions unless breaking one saves more than it costs: the
+        fewest dstates (each costing ``DSTATE_COST``), misreads and broken preferences together. A map
+        with more dstates than ``found`` plus the preferences' whole cost over ``DSTATE_COST`` costs more
+        than breaking them all, so that bound holds the answer."""
+        state = self.state
+        soft = [x for x in state.assertions if x.soft]
+        if not soft or not found.minimal:
+            return found
+        if state.classes is None:  # one dstate per class held: each class needs one (.one_per_class)
+            state.classes = state.first.classes(range(len(state.tableau)))
+        bound = found.n_dstates + sum(x.cost for x in soft) // DSTATE_COST
+        return self.optimise(found, bound) or found
 
     def _map(self, outcome: Outcome, minimal: bool = True) -> CognitiveMap:
         models = outcome.models if minimal else outcome.models[:1]

@@ -14,7 +14,6 @@ from typing import TYPE_CHECKING, Sequence
 import numpy as np
 
 from ...walls import wrap_deg
-from ..facts import tableau_facts
 from ..grounding import prepass
 from ..motion import TypeSuspect, action_types
 from ..vocabulary import DSTATE_COST
@@ -78,13 +77,13 @@ class Retyping:
         if state.retyped:
             state.retyped.sort(key=lambda s: s.t)
             state.angles = angles
-            state.facts = tableau_facts(state.tableau, angles=angles)
+            state.facts = state.experience_facts(angles)
             state.action_types = action_types(state.typing.read, angles)
 
     def proved_with(self, angles: list[int]) -> int:
         """The dstates the theory proves necessary (the classes' lower bounds) with these action angles."""
         state = self.state
-        grounded = prepass(state.resolver.theory, tableau_facts(state.tableau, angles=angles),
+        grounded = prepass(state.resolver.theory, state.experience_facts(angles),
                            state.resolver.future_depth)
         state.ground_s += grounded.ground_s
         classes = grounded.classes(range(len(state.tableau)))

@@ -11,12 +11,13 @@ time-out with what was proved and found.
 from __future__ import annotations
 
 import time
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Sequence
 
 from clingo import Symbol
 
 from ...errors import SolveTimeout
 from ...tableau import Tableau
+from ..assertions import Assertion, assertion_facts
 from ..cogmap import CognitiveMap, SolveStats, Try, build_map
 from ..facts import tableau_facts, typing_of
 from ..grounding import Classes, Grounding, PartialFeatures
@@ -31,13 +32,14 @@ if TYPE_CHECKING:
 class SearchState:
     """One resolution: the tableau as facts, its classes, the figures, the best map so far."""
 
-    def __init__(self, resolver: Resolver, tableau: Tableau):
+    def __init__(self, resolver: Resolver, tableau: Tableau, assertions: Sequence[Assertion] = ()):
         self.resolver, self.tableau = resolver, tableau
+        self.assertions = list(assertions)  # a person's word (.assertions): facts beside the experience
         self.start = time.perf_counter()
         # the actions' angles and types, and the learned types' grid (None with a fixed quantum)
         self.typing = typing_of(tableau, resolver.quantum_deg)
         self.angles, self.action_types, self.grid = self.typing.angles, self.typing.types, self.typing.grid
-        self.facts = tableau_facts(tableau, angles=self.angles)
+        self.facts = self.experience_facts(self.angles)
         self.retyped: list[TypeSuspect] = []  # actions taken as mistyped
         self.first: Grounding | None = None  # the first try's grounding
         self.suspects: dict[int, Suspect] = {}  # views the search may take as misreads (robust only)
@@ -49,6 +51,10 @@ class SearchState:
         self.best: CognitiveMap | None = None
         self.ground_s = self.solve_s = 0.0
         self.tries: list[Try] = []
+
+    def experience_facts(self, angles: Sequence[int]) -> list[Symbol]:
+        """The tableau as facts with these action angles, and the person's assertions."""
+        return tableau_facts(self.tableau, angles=angles) + assertion_facts(self.assertions)
 
     def build(self, models: list[list[Symbol]], exhausted: bool, minimal: bool = True) -> CognitiveMap:
         """The map of these models, with the misreads and retyped actions allowed, and the figures so far."""

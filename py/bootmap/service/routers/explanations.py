@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Annotated
 
 from fastapi import APIRouter, Query, Request
+from fastapi.concurrency import run_in_threadpool
 
 from ...errors import AxiomError
 from ...mapping.theory import select_levels
@@ -36,7 +38,9 @@ async def why(tableau_id: TableauId, a: Point, b: Point, services: ServicesDep, 
     chosen = _levels(levels, services)
     await readable(services, caller, tableau_id)
     stored = StoredTableau(services.settings.database_url, tableau_id)  # the solver reads it
-    job = services.explain_job(stored, a, b, chosen)
+    # about the map as stored: the one that honours the owner's assertions
+    said = tuple(r.entry for r in await run_in_threadpool(services.store.assertions, tableau_id))
+    job = dataclasses.replace(services.explain_job(stored, a, b, chosen), assertions=said)
     explained = await services.solve(job, caller.token_id, request)
     return ExplanationOut.model_validate({**explained.explanation, "text": explained.text})
 

@@ -8,6 +8,7 @@ always has a map. Appending is the same: the new revision is stored only once it
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import tempfile
 from contextlib import asynccontextmanager
@@ -154,7 +155,11 @@ async def append_steps(tableau_id: TableauId, services: ServicesDep, caller: Cal
     async with body_file(request) as body:  # the intake process reads the stored tableau itself
         prepared = await services.intake.run(prepare_append, services.settings.database_url, tableau_id, body,
                                              services.limits)
-        solved, theory = await _solve(services, prepared.document, caller, request, stream=tableau_id)
+        # the assertions in force: the new revision's map honours them (read at the revision the store
+        # checks: a change to them makes a revision of its own)
+        said = tuple(r.entry for r in await run_in_threadpool(services.store.assertions, tableau_id))
+        solved, theory = await _solve(services, prepared.document, caller, request, stream=tableau_id,
+                                      assertions=said)
         cmap = await run_in_threadpool(_map_record, solved, prepared.extends + 1, theory)
         # The owner and the revision read above are checked again by the statement that stores the new
         # revision: if the tableau was deleted meanwhile, 404; if another append got there first, 409.
@@ -166,8 +171,11 @@ async def append_steps(tableau_id: TableauId, services: ServicesDep, caller: Cal
 
 # ---------------------------------------------------------------------------------------------------
 
-async def _solve(services: Services, document: str, caller: Caller, request: Request, stream: int | None = None):
+async def _solve(services: Services, document: str, caller: Caller, request: Request, stream: int | None = None,
+                 assertions: tuple[dict, ...] = ()):
     job, theory = services.job(document, stream)
+    if assertions:
+        job = dataclasses.replace(job, assertions=assertions)
     return await services.solve(job, caller.token_id, request), theory
 
 
