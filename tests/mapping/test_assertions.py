@@ -120,7 +120,8 @@ def test_a_soft_assertion_is_kept_only_where_it_is_worth_its_cost(paper):
 
 
 def test_same_and_apart_that_determinism_cannot_both_honour_clash_with_their_proof(paper):
-    # Both laps turn -90 at S0: t0 = t8 makes t1 = t9 (deterministic_action), which a person said are apart.
+    # Both laps turn -90 at S0: t0 = t8 would make t1 = t9 (deterministic_action), which a person said are
+    # apart: turn -90 from t0 reaches a time point a person told apart from where turn -90 from t8 does.
     result = Mapper().honour(paper, said([{"apart": ["t1", "t9"]}, {"same": ["t0", "t8"]}], paper))
     assert result.after is None and result.diff is None
     conflict = result.conflict
@@ -128,11 +129,12 @@ def test_same_and_apart_that_determinism_cannot_both_honour_clash_with_their_pro
     e = conflict.explanation
     assert (e.a, e.b, e.verdict, e.evidence) == (0, 8, "different", [0, 1, 8, 9])
     cited = {r.name: f"{r.file.rsplit('/', 1)[-1]}:{r.line}" for r in e.axioms}
-    assert set(cited) == {"deterministic_action", "one_value_per_feature"}
-    assert all(c.startswith("causal.lp:") for c in cited.values())
-    assert "asserted_apart" in e.rules_cited()  # the person's word is a premise of the proof
+    assert set(cited) == {"one_value_per_feature"} and cited["one_value_per_feature"].startswith("causal.lp:")
+    # the person's word, reached by the same action from both, is the premise of the proof
+    assert {"told_apart_ahead", "asserted_apart"} <= set(e.rules_cited())
     text = result.to_text()
-    assert "same(t0, t8); apart(t1, t9)" in text and f"deterministic_action ({cited['deterministic_action']})" in text
+    assert "same(t0, t8); apart(t1, t9)" in text and f"one_value_per_feature ({cited['one_value_per_feature']})" in text
+    assert "turn -90 from t0 reached t1, which a person told apart from t9" in text
     # the clash is minimal: each assertion alone has a map
     for one in conflict.assertions:
         assert Resolver().resolve(paper, assertions=[one]) is not None
@@ -214,7 +216,7 @@ def test_bootmap_map_assert_prints_the_map_and_what_changed_or_the_clash(tmp_pat
     notes.write_text(json.dumps({"assertions": [{"same": ["t0", "t8"]}, {"apart": ["t1", "t9"]}]}))
     assert main(["map", str(run), "--assert", str(notes)]) == 1
     out = capsys.readouterr().out
-    assert "no map honours the assertions" in out and "deterministic_action (causal.lp:" in out
+    assert "no map honours the assertions" in out and "one_value_per_feature (causal.lp:" in out
     notes.write_text('{"assertions": [{"apart": ["t1", "t1"]}]}')
     assert main(["map", str(run), "--assert", str(notes)]) == 2
     assert f"{notes}: assertions[0].apart: t1 is always its own dstate" in capsys.readouterr().err

@@ -87,10 +87,10 @@ def test_assertions_the_experience_refutes_get_409_with_the_clash_and_nothing_is
     assert problem["type"].endswith("assertion-conflict")
     conflict = problem["conflict"]
     assert [list(a.values())[0] for a in conflict["assertions"]] == [["t0", "t8"], ["t1", "t9"]]
-    assert {a["name"] for a in conflict["explanation"]["axioms"]} == {"deterministic_action",
-                                                                      "one_value_per_feature"}
+    assert {a["name"] for a in conflict["explanation"]["axioms"]} == {"one_value_per_feature"}
+    assert {"told_apart_ahead", "asserted_apart"} <= set(conflict["explanation"]["rules_cited"])
     assert conflict["explanation"]["evidence"] == [0, 1, 8, 9]
-    assert "deterministic_action (causal.lp:" in problem["text"]
+    assert "one_value_per_feature (causal.lp:" in problem["text"]
     assert alice.get(f"/tableaux/{tid}/map").json() == before
     assert len(alice.get(f"/tableaux/{tid}/assertions").json()["assertions"]) == 1
 

@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 from clingo import Symbol
 
 from ..tableau import Tableau, Turn
+from .confidence import Confidence
 from .facts import length_types_of
 from .motion import ActionType, LengthType
 from .vocabulary import AHEAD, HEADING_OF, IS, LEFT, MISREAD, PATH_OF, PLACE_OF, RIGHT, VIEW_OF, Atoms
@@ -88,6 +89,10 @@ class CognitiveMap:
         the axioms saw instead (``abduced_deg``) and what that cost.
     stats : SolveStats
         Solver figures: classes, the bound proved, ground_s, solve_s, total_s, the groundings tried.
+    confidence : Confidence or None
+        What the minimal maps found agree on (:mod:`.confidence`): per dstate and place, in how many it is
+        the same; the share of time points settled. None for a map not proved minimal (a fall-back on
+        time-out, a loop-closed map).
     """
 
     steps: list[dict]
@@ -114,6 +119,7 @@ class CognitiveMap:
     suspect_steps: list[dict] = field(default_factory=list)
     retyped_steps: list[dict] = field(default_factory=list)
     found_by: str = "fewest dstates"
+    confidence: Confidence | None = None
 
     @property
     def n_dstates(self) -> int:
@@ -153,6 +159,7 @@ class CognitiveMap:
             "length_types": [a.to_dict() for a in self.length_types],
             "suspect_steps": self.suspect_steps,
             "retyped_steps": self.retyped_steps,
+            "confidence": self.confidence.to_dict() if self.confidence is not None else None,
             "stats": self.stats.to_dict(),
         }
 
@@ -183,6 +190,8 @@ class CognitiveMap:
             lines.append("actions taken as mistyped: " + "; ".join(
                 f"t{s['t']} {s['kind']} read {s['measured_deg']:+g}, typed {s['learned_deg']:+d}, taken as "
                 f"{s['abduced_deg']:+d}" for s in self.retyped_steps))
+        if self.confidence is not None and (self.confidence.maps > 1 or self.confidence.capped):
+            lines.append(self.confidence.to_text())
         for pa, places in self.paths.items():
             lines.append(f"{pa}: {' -> '.join(places)} (pos)")
         for p, pa in self.right_of:
@@ -275,10 +284,13 @@ def build_map(tableau: Tableau, models: list[list[Symbol]], exhausted: bool, lev
     order = sorted(order, key=_natural)
     paths = {pa: _ordered_places(pa, on, order) for pa in sorted(set(paname.values()), key=_natural1)}
     steps = [step_row(t, tableau.steps[t], S[i], place_of, path_of) for t, i in enumerate(seq)]
-    alternatives = []
+    alternatives, alternative_places = [], []
     for m in models[1:]:
-        _, alt = _number_dstates(IS.args(m), n)
+        alt_atoms = Atoms(m)
+        alt_ids, alt = _number_dstates(alt_atoms[IS], n)
         alternatives.append([f"S{i}" for i in alt])
+        place_of_alt = {alt_ids[d]: str(p) for d, p in alt_atoms[PLACE_OF]}
+        alternative_places.append([place_of_alt.get(i) for i in alt])
     misread = sorted(t.number for (t,) in atoms[MISREAD])
     suspect_steps = [{"t": t, "observed": tableau.steps[t].view, "expected": views[S[seq[t]]],
                       "cost": (misread_costs or {}).get(t)} for t in misread]
@@ -289,7 +301,10 @@ def build_map(tableau: Tableau, models: list[list[Symbol]], exhausted: bool, lev
         n_models=len(models) if minimal else 0, unique=minimal and len(models) == 1 and exhausted,
         models_capped=minimal and not exhausted, alternatives=alternatives, levels=list(levels),
         stats=stats, minimal=minimal, action_types=list(action_types or []),
-        length_types=length_types_of(tableau))
+        length_types=length_types_of(tableau),
+        confidence=Confidence.of([[S[i] for i in seq]] + alternatives,
+                                 [[place_of.get(S[i]) for i in seq]] + alternative_places,
+                                 capped=not exhausted) if minimal else None)
 
 
 def step_row(t: int, step, dstate: str, place_of: dict, path_of: dict) -> dict:

@@ -13,13 +13,15 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Sequence
 
 import clingo
 from clingo import Symbol
 
 from .cogmap import CognitiveMap
 from .trace import Derivations, Instrumented, RuleRef
-from .vocabulary import DSTATE_FEATURE, FEATURE, IS, PLACE_OF, QUIET, TOLD_APART, TURN_ACTION, action_word, predicate
+from .vocabulary import (DSTATE_FEATURE, FEATURE, IS, PLACE_OF, QUIET, SEQUENCE, TOLD_AFTER, TOLD_APART, TURN_ACTION,
+                         action_word, predicate)
 
 
 @dataclass
@@ -134,19 +136,32 @@ class Names:
             return str(atom)
         return f"{atom.name}({', '.join(self.term(x) for x in atom.arguments)})"
 
+    def _told(self, at_time: bool, args: Sequence[Symbol]) -> str:
+        """A person's word as a feature (core/assert.lp): ``told_apart(T1, T2)`` shows 1 at T1 and 2 at T2;
+        ``told_after(S, told_apart(T1, T2))`` shows it at the time point the actions S started from."""
+        feature, value = args[1], args[2].number
+        actions = []
+        if TOLD_AFTER.matches(feature):
+            sequence, feature = feature.arguments
+            while SEQUENCE.matches(sequence):
+                actions.append(action_word(sequence.arguments[0]))
+                sequence = sequence.arguments[1]
+        ends = [x.number for x in feature.arguments]
+        mine, other = (ends[0], ends[1]) if value == 1 else (ends[1], ends[0])
+        where = f"t{args[0].number}" if at_time else self.term(args[0])
+        if not actions:
+            return (f"a person told t{mine} apart from t{other}" if at_time else
+                    f"{where} holds t{mine}, which a person told apart from t{other}")
+        return f"{', then '.join(actions)} from {where} reached t{mine}, which a person told apart from t{other}"
+
     def phrase(self, atom: Symbol) -> str:
         """The atom as a sentence, by the vocabulary's phrase; a user's own predicate as its atom."""
         p = predicate(atom)
         if p is None or p.phrase is None:
             return self.atom(atom)
         args = atom.arguments
-        if p in (FEATURE, DSTATE_FEATURE) and TOLD_APART.matches(args[1]):
-            # a person's word as a feature (core/assert.lp): value 1 at the first time point, 2 at the second
-            ends = [x.number for x in args[1].arguments]
-            mine, other = (ends[0], ends[1]) if args[2].number == 1 else (ends[1], ends[0])
-            if p is FEATURE:
-                return f"a person told t{mine} apart from t{other}"
-            return f"{self.term(args[0])} holds t{mine}, which a person told apart from t{other}"
+        if p in (FEATURE, DSTATE_FEATURE) and (TOLD_APART.matches(args[1]) or TOLD_AFTER.matches(args[1])):
+            return self._told(p is FEATURE, args)
         return re.sub(r"\{(P?)(\d)\}", lambda m: (self.place(args[int(m[2])]) if m[1] else self.term(args[int(m[2])])),
                       p.phrase)
 

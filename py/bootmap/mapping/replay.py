@@ -49,7 +49,7 @@ STOCK_DIGESTS = {
     "topological.lp": "df80192cb9c27380cf518bbc4e1f298006fdaf1d07d5fded8971fa6a25c41512",
     "core/ask.lp": "2e8adf403568adf1bc5e166b19bde32ba2fdaac7f873adef0930bb9071c939ca",
     "core/partition.lp": "5a5041dcda4ff90134c77b13f5c751ef32325af467a675c6f5272a5a5f7f41c0",
-    "core/assert.lp": "a92b4b19ecc25704f432fba835c495cf324fc1a10bf335cadeca63aacd4c0f9f",
+    "core/assert.lp": "2c01befdceb28aa69c8a639e07b55dc2b96f6280fd2d7f052fe55fa211a76c17",
 }
 
 

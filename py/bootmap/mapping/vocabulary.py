@@ -213,6 +213,8 @@ SAME, OPPOSITE = Term("same", 0, "one way along a path"), Term("opposite", 0, "t
 POS, NEG = Term("pos", 0, "the way a path's least dstate faces"), Term("neg", 0, "the other way")
 TOLD_APART = Term("told_apart", 2, "the feature: a person's word that T1 and T2 differ, told_apart(T1, T2); "
                                    "T1 shows it with value 1, T2 with value 2 (core/assert.lp)")
+TOLD_AFTER = Term("told_after", 2, "the feature: a person's word seen after a sequence of actions, told_after(S, "
+                                   "told_apart(T1, T2)) (core/assert.lp)")
 BROKEN_SAME = Term("broken_same", 0, "a preference for one dstate, broken (what core/assert.lp's cost counts)")
 BROKEN_APART = Term("broken_apart", 0, "a preference for two dstates, broken (what core/assert.lp's cost counts)")
 TURN_ACTION = Term("turn", 1, "a turn by its angle type, turn(A) (causal.lp's action/2)")

@@ -290,6 +290,12 @@ class MapOut(Out):
                                                          "explaining them as seen needs far more dstates.")
     retyped_steps: list[RetypedStep] = Field(description="Actions the map takes as mistyped: read far from "
                                                           "their learned type, and typed as its neighbour.")
+    confidence: dict[str, Any] | None = Field(None, description="What the minimal maps found agree on: "
+                                              "minimal_maps, capped, settled (the share of time points whose "
+                                              "dstate every one of them agrees on), and per dstate and place "
+                                              "in_maps (in how many it is the same) and, per dstate, "
+                                              "confusable (the time points it could still be one with); null "
+                                              "for a loop-closed map.")
     stats: dict[str, Any] = Field(description="Solver figures (seconds, bounds tried).")
 
 
