@@ -56,8 +56,9 @@ def test_built_wheel_carries_the_axioms_and_runs_the_demo(tmp_path):
     assert wheel.name.startswith(f"bootmap-{release}-")  # the tag sets the version
     # The viewer's page and modules ship in the package: nothing for a user to build.
     shipped = set(zipfile.ZipFile(wheel).namelist())
-    assert {f"bootmap/service/static/{f}" for f in ("index.html", "app.js", "api.js", "draw.js", "table.js",
-                                                     "why.js", "zoom.js", "viewer.css")} <= shipped
+    assert {f"bootmap/service/static/{f}" for f in ("index.html", "app.js", "api.js", "assert.js", "draw.js",
+                                                     "table.js", "why.js", "zoom.js", "viewer.css")} <= shipped
+    assert "bootmap/asp/core/assert.lp" in shipped  # every axiom file, the core's too
     assert "bootmap/py.typed" in shipped  # type checkers read the package's annotations
     env_dir = tmp_path / "clean"
     venv.create(env_dir, with_pip=False)

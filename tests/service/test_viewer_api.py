@@ -14,7 +14,7 @@ def test_the_page_and_its_modules_are_served_from_the_package(client):
     page = client.get("/")
     assert page.status_code == 200 and page.headers["content-type"].startswith("text/html")
     assert '<script type="module" src="/viewer/app.js">' in page.text
-    for name in ("app.js", "api.js", "draw.js", "table.js", "why.js", "zoom.js"):
+    for name in ("app.js", "api.js", "assert.js", "draw.js", "table.js", "why.js", "zoom.js"):
         r = client.get(f"/viewer/{name}")
         assert r.status_code == 200 and r.headers["content-type"].startswith("text/javascript"), name
     assert client.get("/viewer/viewer.css").headers["content-type"].startswith("text/css")

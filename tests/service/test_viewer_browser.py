@@ -420,3 +420,79 @@ def test_a_real_logs_map_is_decluttered_and_readable_once_zoomed(page, viewer_se
                           " return [...svg.querySelectorAll('.place-label')].map(t =>"
                           " parseFloat(getComputedStyle(t).fontSize) * k); }")
     assert min(sizes) >= 11
+
+
+# --- A person in the loop: same place / not the same, what changed, the clash, the list ------------------
+
+@pytest.fixture
+def two_laps(viewer_server) -> int:
+    """The paper's notched rectangle, two circuits (t0, t8 and t16 are S0): a tableau of the test's own."""
+    with viewer_server.client() as c:
+        r = c.post("/tableaux", json=examples.notched_rectangle(circuits=2).to_dict())
+        assert r.status_code == 201, r.text
+        return r.json()["id"]
+
+
+def _pick_rows(page, *ts):
+    for t in ts:
+        page.locator(f'#tableau tbody tr[data-t="{t}"]').click()
+
+
+def test_not_the_same_splits_the_dstate_lights_what_changed_and_lists_the_assertion_to_take_back(page, viewer_server,
+                                                                                               two_laps):
+    _open(page, viewer_server, two_laps)
+    assert page.locator("#assert-apart").is_disabled()
+    assert page.locator("#assertions li.none").count() == 1  # the owner's (here, the local user's) list
+    _pick_rows(page, 0, 8)  # both S0
+    assert page.locator("#assert-apart").is_enabled()
+    page.locator("#assert-apart").click()
+    page.wait_for_selector("body[data-asserted=changed]", state="attached", timeout=60_000)
+    assert "9 dstates" in page.locator("#summary").inner_text()
+    assert "dstate S0 split: now S0, S8" in page.locator("#asserted").inner_text()
+    page.wait_for_selector('#map .dstate.changed[data-dstate="S8"]', state="attached")
+    assert sorted(page.locator("#map .dstate.changed").evaluate_all("ns => ns.map(n => n.dataset.dstate)")) == [
+        "S0", "S8"]
+    assert page.locator("#assertions li code").all_inner_texts() == ["apart(t0, t8)"]
+    _shot(page, "assert.png", full_page=True)
+    # taking it back: the map as it was
+    page.locator("#assertions button.remove").click()
+    page.wait_for_selector("body[data-asserted=removed]", state="attached", timeout=60_000)
+    assert "8 dstates" in page.locator("#summary").inner_text()
+    assert "dstates S0 + S8 joined: now S0" in page.locator("#asserted").inner_text()
+    assert page.locator("#assertions li.none").count() == 1
+
+
+def test_same_place_that_the_experience_refutes_shows_the_clash_with_its_proof(page, viewer_server, two_laps):
+    page.allowed_errors = ["409 (Conflict)"]  # the browser logs the service's refusal; the page shows why
+    _open(page, viewer_server, two_laps)
+    _pick_rows(page, 1, 9)
+    page.locator("#assert-apart").click()
+    page.wait_for_selector("body[data-asserted=changed]", state="attached", timeout=60_000)
+    _pick_rows(page, 0, 8)
+    page.locator("#assert-same").click()
+    page.wait_for_selector("body[data-asserted=conflict]", state="attached", timeout=60_000)
+    text = page.locator("#asserted").inner_text()
+    assert "No map honours that" in text and "same(t0, t8) and apart(t1, t9)" in text
+    assert page.locator("#asserted .axioms .rule").all_inner_texts() == ["one_value_per_feature"]
+    assert "causal.lp:" in page.locator("#asserted .axioms").inner_text()
+    assert page.locator("#tableau tr.evidence").evaluate_all("rs => rs.map(r => r.dataset.t)") == ["0", "1", "8", "9"]
+    assert page.locator("#assertions li code").all_inner_texts() == ["apart(t1, t9)"]  # nothing stored
+
+
+def test_dstates_the_minimal_maps_disagree_on_are_drawn_dashed(page, viewer_server):
+    # A short exploration of a random grid world that leaves two minimal maps (seed 20023: 20 steps).
+    rng = np.random.default_rng(20023)
+    world = random_world(rng, int(rng.integers(3, 5)), int(rng.integers(3, 5)), extra_edges=int(rng.integers(0, 4)),
+                         landmarks=0.2)
+    tableau = walk(world, int(rng.integers(8, 30)), rng, policy="explore")
+    with viewer_server.client() as c:
+        r = c.post("/tableaux", json=tableau.to_dict())
+        assert r.status_code == 201, r.text
+        tid, m = r.json()["id"], r.json()["map"]
+    assert m["confidence"]["minimal_maps"] == 2
+    unsettled = sorted(d for d, x in m["confidence"]["dstates"].items() if x["in_maps"] < x["of"])
+    assert unsettled
+    _open(page, viewer_server, tid)
+    assert sorted(page.locator("#map .dstate.unsettled").evaluate_all("ns => ns.map(n => n.dataset.dstate)")) == \
+        unsettled
+    assert "of time points at a dstate they all agree on" in page.locator("#summary").inner_text()

@@ -66,6 +66,17 @@ export async function getJSON(path, { etag } = {}) {
   return { data: body, etag: response.headers.get("ETag") };
 }
 
+// A change (POST, DELETE) with a JSON body, or none; the answer's JSON. A refusal throws ApiError with
+// the problem (e.g. a 409's conflict).
+export async function sendJSON(method, path, body) {
+  const options = { method, headers: body === undefined ? {} : { "Content-Type": "application/json" } };
+  if (body !== undefined) options.body = JSON.stringify(body);
+  const response = await send(path, options);
+  const data = await response.json().catch(() => null);
+  if (!response.ok) throw new ApiError(response.status, data);
+  return { data };
+}
+
 // An image (or any file) as an object URL: <img src> cannot send the Authorization header.
 export async function objectURL(path) {
   const response = await send(path);

@@ -5,15 +5,17 @@
 // because EventSource cannot send the Authorization header, and because an append may land through
 // another server process on the same database, which a per-process event stream would not hear of.
 
-import { ApiError, askToken, getJSON, objectURL } from "./api.js";
-import { HEIGHT, WIDTH, drawMap, drawTrajectory, fitLabels, light, svgFile } from "./draw.js";
+import { ApiError, askToken, getJSON, objectURL, sendJSON } from "./api.js";
+import { changedDstates, renderAssertions, renderConflict, renderDiff } from "./assert.js";
+import { HEIGHT, WIDTH, drawMap, drawTrajectory, fitLabels, light, markDstates, svgFile } from "./draw.js";
 import { fillTable, markRows } from "./table.js";
 import { renderWhy } from "./why.js";
 import { ZoomView } from "./zoom.js";
 
 const POLL_MS = 1000;
 const $ = (id) => document.getElementById(id);
-const state = { id: null, etag: null, drawing: null, picks: [], poll: null, levels: [], whyAsked: 0, view: null };
+const state = { id: null, etag: null, drawing: null, picks: [], poll: null, levels: [], whyAsked: 0, view: null,
+                changed: [] };
 
 function status(message, isError = false) {
   $("status").textContent = message;
@@ -60,13 +62,16 @@ function chosenLevels() {
 
 async function openTableau(id) {
   clearTimeout(state.poll);
-  Object.assign(state, { id, etag: null, drawing: null, picks: [] });
+  Object.assign(state, { id, etag: null, drawing: null, picks: [], changed: [] });
   $("why").replaceChildren();
+  $("asserted").replaceChildren();
+  $("assertions-panel").hidden = true;
   if (id === undefined || id === null || id === "") return;
   const url = new URL(location.href);
   url.searchParams.set("tableau", id);
   history.replaceState(null, "", url);
   await refresh();
+  loadAssertions().catch(fail);
   poll();
 }
 
@@ -98,6 +103,13 @@ function draw() {
   document.body.dataset.drawn = String(d.revision);
   window.bootmapTimes = { ...(window.bootmapTimes || {}), drawn: performance.now() };
   fillTable($("tableau"), m.steps, (t) => pick({ t }));
+  // How sure the map is: the dstates the minimal maps disagree on, dashed; what the last assertion changed.
+  const c = m.confidence;
+  markDstates($("map"), "unsettled", c ? Object.keys(c.dstates).filter((d) => c.dstates[d].in_maps < c.minimal_maps) : []);
+  markDstates($("map"), "changed", state.changed);
+  if (c && (c.minimal_maps > 1 || c.capped)) {
+    $("summary").textContent += `; ${Math.round(100 * c.settled)}% of time points at a dstate they all agree on`;
+  }
   const traj = d.layout.trajectory;
   $("truth-panel").hidden = !traj;
   if (traj) drawTrajectory($("trajectory"), traj);
@@ -132,6 +144,72 @@ function showPicks() {
   $("selection").textContent = picks.length === 0 ? "Click two dstates (on the map) or two time points (rows)."
     : picks.length === 1 ? `${picks[0].label} (${picks[0].dstate} at t${picks[0].t}): click another.`
     : `${picks[0].label} and ${picks[1].label}:`;
+  const two = picks.length === 2 && picks[0].t !== picks[1].t;
+  $("assert-same").disabled = $("assert-apart").disabled = !two;
+}
+
+// "Same place" or "Not the same" on the two picks: the map solved again around it, what changed lit on
+// the new map; or the clash, with its proof.
+async function assertPicked(kind) {
+  const [a, b] = state.picks;
+  const said = `${kind}(t${a.t}, t${b.t})`;
+  document.body.dataset.asserted = "asking";
+  $("asserted").replaceChildren(Object.assign(document.createElement("p"), {
+    className: "busy", textContent: `${said}: solving the map again…` }));
+  try {
+    const { data } = await sendJSON("POST", `/tableaux/${state.id}/assertions`, { [kind]: [`t${a.t}`, `t${b.t}`] });
+    await changed(data, said);
+    document.body.dataset.asserted = "changed";
+  } catch (e) {
+    if (e instanceof ApiError && e.status === 409 && e.problem?.conflict) {
+      renderConflict($("asserted"), e.problem, (t) => markRows($("tableau"), "focus", [t], true));
+      markRows($("tableau"), "evidence", e.problem.conflict.explanation.evidence);
+      document.body.dataset.asserted = "conflict";
+    } else {
+      $("asserted").replaceChildren();
+      document.body.dataset.asserted = "failed";
+      fail(e);
+    }
+  }
+}
+
+// A change the service made (an assertion added or taken back): say what changed, draw the new map.
+async function changed(data, said) {
+  state.changed = changedDstates(data.diff);
+  state.picks = [];
+  state.whyAsked++;  // an answer about the old map, still on its way, is not shown
+  $("why").replaceChildren();
+  markRows($("tableau"), "evidence", []);
+  renderDiff($("asserted"), data.diff, said);
+  await refresh();
+  markDstates($("map"), "changed", state.changed);
+  showAssertions(data.assertions);
+}
+
+async function loadAssertions() {
+  try {
+    const { data } = await getJSON(`/tableaux/${state.id}/assertions`);
+    showAssertions(data.assertions);
+  } catch (e) {
+    // Another owner's (public) tableau: its assertions are not the reader's to see, nor to change.
+    if (!(e instanceof ApiError && (e.status === 403 || e.status === 404))) throw e;
+    $("assertions-panel").hidden = true;
+  }
+}
+
+function showAssertions(assertions) {
+  $("assertions-panel").hidden = false;
+  renderAssertions($("assertions"), assertions, async (aid) => {
+    document.body.dataset.asserted = "asking";
+    try {
+      const { data } = await sendJSON("DELETE", `/tableaux/${state.id}/assertions/${aid}`);
+      await changed(data, `assertion ${aid} taken back`);
+      document.body.dataset.asserted = "removed";
+    } catch (e) {
+      document.body.dataset.asserted = "failed";
+      fail(e);
+    }
+  });
 }
 
 async function why(a, b) {
@@ -233,6 +311,8 @@ async function main() {
   mapTools();
   $("token-button").addEventListener("click", () => askToken("The API token this tab sends (kept until the tab closes)."));
   $("tableaux").addEventListener("change", (e) => openTableau(e.target.value).catch(fail));
+  $("assert-same").addEventListener("click", () => assertPicked("same"));
+  $("assert-apart").addEventListener("click", () => assertPicked("apart"));
   try {
     await loadLevels(params.get("levels")?.split(","));
     const id = await listTableaux(params.get("tableau"));

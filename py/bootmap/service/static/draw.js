@@ -241,6 +241,12 @@ export function light(svg, cls, dstates) {
   }
 }
 
+// Give the given dstates the class cls (and no others), leaving their places folded as they are.
+export function markDstates(svg, cls, dstates) {
+  for (const node of svg.querySelectorAll(`.dstate.${cls}`)) node.classList.remove(cls);
+  for (const d of dstates) svg.querySelector(`.dstate[data-dstate="${CSS.escape(d)}"]`)?.classList.add(cls);
+}
+
 // The true trajectory (poses), in its own frame, with the start marked.
 export function drawTrajectory(svg, points) {
   svg.replaceChildren();

@@ -10,7 +10,8 @@ const rule = (r) => `<code class="rule" title="${escape(r.level)}">${escape(r.na
 function proofNode(node) {
   const how = node.rule ? ` — by ${rule(node.rule)}` : node.step !== null && node.step !== undefined
     ? ` — <a href="#" class="step" data-t="${escape(node.step)}">observed at t${escape(node.step)}</a>` : "";
-  const kids = node.premises.length ? `<ul>${node.premises.map(proofNode).join("")}</ul>` : "";
+  const premises = node.premises ?? [];  // a leaf may come without them (a conflict's proof, as solved)
+  const kids = premises.length ? `<ul>${premises.map(proofNode).join("")}</ul>` : "";
   return `<li><span class="atom" title="${escape(node.atom)}">${escape(node.text)}</span>${how}${kids}</li>`;
 }
 
