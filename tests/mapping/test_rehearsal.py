@@ -11,7 +11,7 @@ import pytest
 from bootmap.examples import notched_rectangle
 from bootmap.mapping import Resolver
 from bootmap.mapping.rehearsal import Rehearsal
-from bootmap.tableau import Tableau, Turn
+from bootmap.tableau import Step, Tableau, Travel, Turn
 from support.gridworld import random_world, scripted, walk
 
 # The plan's actions as the grid world names them.
@@ -42,6 +42,14 @@ def executed(world, tableau: Tableau, actions: list[str]) -> Tableau:
     return Tableau.from_dict({**doc, "steps": doc["steps"] + more[1:]})
 
 
+def test_a_plan_that_tells_the_maps_apart_leaves_every_time_point_settled():
+    # t4 may be t0's dstate or t2's: travelling on from t4 shows which (B after t0, C after t2).
+    tableau = Tableau(tuple(Step(v, Travel(1.0) if i < 4 else None) for i, v in enumerate("ABACA")))
+    plan = Rehearsal(Resolver(levels=["causal"])).plan(tableau)
+    assert (plan.kind, plan.actions, plan.settled_now, plan.settled_after) == ("distinguish", ["travel"], 0.4, 1.0)
+    assert "40% now, at least 100% after these actions" in plan.to_text()
+
+
 def test_a_unique_map_has_nothing_to_rehearse():
     plan = Rehearsal().plan(notched_rectangle(3))
     assert (plan.kind, plan.actions) == ("nothing", [])
@@ -58,6 +66,9 @@ def test_no_shorter_sequence_tells_the_maps_apart(seed):
     assert not cmap.unique
     plan = Rehearsal(max_length=5).plan(tableau, cmap)
     maps = [cmap.dstate_of] + cmap.alternatives
+    # the map's confidence now, and at worst after the plan: fewer maps left can only agree on more
+    assert plan.settled_now == cmap.confidence.settled < 1.0
+    assert plan.settled_now <= plan.settled_after <= 1.0
     steps = tableau.steps
     actions = [_word(s.action) for s in steps]
     words = sorted({a for a in actions if a})

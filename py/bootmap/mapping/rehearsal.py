@@ -34,6 +34,7 @@ from itertools import combinations
 
 from ..tableau import Tableau
 from .cogmap import CognitiveMap
+from .confidence import Confidence
 from .facts import action_symbols, read_actions
 from .grounding import Deadline
 from .resolver import Resolver
@@ -86,6 +87,9 @@ class Plan:
     kind : str
         ``"nothing"`` (the map is unique), ``"distinguish"`` (every pair told apart), ``"partial"`` (some
         pairs), ``"test"`` (some maps predict views where others cannot say), ``"explore"`` (no prediction differs: the plan leads to an action not yet taken there).
+    settled_now, settled_after : float
+        The map's confidence (:mod:`.confidence`): the share of time points every minimal map puts at one
+        dstate, now, and after the plan whatever the robot sees (the maps its views leave, at worst).
     """
 
     actions: list[str]
@@ -93,10 +97,13 @@ class Plan:
     separated: int = 0
     pairs: int = 0
     kind: str = "nothing"
+    settled_now: float = 1.0
+    settled_after: float = 1.0
 
     def to_dict(self) -> dict:
         return {"kind": self.kind, "actions": self.actions, "separated_pairs": self.separated,
-                "pairs": self.pairs, "hypotheses": self.hypotheses}
+                "pairs": self.pairs, "hypotheses": self.hypotheses, "settled_now": self.settled_now,
+                "settled_after": self.settled_after}
 
     def to_text(self) -> str:
         if self.kind == "nothing":
@@ -113,6 +120,8 @@ class Plan:
         for i, h in enumerate(self.hypotheses):
             seen = ", ".join("?" if v is None else v for v in h["predicts"])
             lines.append(f"  map {i + 1}: now at {h['at']}; predicts {seen or '-'}")
+        lines.append(f"Time points at a dstate every minimal map agrees on: {100 * self.settled_now:.0f}% now, "
+                     f"at least {100 * self.settled_after:.0f}% after these actions whatever is seen.")
         return "\n".join(lines)
 
 
@@ -155,8 +164,27 @@ class Rehearsal:
         words = sorted({a for a in actions if a is not None})
         plan, separated, kind = _search(hyps, words, taken_at_view, self.max_length)
         now = [h.dstate_of[-1] for h in hyps]
-        return Plan(plan, [{"at": at, "predicts": h.predict(at, plan)} for h, at in zip(hyps, now)],
-                    separated, len(hyps) * (len(hyps) - 1) // 2, kind)
+        predicted = [h.predict(at, plan) for h, at in zip(hyps, now)]
+        return Plan(plan, [{"at": at, "predicts": p} for at, p in zip(now, predicted)],
+                    separated, len(hyps) * (len(hyps) - 1) // 2, kind,
+                    _settled(maps), _settled_after(maps, predicted))
+
+
+def _settled(maps: list[list[str]]) -> float:
+    """The share of time points every one of ``maps`` puts at one dstate (:class:`.confidence.Confidence`)."""
+    return Confidence.of(maps, [], capped=False).settled
+
+
+def _settled_after(maps: list[list[str]], predicted: list[list[str | None]]) -> float:
+    """The settled share among the maps the plan's outcome leaves, at worst over the outcomes the maps
+    predict (a map that cannot say what will be seen is left by every outcome its known views allow)."""
+    outcomes = {tuple(p) for p in predicted if None not in p} or {tuple(predicted[0])}
+    worst = 1.0
+    for seen in outcomes:
+        left = [m for m, p in zip(maps, predicted)
+                if all(v is None or s is None or v == s for v, s in zip(p, seen))]
+        worst = min(worst, _settled(left or maps))
+    return worst
 
 
 def _search(hyps: list[_Hypothesis], words: list[str], taken_at_view: dict[str, set[str]],

@@ -498,6 +498,8 @@ class RehearsalOut(Out):
     separated_pairs: int
     pairs: int
     hypotheses: list[HypothesisOut] = Field(description="Per minimal map: where the robot is, what it predicts.")
+    settled_now: float = Field(1.0, description="The share of time points every minimal map puts at one dstate.")
+    settled_after: float = Field(1.0, description="... after the plan, whatever the robot sees (at worst).")
     text: str = Field(description="The plan as text.")
 
 
