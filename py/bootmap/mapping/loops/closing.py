@@ -87,7 +87,7 @@ class LoopCloser:
         clash = hard(assertions)
         for x in list(clash):
             trial = [y for y in clash if y is not x]
-            if trial and not Closing(self, tableau, deadline, trial).asserted():
+            if trial and not self._holds(tableau, trial, deadline):
                 clash = trial
         same = next(x for x in clash if x.kind == "same")  # apart alone refuses joins, never the map
         others = [x for x in clash if x is not same]
@@ -100,6 +100,14 @@ class LoopCloser:
         explanation = LoopExplanation(same.a, same.b, names, "different", sentence, axioms=axioms, levels=levels,
                                       total_s=time.perf_counter() - start)
         return Conflict([same] + others, explanation, levels)
+
+    def _holds(self, tableau: Tableau, assertions: Sequence[Assertion], deadline: Deadline) -> bool:
+        """Whether loop closing finds a map with these assertions."""
+        try:
+            Closing(self, tableau, deadline, assertions).run()
+        except InconsistentTableau:
+            return False
+        return True
 
     def explain(self, tableau: Tableau, a, b, deadline: Deadline | None = None,
                 assertions: Sequence[Assertion] = ()) -> LoopExplanation:
@@ -194,8 +202,9 @@ class Closing:
             raise self.timed_out()
         if not self.asserted():
             raise InconsistentTableau("no map found by loop closing with the assertions: the joins a person "
-                                      "asserted cannot be made, or the axioms reject them",
-                                      levels=tuple(self.resolver.theory.levels))
+                                      "asserted cannot be made", levels=tuple(self.resolver.theory.levels))
+        # A person's joins stay whatever follows; the axioms judge the partitions made with them (the
+        # topological level may refuse them alone, until the proposals join what they imply).
         base = self.dstates.mark()
         proposals = self.preferred + self.proposals
         self._fold_all(proposals)
@@ -218,9 +227,7 @@ class Closing:
 
     def asserted(self) -> bool:
         """Make the joins a person asserted, with what determinism then joins, whatever odometry's drift;
-        False if some join they make is refused (``refused`` says which) or the axioms reject the map."""
-        if not self.asserted_same:
-            return True
+        False if some join they make is refused (``refused`` says which)."""
         self.odometry_bound = False
         try:
             for a, b in self.asserted_same:
@@ -228,7 +235,7 @@ class Closing:
                     return False
         finally:
             self.odometry_bound = True
-        return self._accepted()
+        return True
 
     @cached_property
     def preferred(self) -> list[tuple[int, int]]:
