@@ -20,20 +20,22 @@ def tokens_server(tmp_path_factory, server_axioms):
     s.stop()
 
 
-@pytest.fixture
-def alice(tokens_server):
+def _as(tokens_server, name: str):
+    """A client of the server that sends ``name``'s token."""
     server, tokens = tokens_server
     with server.client() as c:
-        c.headers.update(bearer(tokens["alice"]))
+        c.headers.update(bearer(tokens[name]))
         yield c
+
+
+@pytest.fixture
+def alice(tokens_server):
+    yield from _as(tokens_server, "alice")
 
 
 @pytest.fixture
 def bob(tokens_server):
-    server, tokens = tokens_server
-    with server.client() as c:
-        c.headers.update(bearer(tokens["bob"]))
-        yield c
+    yield from _as(tokens_server, "bob")
 
 
 def paper(client) -> int:

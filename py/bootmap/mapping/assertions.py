@@ -43,7 +43,6 @@ from .diff import MapDiff
 
 if TYPE_CHECKING:
     from .cogmap import CognitiveMap
-    from .explain import Explanation
 
 __all__ = ["Assertion", "AssertedMap", "Conflict", "FORMAT", "KINDS", "SOFT_COST", "parse_assertions", "load_assertions",
            "assertion_facts", "resolve_names", "hard"]
@@ -257,7 +256,7 @@ class Conflict:
     cannot hold with the others: the steps of experience and the axioms (file:line) it needs."""
 
     assertions: list[Assertion]
-    explanation: Explanation
+    explanation: Any  # an explain.Explanation, or a loop-closed map's loops.LoopExplanation
     levels: list[str] = field(default_factory=list)
 
     @property
