@@ -127,7 +127,8 @@ class Mapper:
         levels = tuple(self.resolver.theory.levels)
         if self.closes_loops(tableau):
             try:
-                return self.closer.resolve(tableau, deadline, assertions)
+                return self.closer.resolve(tableau, deadline, assertions,
+                                           prior=before.dstate_of if before is not None else None)
             except InconsistentTableau:
                 if not hard(assertions):
                     raise

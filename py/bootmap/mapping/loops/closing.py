@@ -60,12 +60,15 @@ class LoopCloser:
     context: int = 3
 
     def resolve(self, tableau: Tableau, deadline: Deadline | None = None,
-                assertions: Sequence[Assertion] = ()) -> CognitiveMap:
+                assertions: Sequence[Assertion] = (), prior: Sequence[str] | None = None) -> CognitiveMap:
         """The loop-closed map of ``tableau`` by ``deadline`` (default: the resolver's time limit). A person's
         ``assertions`` (time points): each hard ``same`` is joined first, with what determinism then joins,
         whatever odometry's drift (the person knows where the robot was); each ``apart`` refuses every join
         that would make the two one. A soft ``same`` is the first proposal, kept where the axioms accept it;
         a soft ``apart`` refuses odometry's proposals as a hard one does (loop closing weighs no costs).
+        ``prior``, the dstate of each time point in the map made without the assertions, is what the joins
+        fall back on where the proposals all at once are refused beside them: its joins kept where they
+        still fold and the axioms accept them, before odometry's proposals one at a time.
 
         Raises
         ------
@@ -75,7 +78,7 @@ class LoopCloser:
             Out of time; ``best_map`` is the last map the axioms accepted, if any.
         """
         tableau.require_views()
-        return Closing(self, tableau, deadline or Deadline.after(self.resolver.time_limit), assertions).run()
+        return Closing(self, tableau, deadline or Deadline.after(self.resolver.time_limit), assertions).run(prior)
 
     def conflict(self, tableau: Tableau, assertions: Sequence[Assertion], before: CognitiveMap,
                  deadline: Deadline) -> Conflict:
@@ -195,7 +198,7 @@ class Closing:
         self.checks = 0
 
     # ------------------------------------------------------------------------------------------
-    def run(self) -> CognitiveMap:
+    def run(self, prior: Sequence[str] | None = None) -> CognitiveMap:
         # Every proposal at once first: the topological level may reject a partition on the way to one it
         # accepts (two dstates of one place facing one way, until their other dstates are joined too).
         if self.deadline.passed():
@@ -209,9 +212,12 @@ class Closing:
         proposals = self.preferred + self.proposals
         self._fold_all(proposals)
         if not self._accepted():
-            # Else one proposal at a time, each kept only where the axioms accept the partition it makes.
+            # Else one proposal at a time, each kept only where the axioms accept the partition it makes;
+            # with a person's joins, after the joins of the map made without them, where those still stand.
             self.dstates.undo(base)
-            self._accepted()
+            if not (prior is not None and self.asserted_same and self._kept(prior)):
+                self.dstates.undo(base)
+                self._accepted()
             for i, j in proposals:
                 if self.deadline.passed():
                     raise self.timed_out()
@@ -224,6 +230,19 @@ class Closing:
             raise InconsistentTableau("no map found by loop closing: no partition it reached satisfies the axioms",
                                       levels=tuple(self.resolver.theory.levels))
         return replace(self.best, stats=self._stats())
+
+    def _kept(self, prior: Sequence[str]) -> bool:
+        """Fold the joins of a map made before (each dstate's visits, in order), dropping those refused;
+        whether the axioms accept the partition then."""
+        first: dict[str, int] = {}
+        joins = []
+        for t, d in enumerate(prior):
+            if d in first:
+                joins.append((first[d], t))
+            else:
+                first[d] = t
+        self._fold_all(joins)
+        return self._accepted()
 
     def asserted(self) -> bool:
         """Make the joins a person asserted, with what determinism then joins, whatever odometry's drift;
