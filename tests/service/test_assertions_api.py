@@ -154,3 +154,16 @@ def test_assertions_and_the_map_they_made_survive_a_restart(tmp_path):
             assert c.get(f"/tableaux/{tid}/assertions").status_code == 404
     finally:
         server.stop()
+
+
+def test_steps_that_contradict_an_assertion_are_refused_with_the_clash(alice):
+    tid = paper(alice)
+    assert alice.post(f"/tableaux/{tid}/assertions", json={"same": ["t8", "t16"]}).status_code == 201
+    # From t16 (one dstate with t8, a person said) the same turn now shows a view t9 never showed.
+    r = alice.post(f"/tableaux/{tid}/steps", json={"action": {"type": "turn", "angle_deg": -90},
+                                                   "steps": [{"view": "V9"}]})
+    assert r.status_code == 409, r.text
+    conflict = r.json()["conflict"]
+    assert [list(a.values())[0] for a in conflict["assertions"]] == [["t8", "t16"]]
+    assert 17 in conflict["explanation"]["evidence"] and 9 in conflict["explanation"]["evidence"]
+    assert alice.get(f"/tableaux/{tid}").json()["steps"] == 17  # the append is not stored
