@@ -8,7 +8,7 @@ from collections import defaultdict
 
 import pytest
 
-from bootmap.experiments.world import CHECKS, run_experiment, run_seeds
+from bootmap.experiments.world import CHECKS, run_seeds
 
 # The 8 views the hallway's shapes make at 8 m (worlds/taylor_hall.toml): which true dstates share one.
 VIEWS = [
@@ -24,9 +24,18 @@ VIEWS = [
 
 
 @pytest.fixture(scope="module")
-def taylor(tmp_path_factory):
+def five_seeds(tmp_path_factory):
+    """The experiment on seeds 1 to 5 (each in ``out/seed_N``) and their summary, run once for the module."""
     out = tmp_path_factory.mktemp("taylor")
-    return run_experiment("taylor_hall", seed=1, out_dir=out), out
+    return run_seeds("taylor_hall", [1, 2, 3, 4, 5], out_dir=out), out
+
+
+@pytest.fixture(scope="module")
+def taylor(five_seeds):
+    """Seed 1, the paper's run: its results, as run_experiment returned them, and its report's folder."""
+    out, where = five_seeds
+    (r,) = [r for r in out["runs"] if r["seed"] == 1]
+    return r, where / "seed_1"
 
 
 def test_taylor_hall_reproduces_the_paper(taylor):
@@ -63,13 +72,14 @@ def test_report_says_what_holds(taylor):
 
 
 @pytest.mark.slow
-def test_taylor_hall_holds_on_five_seeds(tmp_path):
+def test_taylor_hall_holds_on_five_seeds(five_seeds):
     # Seed 2 reads three turn-arounds at +198 to +222 degrees: the tail of its turn-arounds, not a
     # primitive of their own (bootmap.mapping.motion).
-    out = run_seeds("taylor_hall", [1, 2, 3, 4, 5], out_dir=tmp_path)
+    out, where = five_seeds
+    assert [r["seed"] for r in out["runs"]] == [1, 2, 3, 4, 5]
     for r in out["runs"]:
         assert r["checks"] == {c.id: True for c in CHECKS}, r["seed"]
         assert r["views"]["k"] == 8
-    summary = (tmp_path / "summary.md").read_text()
+    summary = (where / "summary.md").read_text()
     assert "All of it holds on every seed." in summary
     assert "| k by M | 8 | 8, 8, 8, 8, 8 | 8 | 8 - 8 |" in summary

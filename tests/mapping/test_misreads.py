@@ -174,11 +174,13 @@ def test_proofs_argue_from_the_views_the_map_reads_not_from_its_misreads():
     # apart; read as seen, "turn -90 leads to V3 at t235 but to V0 at t255" would prove it, but the map
     # says t255 was at a V3 dstate after all. The proof must rest on other experience.
     tableau, wrong = with_misreads(notched_rectangle(50), 0.005, np.random.default_rng(0))
-    explainer = Explainer(time_limit=180)  # about 15 s alone: the proof reads headings over 20 steps
+    explainer = Explainer(time_limit=180)  # about 6 s alone: the proof reads headings over 20 steps
     cmap = explainer.resolver.resolve(tableau)
     t = [s["t"] for s in cmap.suspect_steps][0]
     a = t - 1
-    b = next(b for b in range(a - 30, a) if tableau.steps[b].view == tableau.steps[a].view
+    # t234, the earliest time point of the last 20 with t254's view at another dstate (t226, a lap before,
+    # is another such pair, but its proof reads headings over 28 steps and took four times as long).
+    b = next(b for b in range(a - 20, a) if tableau.steps[b].view == tableau.steps[a].view
              and cmap.dstate_of[b] != cmap.dstate_of[a])
     e = explainer.explain(tableau, a, b)
     assert e.verdict == "different"
