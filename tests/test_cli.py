@@ -10,6 +10,7 @@ import pytest
 
 from bootmap import examples
 from bootmap.errors import EXIT_INTERRUPTED
+from support.signals import ctrl_c_default
 
 
 def bootmap(*args, cwd=None):
@@ -185,7 +186,7 @@ def _interrupted(args, ready: bytes, cwd) -> tuple[int, str]:
     """Start ``bootmap args``, wait until it has written ``ready`` to stderr (it is at work), press Ctrl-C
     (SIGINT), and return its exit code and everything it wrote to stderr."""
     proc = subprocess.Popen([sys.executable, "-m", "bootmap.cli", *map(str, args)], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, cwd=cwd)
+                            stderr=subprocess.PIPE, cwd=cwd, preexec_fn=ctrl_c_default)
     seen = b""
     while ready not in seen:
         chunk = proc.stderr.read1(4096)

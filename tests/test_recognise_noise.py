@@ -3,9 +3,15 @@
 import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
+import warnings
+
+from sklearn.decomposition import PCA
+from sklearn.discriminant_analysis import LinearDiscriminantAnalysis
+from sklearn.model_selection import GridSearchCV, KFold
+from sklearn.pipeline import make_pipeline
 from threadpoolctl import threadpool_limits
 
-from bootmap.recognise import DespikedDiscriminant, despike, learning_curve_cv
+from bootmap.recognise import DespikedDiscriminant, components_by_folds, despike, learning_curve_cv
 from bootmap.sim import simulate
 from bootmap.sim.world import load_world
 
@@ -56,3 +62,19 @@ def test_with_no_dstate_seen_twice_the_nearest_despiked_image_decides():
     model = DespikedDiscriminant().fit(X, ["S0", "S1", "S2"])
     assert model.n_components_ is None
     assert model.predict([[1.1, 1.0, 1.0, 1.0], [3.0, 2.9, 3.0, 3.0]]).tolist() == ["S0", "S2"]
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**31), n=st.integers(15, 80), k=st.integers(2, 8), spread=st.floats(0.0, 1.0))
+def test_the_components_chosen_by_folds_are_a_grid_searchs(seed, n, k, spread):
+    # One decomposition per fold gives the choice a grid search over PCA(d) + discriminant makes.
+    rng = np.random.default_rng(seed)
+    y = rng.integers(0, k, n)
+    X = 0.5 * rng.standard_normal((n, 40)) + spread * (y[:, None] == np.arange(40) % k)
+    dims = [d for d in (5, 10, 20, 30, 40) if d <= 2 * n // 3 - 1]
+    folds = KFold(n_splits=3, shuffle=True, random_state=seed % 7)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        search = GridSearchCV(make_pipeline(PCA(svd_solver="full"), LinearDiscriminantAnalysis()),
+                              {"pca__n_components": dims}, cv=folds, error_score=0.0).fit(X, y)
+    assert components_by_folds(X, y, dims, folds) == search.best_params_["pca__n_components"]

@@ -20,6 +20,7 @@ from bootmap.experiments.sweep import TIMING_COLUMNS, DaskCluster, load_spec, lo
 from bootmap.experiments.sweep.cells import experiment_row
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from support.signals import ctrl_c_default
 
 # Tiny cells: 3 circuits of the notched rectangle (24 images), about a second each.
 TINY = """
@@ -274,7 +275,7 @@ def test_ctrl_c_stops_a_sweep_and_its_workers_and_says_how_to_resume(tmp_path):
     spec.write_text(TINY.format(seeds="[1, 2, 3, 4, 5, 6]").replace("circuits = 3", "circuits = 400"))
     proc = subprocess.Popen([sys.executable, "-m", "bootmap.cli", "sweep", str(spec), "-o", str(tmp_path / "out"),
                              "--workers", "2", "--no-progress"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            start_new_session=True)
+                            start_new_session=True, preexec_fn=ctrl_c_default)
     try:
         # At work: the command, its two workers and a forked child for each cell they run.
         assert _until(lambda: len(_session(proc.pid)) >= 5, 120), _session(proc.pid)
