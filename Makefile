@@ -19,9 +19,10 @@ demo: $(STAMP)
 	$(BIN)/bootmap demo
 
 # One pytest worker per core (pytest-xdist); a test module stays on one worker, so its module-scoped
-# servers and databases start once.
+# servers and databases start once. Compiled modules are kept (PYTHONDONTWRITEBYTECODE cleared): the
+# suite starts bootmap in a hundred child processes, which would otherwise each compile it again.
 test: $(STAMP)
-	$(BIN)/python -m pytest -q -n auto --dist loadscope
+	PYTHONDONTWRITEBYTECODE= $(BIN)/python -m pytest -q -n auto --dist loadscope
 
 bench: $(STAMP)
 	$(BIN)/python bench/resolve_bench.py

@@ -101,6 +101,7 @@ def test_experiment_command_exits_1_when_a_check_fails(tmp_path):
     assert "- nearest neighbour at 90 images >= 85%: **no**" in (tmp_path / "report.md").read_text()
 
 
+@pytest.mark.slow
 def test_seeds_report_mean_and_spread_and_exit_1_when_one_seed_fails(tmp_path, capsys):
     from bootmap.cli import main
 
@@ -269,6 +270,7 @@ def test_one_failing_seed_is_named_and_the_others_still_run(monkeypatch, tmp_pat
     assert "on seed(s) 1, 2, 3" in (tmp_path / "summary.md").read_text()  # 2 circuits: too few images for 1-NN
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [0, 1000])
 def test_seeds_with_adjacent_dropouts_reproduce_the_paper(seed):
     # Seeds 0, 1000 and 1010 of the notched rectangle hold two laser drop-outs side by side in one image,
