@@ -199,7 +199,8 @@ def test_a_log_ingested_as_recorded_keeps_its_odometry(tmp_path, capsys):
     assert main(["ingest", str(log), "-o", str(tmp_path / "calibrated.json"), "--no-progress"]) == 0
     as_recorded = json.loads((tmp_path / "as_recorded.json").read_text())["meta"]
     calibrated = json.loads((tmp_path / "calibrated.json").read_text())["meta"]
-    assert "odometry" not in as_recorded
+    assert "calibration" not in as_recorded["odometry"]  # the building's axis is recorded either way
+    assert as_recorded["odometry"]["axis_deg"] == calibrated["odometry"]["axis_deg"]
     # the drive's odometry is exact: the laser finds no drift worth taking out
     assert calibrated["odometry"]["calibration"]["applied"] is False
     assert "calibrated by the laser" not in capsys.readouterr().err

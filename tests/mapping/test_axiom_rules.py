@@ -69,6 +69,12 @@ def two_lengths() -> Tableau:
                   ("a", Travel(6.01)), ("b", None)])
 
 
+def bent_round_a_corner() -> Tableau:
+    """A log's travel that bent right on the way (a corner driven round without stopping) to a place that
+    looks like where it started: the place reached lies right of the starting path, so not on it."""
+    return steps([("a", Travel(5.0, heading_change_deg=-90.0)), ("a", None)], meta={"passes_through": True})
+
+
 def loop_with_misreads() -> Tableau:
     """The notched rectangle, 15 circuits, two views misread (t56, t61)."""
     clean = examples.notched_rectangle(15)
@@ -200,11 +206,12 @@ SCENARIOS = {
     "first_view_either_way": resolved(first_view_either_way, ("causal",)),
     "turned_around_in_place": resolved(lambda: steps([("a", Turn(180.0)), ("a", None)]), CT),
     "travelled_to_itself": resolved(lambda: steps([("a", Travel(2.0)), ("a", None)]), CT),
+    "bent_to_itself": resolved(bent_round_a_corner, CT),
     "walk2": resolved(lambda: grid_walk(2), CT),
     "walk22": resolved(lambda: grid_walk(22), CT),
     "walk82": resolved(lambda: grid_walk(82), CT),
     "walk148": resolved(lambda: grid_walk(148), CT),
-    "walk239": resolved(lambda: grid_walk(239), CT),
+    "walk473": resolved(lambda: grid_walk(473), CT),
     "S0_S4_apart": can_be_same(PAPER2, 0, 4, range(9), CT),
     "headings_after_a_gap": can_be_same(PAPER2, 4, 8, [0, *range(2, 10)], CM),
     "loop_closing": loop_closed(lambda: grid_walk(0)),
@@ -254,7 +261,7 @@ CASES = {
     "place_of": "paper",
     "same_path": "paper",
     "one_direction": "turned_around_in_place",
-    "turn_leaves_path": "walk239",
+    "turn_leaves_path": "walk473",
     "path_rep": "paper",
     "path_of": "paper",
     "one_dstate_per_place_and_direction": "walk82",
@@ -268,6 +275,7 @@ CASES = {
     "sides_turn_around": "walk148",
     "on_path_no_side": "paper_without_headings",
     "one_side": "both_sides",
+    "sides_by_bend": "bent_to_itself",          # the place a bend reached may be the one it left: 1 dstate
     "asserted_same": "asserted_same",           # the person's join is not made: a map instead of the clash
     "asserted_apart": "asserted_apart",         # S0's visits stay one dstate
     "preferred_same": "preferred_same",         # both minimal maps instead of the one that keeps it

@@ -18,7 +18,7 @@ from bootmap.mapping.resolver import Resolver
 from bootmap.mapping.stream import MapStream
 from bootmap.sim.simulation import simulate
 from bootmap.sim.world import load_world
-from bootmap.mapping.facts import typed_actions
+from bootmap.mapping.facts import action_symbols, typed_actions
 from bootmap.tableau import Tableau, Travel, Turn
 from support.check import check_map, true_partition
 from support.gridworld import random_world, walk
@@ -158,6 +158,31 @@ def test_a_travel_may_pass_a_dstate_only_where_the_tableau_says_so():
     # On the topological level both travels from A east run along one path, B before C.
     assert passing.n_paths == 1 and len(passing.paths["Pa0"]) == 3
 
+
+
+def bent(change_deg: float) -> Tableau:
+    """A log's travel of 5 m from a place to one that looks the same, bending by ``change_deg`` on the way
+    (a corner driven round without stopping, which the turn detector did not cut out as a turn)."""
+    steps = [{"view": "a", "action": {"type": "travel", "distance_m": 5, "heading_change_deg": change_deg}},
+             {"view": "a"}]
+    return Tableau.from_dict({"format": FORMAT, "steps": steps, "meta": {"passes_through": True}})
+
+
+@pytest.mark.parametrize("change, side", [(-90.0, "right"), (90.0, "left")])
+def test_a_travel_that_bent_round_a_corner_leaves_its_path_and_its_place_lies_on_that_side(change, side):
+    topological = ("causal", "topological")
+    straight = Resolver(levels=topological).resolve(bent(0.0))
+    assert straight.n_dstates == 2 and straight.n_paths == 1  # a travel along one path, to a place ahead
+    turned = Resolver(levels=topological).resolve(bent(change))
+    # Two paths: the bend left the first; and the place reached lies on the bend's side of it, so it is
+    # not the place the travel started from (which is on that path), though both look alike.
+    assert turned.n_dstates == 2 and turned.n_paths == 2
+    assert check_map(bent(change), turned.dstate_of) == []
+    assert any(side in v for v in check_map(bent(change), ["S0", "S0"]))
+    # It is an action of its own: a straight travel of the same length is another.
+    def action(t: Tableau):
+        return action_symbols(t, typed_actions(t)[0])[0]
+    assert str(action(bent(change))) == f"travel(50,{int(change)})" and str(action(bent(0.0))) == "travel(50)"
 
 
 def test_odometry_alone_maps_a_simulated_taylor_hall():

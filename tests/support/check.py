@@ -114,11 +114,12 @@ class Experience:
         linked = [s.action if t + 1 in kept else None for t, s in zip(times, steps)]
         changes = [None if a is None else _heading_change(a, quantum_deg) for a in linked]
         # A turn is named by its quantised angle (which is also its heading change), a travel by "travel"
-        # (where the robot drove through dstates, by ("travel", its length in decimetres)).
+        # (where the robot drove through dstates, by ("travel", its length in decimetres), and where such a
+        # travel bent round a corner, by ("travel", its length, its heading change)).
         lengths = [round(a.distance_m * 10) if isinstance(a, Travel) else None for a in linked]
         passing = passes_through(tableau)
-        actions = [None if a is None else c if isinstance(a, Turn) else (TRAVEL, n) if passing else TRAVEL
-                   for a, c, n in zip(linked, changes, lengths)]
+        actions = [None if a is None else c if isinstance(a, Turn) else TRAVEL if not passing
+                   else (TRAVEL, n) if c == 0 else (TRAVEL, n, c) for a, c, n in zip(linked, changes, lengths)]
         exp = cls(times, dstate_of, [s.view for s in steps], actions, changes, lengths,   # type: ignore[arg-type]
                   passing)
         for i, a in enumerate(actions):
@@ -139,7 +140,7 @@ class Experience:
 
 def action_name(a: object) -> str:
     if isinstance(a, tuple):
-        return f"travel({a[1]})"
+        return f"travel({', '.join(map(str, a[1:]))})"
     return TRAVEL if a == TRAVEL else f"turn({a})"
 
 
@@ -289,7 +290,7 @@ class Topology:
 
     @classmethod
     def build(cls, exp: Experience) -> "Topology":
-        turn_links, around, travel_links = _links(exp)
+        turn_links, around, travel_links, bends = _links(exp)
         place = _places(exp.dstates, turn_links, around)
         paths = UnionFind(exp.dstates)
         for d, d2 in travel_links:
@@ -297,7 +298,7 @@ class Topology:
         for d, d2 in around:
             paths.union(d, d2, 1)
         ahead, behind = _order(exp.dstates, travel_links, around, place)
-        right, left = _sides(exp.dstates, turn_links, travel_links, around, ahead)
+        right, left = _sides(exp.dstates, turn_links, travel_links, around, ahead, bends, place)
         return cls(exp, turn_links, around, travel_links, place, paths, ahead, behind, right, left)
 
     def on_path(self, d: str) -> set[str]:
@@ -362,17 +363,20 @@ class Topology:
         return "{" + ",".join(d for d in self.exp.dstates if self.place[d] == p) + "}"
 
 
-def _links(exp: Experience) -> tuple[list, set, list]:
-    """turn_link (a turn that is not a turn-around), around (both ways) and travel_link, from next/3."""
-    turn_links, around, travel_links = [], set(), []
+def _links(exp: Experience) -> tuple[list, set, list, list]:
+    """turn_link (a turn that is not a turn-around), around (both ways), travel_link and the travels that
+    bent round a corner (d, d2, heading change; no travel link), from next/3."""
+    turn_links, around, travel_links, bends = [], set(), [], []
     for d, a, d2 in exp.transitions():
-        if a == TRAVEL or isinstance(a, tuple):
+        if isinstance(a, tuple) and len(a) == 3:
+            bends.append((d, d2, a[2]))
+        elif a == TRAVEL or isinstance(a, tuple):
             travel_links.append((d, d2))
         elif a == AROUND:
             around |= {(d, d2), (d2, d)}
         else:
             turn_links.append((d, d2, a))
-    return turn_links, around, travel_links
+    return turn_links, around, travel_links, bends
 
 
 def _places(dstates: list[str], turn_links: list, around: set) -> dict[str, str]:
@@ -405,9 +409,10 @@ def _order(dstates: list[str], travel_links: list, around: set,
 
 
 def _sides(dstates: list[str], turn_links: list, travel_links: list, around: set,
-           ahead: dict[str, set[str]]) -> tuple[dict[str, set[str]], dict[str, set[str]]]:
-    """right_by_turn, left_by_turn, sides_along_path, sides_turn_around: the least sets right(D, P),
-    left(D, P)."""
+           ahead: dict[str, set[str]], bends: list = (), place: dict[str, str] | None = None
+           ) -> tuple[dict[str, set[str]], dict[str, set[str]]]:
+    """right_by_turn, left_by_turn, sides_by_bend, sides_along_path, sides_turn_around: the least sets
+    right(D, P), left(D, P)."""
     right = {d: set() for d in dstates}
     left = {d: set() for d in dstates}
     for d, d2, a in turn_links:
@@ -415,6 +420,11 @@ def _sides(dstates: list[str], turn_links: list, travel_links: list, around: set
             right[d] |= ahead[d2]
         elif a > 0:
             left[d] |= ahead[d2]
+    for d, d2, c in bends:
+        if c < 0:
+            right[d].add(place[d2])
+        elif c != 180:
+            left[d].add(place[d2])
     changed = True
     while changed:
         changed = False

@@ -142,8 +142,11 @@ def log_tableau(scans: list[Scan], detector: TurnDetector = TurnDetector(), max_
                        pose=_rounded(scans[i].truth) if has_truth else None, odometry=_rounded(scans[i].odometry))
                   for k, i in enumerate(chosen))
     meta = _meta(scans, chosen, turns, detector, max_range, radius_m, source, has_truth, junctions, passes)
+    # The building's main axis as the whole odometry track shows it (every scan's pose, not only the
+    # dstates'): the sectors a dstate faces are read against it (bootmap.mapping.sectors).
+    meta["odometry"] = {"axis_deg": round(math.degrees(main_axis([s.odometry for s in scans])), 2)}
     if calibration is not None:
-        meta["odometry"] = {"calibration": calibration.to_dict()}
+        meta["odometry"]["calibration"] = calibration.to_dict()
     if visits is not None:
         meta["dstates"].update(detector=None, junctions=None, places=asdict(places),
                                visits=[[v.first, v.last] for v in visits])

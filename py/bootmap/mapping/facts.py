@@ -83,6 +83,17 @@ class Typing:
         return [found[t] for t in sorted(found)]
 
 
+def odometry_axis(meta: dict | None) -> float | None:
+    """The building's main axis (radians) that ingest read from the whole odometry track of a log
+    (``meta.odometry.axis_deg``), or None where the tableau does not say (its dstates' poses then give it).
+
+    >>> round(odometry_axis({"odometry": {"axis_deg": 45.0}}), 4), odometry_axis({})
+    (0.7854, None)
+    """
+    axis = ((meta or {}).get("odometry") or {}).get("axis_deg")
+    return None if axis is None else float(np.radians(axis))
+
+
 def typing_of(tableau: Tableau, quantum_deg: float | None = None, compass: bool = True) -> Typing:
     """How the tableau's actions are read (:class:`Typing`): with a quantum, odometry's readings rounded to
     it; for a log that drove through its dstates with odometry at each, the changes of the building's
@@ -101,7 +112,7 @@ def typing_of(tableau: Tableau, quantum_deg: float | None = None, compass: bool 
         start = tableau.steps[0].odometry
         heading = start[2] + np.radians(np.concatenate([[0.0], np.cumsum([measured_angle(a) for a in actions])]))
         poses = [(step.odometry[0], step.odometry[1], h) for step, h in zip(tableau.steps, heading)]
-        angles = sector_angles(poses)[:len(actions)]
+        angles = sector_angles(poses, odometry_axis(tableau.meta))[:len(actions)]
         return Typing(angles, action_types(actions, angles, resolution), None, actions)
     walls = WallCompass().fit(tableau) if compass else None
     if walls is None or not walls.used_:

@@ -44,9 +44,9 @@ from .theory import Theory
 #: The axiom files the replay's argument is about (path in the axiom directory -> sha256). When one
 #: changes, check the argument above against it, then update its digest (tests/mapping/test_stream.py).
 STOCK_DIGESTS = {
-    "causal.lp": "b7171fb13596ce9381d81b6bf339896d062d412614eb91c298d0a1d252cbd153",
+    "causal.lp": "c53ada773c9738d3654228e1c660ac260badc953658d8500509d83f0c2c4f473",
     "metrical.lp": "4628513194f19408c98f56c8d15750bd6f1cb69f46904f76d5521ada01d6dbb5",
-    "topological.lp": "df80192cb9c27380cf518bbc4e1f298006fdaf1d07d5fded8971fa6a25c41512",
+    "topological.lp": "b4f0c61157346150b0009e9d4c892e37555713729af5fcc7935c08d7cbc6fa87",
     "core/ask.lp": "2e8adf403568adf1bc5e166b19bde32ba2fdaac7f873adef0930bb9071c939ca",
     "core/partition.lp": "5a5041dcda4ff90134c77b13f5c751ef32325af467a675c6f5272a5a5f7f41c0",
     "core/assert.lp": "2c01befdceb28aa69c8a639e07b55dc2b96f6280fd2d7f052fe55fa211a76c17",

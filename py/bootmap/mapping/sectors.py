@@ -8,7 +8,8 @@ Typed one by one, such angles sum to a heading that wanders off the building's a
 one dstate are left facing "different ways" for the axioms, which forbid their join.
 
 The building says what a heading is: its corridors run along a main axis and across it
-(:func:`bootmap.paths.main_axis`, from the robot's own dead-reckoned path through its dstates). Each
+(:func:`bootmap.paths.main_axis`, from the robot's own dead-reckoned path: the whole track where a log's
+tableau records it, ``meta.odometry.axis_deg``, else the path through its dstates). Each
 dstate faces the sector (east, north, west or south of that axis) its heading lies in (the heading odometry
 began at plus the actions' measured angles: for a log's own tableau, odometry's heading at each dstate),
 and each action's angle is the change of sector, a multiple of 90 degrees (a turn-around is +180). The angles then

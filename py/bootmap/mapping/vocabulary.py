@@ -220,6 +220,8 @@ BROKEN_APART = Term("broken_apart", 0, "a preference for two dstates, broken (wh
 TURN_ACTION = Term("turn", 1, "a turn by its angle type, turn(A) (causal.lp's action/2)")
 TRAVEL_ACTION = Term("travel", 0, "a travel, whatever its length (causal.lp's action/2)")
 TRAVEL_BY_LENGTH = Term("travel", 1, "a travel by its length type, travel(L), where the robot drove through dstates")
+TRAVEL_BENT = Term("travel", 2, "a travel by its length type and its net heading change, travel(L, C), where the "
+                                "robot drove through dstates and round a corner on the way")
 
 TERMS: tuple[Term, ...] = tuple(v for v in list(globals().values()) if isinstance(v, Term))
 
@@ -248,10 +250,12 @@ def action_term(kind: str, angle: int, length: int | None = None) -> Symbol:
     """The term causal.lp makes of an action (``turn_action``, ``travel_action``): a turn by its
     quantised angle, ``turn(A)``, or ``travel`` whatever its length and bend; where the robot drove
     through dstates without stopping (``travel_action_passing``), a travel by its length type,
-    ``travel(L)``."""
+    ``travel(L)``, or by its length type and heading change where it bent round a corner, ``travel(L, C)``."""
     if kind == "turn":
         return TURN_ACTION(angle)
-    return TRAVEL_ACTION() if length is None else TRAVEL_BY_LENGTH(length)
+    if length is None:
+        return TRAVEL_ACTION()
+    return TRAVEL_BY_LENGTH(length) if angle == 0 else TRAVEL_BENT(length, angle)
 
 
 def action_word(term: Symbol) -> str:
@@ -260,6 +264,8 @@ def action_word(term: Symbol) -> str:
         return f"turn {term.arguments[0].number:+d}"
     if TRAVEL_BY_LENGTH.matches(term):
         return f"travel {term.arguments[0].number / 10:g} m"
+    if TRAVEL_BENT.matches(term):
+        return f"travel {term.arguments[0].number / 10:g} m turning {term.arguments[1].number:+d}"
     return term.name
 
 
