@@ -409,7 +409,7 @@ def _order(dstates: list[str], travel_links: list, around: set,
 
 
 def _sides(dstates: list[str], turn_links: list, travel_links: list, around: set,
-           ahead: dict[str, set[str]], bends: list = (), place: dict[str, str] | None = None
+           ahead: dict[str, set[str]], bends: list, place: dict[str, str]
            ) -> tuple[dict[str, set[str]], dict[str, set[str]]]:
     """right_by_turn, left_by_turn, sides_by_bend, sides_along_path, sides_turn_around: the least sets
     right(D, P), left(D, P)."""
