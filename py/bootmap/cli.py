@@ -237,8 +237,13 @@ def _print_summary(r: dict) -> None:
           f"(truth {m['true_dstates']}, {m['true_places']}, {m['true_paths']}); "
           f"{m['dstate_accuracy']:.1%} of images on the right dstate")
     if m.get("merged_true_dstates"):
-        print("  the map could not tell apart: " +
-              "; ".join(", ".join(ts) for ts in m["merged_true_dstates"].values()))
+        # One group per set of true dstates: a map that splits them as well holds the same group on
+        # more than one of its dstates, named once here with the dstates it is on.
+        groups: dict[tuple, list[str]] = {}
+        for dstate, ts in m["merged_true_dstates"].items():
+            groups.setdefault(tuple(ts), []).append(dstate)
+        print("  the map could not tell apart: " + "; ".join(
+            ", ".join(ts) + ("" if len(on) == 1 else f" (on {', '.join(on)})") for ts, on in groups.items()))
     if rec and rec["cv_at_90"] is not None:
         other = other_learner(rec)
         beside = "" if other is None else f"; {other[0]} {other[1]:.1%}"
