@@ -145,13 +145,13 @@ def test_an_unknown_view_criterion_is_refused(square):
 
 
 @pytest.mark.slow
-def test_the_whole_killian_log_in_under_two_minutes(tmp_path, capsys):
+def test_the_whole_killian_log_as_the_readme_shows_it(tmp_path, capsys):
     pytest.importorskip("rtbdata")
     # The README's command; scan matching (half the time, and lines the README does not show) left out.
     code = main(["experiment", "killian", "-o", str(tmp_path), "--no-scan-match"])
     r = json.loads((tmp_path / "results.json").read_text())
     assert (r["scans"], r["images"], r["truth"]["true_dstates"]) == (3873, 98, 75)
-    assert sum(r["timings"].values()) < 120
+    assert set(r["timings"]) >= {"ingest_s", "views_s", "map_s"}  # its speed is bench/real_logs_bench.py's
     # The map by loop closing meets its target (80% of visits in their true dstate) and beats
     # a dstate per visit, which most of the log's dstates (seen once) would make look good.
     m, nn = r["map"], r["nn_revisited"]
