@@ -161,6 +161,44 @@ def test_a_users_new_rule_is_cited_by_name(tmp_path):
     assert Explainer(axioms=axioms, levels=TOPO).explain(tableau, 0, 16).verdict == "same"
 
 
+def test_an_axiom_file_edited_between_two_explanations_is_read_again(tmp_path):
+    # The instrumented theory is parsed once for as long as its files are unchanged (every explainer of
+    # the process shares it); an edit reaches the next explainer made, as it reaches the next resolver.
+    axioms = tmp_path / "asp"
+    shutil.copytree(Resolver().theory.directory, axioms)
+    daylight = axioms / "daylight.lp"
+    daylight.write_text(DAYLIGHT)
+    tableau = notched_rectangle(3)
+
+    def explained():
+        return Explainer(axioms=axioms, levels=["causal", "topological", "daylight"]).explain(tableau, 0, 16)
+
+    assert [r.name for r in explained().axioms] == ["day_differs_from_night"]
+    assert [r.name for r in explained().axioms] == ["day_differs_from_night"]  # unchanged: the same rules
+    daylight.write_text(DAYLIGHT.replace("day_differs_from_night", "day_apart_from_night"))  # renamed
+    assert [r.name for r in explained().axioms] == ["day_apart_from_night"]
+    daylight.write_text(DAYLIGHT.split("% A dstate seen at daytime")[0])  # the constraint taken out
+    assert explained().verdict == "same"
+
+
+@settings(max_examples=40, deadline=None)
+@given(keep=st.sets(st.integers(0, 40), max_size=30))
+def test_an_excerpt_holds_the_kept_views_the_actions_between_kept_steps_and_a_resume_after_each_gap(keep):
+    from bootmap.mapping.facts import Excerpts, tableau_facts
+
+    facts = tableau_facts(notched_rectangle(5))
+    got = {str(f) for f in Excerpts(facts)(keep)}
+    # From the definition, on the facts' text: view(T, V) of a kept T; turn/travel/length(T, _) where T
+    # and T + 1 are kept; resume(T) where T is kept and T - 1 is not (T > 0).
+    expected = set()
+    for f in map(str, facts):
+        name, t = f.split("(")[0], int(f.split("(")[1].split(",")[0].rstrip(")"))
+        if t in keep and (name == "view" or t + 1 in keep):
+            expected.add(f)
+    expected |= {f"resume({t})" for t in keep if t > 0 and t - 1 not in keep}
+    assert got == expected
+
+
 def test_different_views_are_a_one_line_proof(paper):
     e = Explainer().explain(paper, 0, 1)
     assert e.verdict == "different" and e.evidence == [0, 1]

@@ -44,7 +44,7 @@ from ..errors import ExplainError, InconsistentTableau, SolveTimeout
 from ..tableau import Tableau
 from .assertions import Assertion, Conflict, assertion_facts
 from .cogmap import CognitiveMap, action_text
-from .facts import action_symbol, action_symbols, excerpt_facts, read_actions, tableau_facts
+from .facts import Excerpts, action_symbol, action_symbols, read_actions, tableau_facts
 from .grounding import Classes, Deadline, Grounding, key_with_view, prepass
 from .misreads import find_suspects
 from .proof import Failure, Names, ProofNode, merged, node, rule_dict
@@ -342,6 +342,7 @@ class _Question:
         for step in (cmap.retyped_steps if cmap is not None else ()):
             self.angles[step["t"]] = step["abduced_deg"]  # the map's evidence: actions as it typed them
         self.facts = tableau_facts(tableau, angles=self.angles)
+        self.excerpt = Excerpts(self.facts)
         self.misreads = self.misread_facts(cmap) if cmap is not None and cmap.suspect_steps else {}
         self.assumed: list[Assertion] = []  # a person's assertions the question takes as given
         self.pinned: set[int] = set()       # time points part of every excerpt
@@ -452,7 +453,7 @@ class _Question:
         allowed (as many dstates as time points), so "cannot be one dstate" means in no map at all.
         None when a and b are not even in one class (they differ in a feature every time point shows,
         e.g. the view)."""
-        facts, classes = self.with_misreads(excerpt_facts(self.facts, keep) + self.assumed_in(keep), keep)
+        facts, classes = self.with_misreads(self.excerpt(keep) + self.assumed_in(keep), keep)
         if None in classes.keys or not classes.same_class(a, b):
             return None
         return facts + classes.layout(len(keep)) + [SAME_ASKED(a, b)]
@@ -480,7 +481,7 @@ class _Question:
     def feature_failure(self, a: int, b: int, evidence: list[int]) -> tuple[list[RuleRef], list[Failure]]:
         """a and b differ in a feature every time point shows: no supposition needed, the features'
         own derivations are the proof."""
-        facts = excerpt_facts(self.facts, evidence) + self.assumed_in(evidence)
+        facts = self.excerpt(evidence) + self.assumed_in(evidence)
         if any(t in self.misreads for t in evidence):  # else no prepass is needed: nothing to add
             facts, _ = self.with_misreads(facts, evidence)
         traced = Grounding(self.theory, facts, self.depth, instrumented=True).ground()

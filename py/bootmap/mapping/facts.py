@@ -211,17 +211,25 @@ def add_facts(ctl: clingo.Control, facts: Iterable[Symbol]) -> None:
             backend.add_rule([backend.add_atom(sym)])
 
 
-def excerpt_facts(facts: Sequence[Symbol], keep: Iterable[int]) -> list[Symbol]:
-    """Of a tableau's facts (:func:`tableau_facts`), those of the kept time points only: their views, the
-    actions between two kept time points, and ``resume(T)`` where a run of kept time points starts after
-    a gap (the metrical level starts a frame of headings there: the turns in the gap are not part of the
-    excerpt).
+class Excerpts:
+    """A tableau's facts (:func:`tableau_facts`), each read once for its time point, to cut excerpts from
+    (reading a symbol's arguments is a call into clingo, and an explanation cuts dozens of excerpts).
 
-    An excerpt is how an explanation states its evidence: these steps alone force the conclusion.
+    An excerpt is how an explanation states its evidence: these steps alone force the conclusion. It
+    holds the facts of the kept time points only: their views, the actions between two kept time points,
+    and ``resume(T)`` where a run of kept time points starts after a gap (the metrical level starts a frame
+    of headings there: the turns in the gap are not part of the excerpt).
     """
-    kept = set(keep)
-    out = [sym for sym in facts if not sym.arguments]  # what holds of the whole tableau (passes_through)
-    out += [sym for sym in facts if sym.arguments
-            and (t := sym.arguments[0].number) in kept and (VIEW.matches(sym) or t + 1 in kept)]
-    out += [RESUME(t) for t in sorted(kept) if t > 0 and t - 1 not in kept]
-    return out
+
+    def __init__(self, facts: Sequence[Symbol]):
+        self.facts = list(facts)
+        self._whole = [sym for sym in self.facts if not sym.arguments]  # of the whole tableau (passes_through)
+        self._timed = [(sym.arguments[0].number, VIEW.matches(sym), sym) for sym in self.facts if sym.arguments]
+
+    def __call__(self, keep: Iterable[int]) -> list[Symbol]:
+        """The facts of the excerpt that keeps these time points."""
+        kept = set(keep)
+        out = list(self._whole)
+        out += [sym for t, is_view, sym in self._timed if t in kept and (is_view or t + 1 in kept)]
+        out += [RESUME(t) for t in sorted(kept) if t > 0 and t - 1 not in kept]
+        return out

@@ -19,6 +19,7 @@ still arrives as facts through the backend.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import lru_cache
 from pathlib import Path
 
 import clingo
@@ -59,29 +60,46 @@ class Instrumented:
 
 
 def load_instrumented(theory: Theory, ctl: clingo.Control) -> Instrumented:
-    """Add the theory to ``ctl`` with its recording twins; declare the ``_bm_on`` externals."""
-    out = Instrumented()
+    """Add the theory to ``ctl`` with its recording twins; declare the ``_bm_on`` externals. The files are
+    parsed and twinned once for as long as they are unchanged (an explanation loads the theory into many
+    controls); a file edited since is read again."""
     level_of = {str(p): lv for lv, p in theory.levels.items()}
-    names = {str(p): rule_lines(p) for p in theory.files}
+    files = []
+    for path in theory.files:
+        stat = path.stat()
+        files.append((str(path), level_of.get(str(path), "core"), stat.st_mtime_ns, stat.st_size))
+    statements, rules = _instrumented(tuple(files))
     with ast.ProgramBuilder(ctl) as builder:
-        for path in theory.files:
-            key = str(path)
-
-            def add(stm, key=key):
-                switched = False
-                if stm.ast_type == ast.ASTType.Rule:
-                    switched = _add_twin(stm, key, level_of.get(key, "core"), names[key], out, builder)
-                if not switched:
-                    builder.add(stm)
-
-            ast.parse_files([key], add)
+        for stm in statements:
+            builder.add(stm)
+    out = Instrumented(list(rules))
     if out.switchable:
         ctl.add("base", [], f"#external {ON}(0..{len(out.rules) - 1}).")
     return out
 
 
-def _add_twin(rule, file: str, level: str, names: dict[int, str], out: Instrumented, builder) -> bool:
-    """Add the recording twin of one rule and, for a level's constraint, the rule itself with a switch
+@lru_cache(maxsize=8)
+def _instrumented(files: tuple[tuple[str, str, int, int], ...]) -> tuple[tuple, tuple[RuleRef, ...]]:
+    """The statements of the instrumented theory and its rules, for these files (path, level, and the
+    modification time and size that key the cache)."""
+    statements: list = []
+    out = Instrumented()
+    for key, level, _, _ in files:
+        names = rule_lines(Path(key))
+
+        def add(stm, key=key, level=level, names=names):
+            switched = False
+            if stm.ast_type == ast.ASTType.Rule:
+                switched = _add_twin(stm, key, level, names, out, statements.append)
+            if not switched:
+                statements.append(stm)
+
+        ast.parse_files([key], add)
+    return tuple(statements), tuple(out.rules)
+
+
+def _add_twin(rule, file: str, level: str, names: dict[int, str], out: Instrumented, emit) -> bool:
+    """Emit the recording twin of one rule and, for a level's constraint, the rule itself with a switch
     on it (then True: the rule as written must not be added too)."""
     head = rule.head
     constraint = head.ast_type == ast.ASTType.Literal and head.atom.ast_type == ast.ASTType.BooleanConstant
@@ -99,11 +117,11 @@ def _add_twin(rule, file: str, level: str, names: dict[int, str], out: Instrumen
         args, name = [rid, tuple_], VIOLATED
         if level != "core":
             switch = ast.Literal(loc, ast.Sign.NoSign, ast.SymbolicAtom(ast.Function(loc, ON, [rid], 0)))
-            builder.add(ast.Rule(loc, head, list(rule.body) + [switch]))
+            emit(ast.Rule(loc, head, list(rule.body) + [switch]))
     else:
         args, name = [rid, head.atom.symbol, tuple_], FIRED
     twin_head = ast.Literal(loc, ast.Sign.NoSign, ast.SymbolicAtom(ast.Function(loc, name, args, 0)))
-    builder.add(ast.Rule(loc, twin_head, body))
+    emit(ast.Rule(loc, twin_head, body))
     return constraint and level != "core"
 
 
