@@ -19,8 +19,8 @@ demo: $(STAMP)
 	$(BIN)/bootmap demo
 
 # One pytest worker more than there are cores (pytest-xdist): many tests wait on servers and child
-# processes (start-up, time-outs), and the extra worker fills those waits (2 cores: 5 min 35 s with
-# three workers, 6 min 2 s with two, 5 min 54 s with four). A test module stays on one worker, so its
+# processes (start-up, time-outs), and the extra worker fills those waits (2 cores, one run each: three
+# workers 5 min 35 s, two 6 min 2 s, four 5 min 54 s). A test module stays on one worker, so its
 # module-scoped servers and databases start once. Compiled modules are kept (PYTHONDONTWRITEBYTECODE
 # cleared): the suite starts bootmap in a hundred child processes, which would otherwise each compile it.
 WORKERS ?= $(shell $(PYTHON) -c "import os; print((os.cpu_count() or 1) + 1)")
