@@ -169,7 +169,9 @@ def test_four_16_mb_posts_and_twelve_reads_keep_the_server_under_its_bound(memor
     print(f"server peak {peak:.0f} MiB; /health max {max(took):.3f} s, median {statistics.median(took):.3f} s, "
           f"{len(took)} timed")
     assert peak < BOUND_MB, f"the server's resident set peaked at {peak:.0f} MiB"
-    assert len(took) >= 10 and max(took) < 1.0 and statistics.median(took) < 0.1, took
+    # /health keeps answering while the bodies are parsed (in the intake processes): generous margins, not
+    # a speed (a parse in the server's own loop held it for seconds).
+    assert len(took) >= 10 and max(took) < 2.0 and statistics.median(took) < 0.5, took
 
 
 def test_connections_stalled_mid_body_are_closed_at_the_body_time_out(memory_server):
@@ -239,7 +241,7 @@ def test_valid_16_mb_posts_layouts_recognitions_and_reads_keep_the_server_under_
     peak = vm(s.process.pid, "VmHWM")
     print(f"server peak {peak:.0f} MiB; /health max {max(took):.3f} s, median {statistics.median(took):.3f} s")
     assert peak < BOUND_MB, f"the server's resident set peaked at {peak:.0f} MiB"
-    assert statistics.median(took) < 0.1, took
+    assert statistics.median(took) < 0.5, took  # answering throughout (a generous margin, not a speed)
 
 
 def test_connections_that_trickle_their_headers_or_send_nothing_are_closed_at_the_header_time_out(memory_server):

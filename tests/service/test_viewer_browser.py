@@ -442,6 +442,7 @@ def test_not_the_same_splits_the_dstate_lights_what_changed_and_lists_the_assert
                                                                                                two_laps):
     _open(page, viewer_server, two_laps)
     assert page.locator("#assert-apart").is_disabled()
+    page.wait_for_selector("body[data-listed]", state="attached", timeout=20_000)  # fetched after the map
     assert page.locator("#assertions li.none").count() == 1  # the owner's (here, the local user's) list
     _pick_rows(page, 0, 8)  # both S0
     assert page.locator("#assert-apart").is_enabled()
@@ -477,6 +478,30 @@ def test_same_place_that_the_experience_refutes_shows_the_clash_with_its_proof(p
     assert "causal.lp:" in page.locator("#asserted .axioms").inner_text()
     assert page.locator("#tableau tr.evidence").evaluate_all("rs => rs.map(r => r.dataset.t)") == ["0", "1", "8", "9"]
     assert page.locator("#assertions li code").all_inner_texts() == ["apart(t1, t9)"]  # nothing stored
+
+
+def test_a_list_of_assertions_fetched_before_an_assertion_and_answered_after_it_does_not_hide_it(page, viewer_server,
+                                                                                                 two_laps):
+    # The page fetches the tableau's assertions once the map is drawn; hold that answer (the list as it was:
+    # empty) back until a "not the same" has been made and listed: the late, older list must not replace it.
+    held = []
+
+    def hold(route):
+        if route.request.method == "GET":
+            held.append((route, route.fetch()))
+        else:
+            route.continue_()
+
+    page.route(f"**/tableaux/{two_laps}/assertions", hold)
+    _open(page, viewer_server, two_laps)
+    _pick_rows(page, 0, 8)
+    page.locator("#assert-apart").click()
+    page.wait_for_selector("body[data-asserted=changed]", state="attached", timeout=60_000)
+    assert page.locator("#assertions li code").all_inner_texts() == ["apart(t0, t8)"]
+    assert len(held) == 1 and held[0][1].json()["assertions"] == []
+    held[0][0].fulfill(response=held[0][1])
+    page.wait_for_timeout(500)  # the held answer arrives and is read (a margin, not the subject)
+    assert page.locator("#assertions li code").all_inner_texts() == ["apart(t0, t8)"]
 
 
 def test_dstates_the_minimal_maps_disagree_on_are_drawn_dashed(page, viewer_server):

@@ -15,7 +15,7 @@ import { ZoomView } from "./zoom.js";
 const POLL_MS = 1000;
 const $ = (id) => document.getElementById(id);
 const state = { id: null, etag: null, drawing: null, picks: [], poll: null, levels: [], whyAsked: 0, view: null,
-                changed: [] };
+                changed: [], listed: 0 };
 
 function status(message, isError = false) {
   $("status").textContent = message;
@@ -187,9 +187,11 @@ async function changed(data, said) {
 }
 
 async function loadAssertions() {
+  const listed = state.listed;
   try {
     const { data } = await getJSON(`/tableaux/${state.id}/assertions`);
-    showAssertions(data.assertions);
+    // A list shown since it was asked for (an assertion made or taken back meanwhile) is newer: keep it.
+    if (listed === state.listed) showAssertions(data.assertions);
   } catch (e) {
     // Another owner's (public) tableau: its assertions are not the reader's to see, nor to change.
     if (!(e instanceof ApiError && (e.status === 403 || e.status === 404))) throw e;
@@ -198,6 +200,8 @@ async function loadAssertions() {
 }
 
 function showAssertions(assertions) {
+  state.listed++;
+  document.body.dataset.listed = state.listed;  // the assertions are listed (for scripts that drive the page)
   $("assertions-panel").hidden = false;
   renderAssertions($("assertions"), assertions, async (aid) => {
     document.body.dataset.asserted = "asking";
