@@ -142,6 +142,27 @@ def test_same_and_apart_that_determinism_cannot_both_honour_clash_with_their_pro
         Resolver().resolve(paper, assertions=conflict.assertions)
 
 
+def test_assertions_the_map_already_honours_need_no_search_to_be_cleared(paper, monkeypatch):
+    # The map made without them is a map of the experience: where it honours a set of assertions, that set
+    # cannot clash, and the explainer says so without grounding anything (a clash's deletion test asks
+    # this of every subset: for the paper's same(t0, t8) alone, a search grounds fourteen windows).
+    from bootmap.mapping import explain
+    from bootmap.mapping.explain import Explainer
+
+    explainer = Explainer()
+    cmap = explainer.minimal_map(paper, Deadline.after(60))
+    grounded = []
+    real = explain.Grounding.ground
+    monkeypatch.setattr(explain.Grounding, "ground", lambda self: grounded.append(1) or real(self))
+    honoured = said([{"same": ["t0", "t8"]}, {"apart": ["t0", "t1"]}], paper)
+    assert explainer.conflict(paper, honoured, cmap=cmap, local=True) is None
+    assert explainer.conflict(paper, honoured, cmap=cmap) is None and not grounded
+    clash = said([{"same": ["t0", "t8"]}, {"apart": ["t1", "t9"]}], paper)
+    assert [str(x) for x in explainer.conflict(paper, clash, cmap=cmap, local=True).assertions] == [
+        "same(t0, t8)", "apart(t1, t9)"]
+    assert grounded  # a clash is still searched for and proved
+
+
 def test_an_assertion_the_experience_alone_refutes_is_the_whole_clash(paper):
     result = Mapper().honour(paper, said([{"same": ["t0", "t4"]}, {"apart": ["t2", "t10"]}], paper))
     assert [str(a) for a in result.conflict.assertions] == ["same(t0, t4)"]  # the other is not part of it

@@ -272,7 +272,14 @@ class Explainer:
         cmap = cmap or self.minimal_map(tableau, deadline)
         q = _Question(self, tableau, deadline, cmap)
         clash = [x for x in assertions if not x.soft]
-        clashes = q.clash_nearby if local else (lambda xs: not q.can_hold(xs))
+
+        def clashes(xs: Sequence[Assertion]) -> bool:
+            # The map made without them is a map of the experience: where it honours them all, so does
+            # some map, and no search need say so.
+            if _honours(cmap, xs):
+                return False
+            return q.clash_nearby(xs) if local else not q.can_hold(xs)
+
         if not clashes(clash):
             return None
         for x in list(clash):
@@ -330,6 +337,11 @@ class _Memo:
         return value
 
 
+def _honours(cmap: CognitiveMap, assertions: Sequence[Assertion]) -> bool:
+    """Whether the map honours every one of these (hard) assertions of time points."""
+    return all((cmap.dstate_of[x.a] == cmap.dstate_of[x.b]) == (x.kind == "same") for x in assertions)
+
+
 class _Question:
     """One explanation under way: the tableau's facts (built once for every excerpt tried) and the deadline."""
 
@@ -346,6 +358,9 @@ class _Question:
         self.misreads = self.misread_facts(cmap) if cmap is not None and cmap.suspect_steps else {}
         self.assumed: list[Assertion] = []  # a person's assertions the question takes as given
         self.pinned: set[int] = set()       # time points part of every excerpt
+        # Each answer of can_be_same, by the pair, the steps kept and the assertions assumed: a clash is
+        # looked for, its assertions pared down, then proved, and each asks of the same windows again.
+        self.answers: dict[tuple, bool] = {}
 
     def assume(self, assertions: Sequence[Assertion], pin: bool = True) -> None:
         """Take these assertions as given: with ``pin``, in every excerpt tried (their time points always
@@ -443,10 +458,12 @@ class _Question:
 
     def can_be_same(self, a: int, b: int, keep: Sequence[int] | None = None) -> bool:
         keep = list(range(len(self.tableau))) if keep is None else sorted(keep)
-        facts = self.asked(a, b, keep)
-        if facts is None:
-            return False
-        return bool(self._solve(Grounding(self.theory, facts, self.depth).ground()).satisfiable)
+        key = (a, b, tuple(keep), tuple((x.kind, x.a, x.b) for x in self.assumed if x.a in keep and x.b in keep))
+        if key not in self.answers:
+            facts = self.asked(a, b, keep)
+            self.answers[key] = facts is not None and bool(
+                self._solve(Grounding(self.theory, facts, self.depth).ground()).satisfiable)
+        return self.answers[key]
 
     def asked(self, a: int, b: int, keep: list[int]) -> list[Symbol] | None:
         """The kept steps' facts, supposing a and b are one dstate, with every partition of each class
