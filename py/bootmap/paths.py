@@ -7,7 +7,7 @@ service (its ``meta`` limit) and to draw.
 
 :func:`main_axis` is a building's main axis from a path through it: the direction its corridors run
 (modulo 90 degrees), which both a log's truth (heading sectors of the true poses) and the map of a log
-(heading sectors of the odometry, :func:`bootmap.mapping.compass.sector_angles`) are aligned to.
+(heading sectors of the odometry, :func:`bootmap.mapping.sectors.sector_angles`) are aligned to.
 
 Example
 -------

@@ -276,7 +276,7 @@ class Explainer:
         def clashes(xs: Sequence[Assertion]) -> bool:
             # The map made without them is a map of the experience: where it honours them all, so does
             # some map, and no search need say so.
-            if _honours(cmap, xs):
+            if all(x.holds_in(cmap) for x in xs):
                 return False
             return q.clash_nearby(xs) if local else not q.can_hold(xs)
 
@@ -337,11 +337,6 @@ class _Memo:
         return value
 
 
-def _honours(cmap: CognitiveMap, assertions: Sequence[Assertion]) -> bool:
-    """Whether the map honours every one of these (hard) assertions of time points."""
-    return all((cmap.dstate_of[x.a] == cmap.dstate_of[x.b]) == (x.kind == "same") for x in assertions)
-
-
 class _Question:
     """One explanation under way: the tableau's facts (built once for every excerpt tried) and the deadline."""
 
@@ -371,8 +366,12 @@ class _Question:
 
     def assumed_in(self, keep: Sequence[int]) -> list[Symbol]:
         """The assumed assertions an excerpt keeping ``keep`` holds, as facts."""
+        return assertion_facts(self._assumed_within(keep))
+
+    def _assumed_within(self, keep: Sequence[int]) -> list[Assertion]:
+        """The assumed assertions whose two time points the excerpt keeping ``keep`` holds."""
         kept = set(keep)
-        return assertion_facts([x for x in self.assumed if x.a in kept and x.b in kept])
+        return [x for x in self.assumed if x.a in kept and x.b in kept]
 
     def clash_nearby(self, assertions: Sequence[Assertion], only: Assertion | None = None) -> bool:
         """Whether the steps around some ``same`` of these assertions (or around ``only``) show it cannot
@@ -458,7 +457,7 @@ class _Question:
 
     def can_be_same(self, a: int, b: int, keep: Sequence[int] | None = None) -> bool:
         keep = list(range(len(self.tableau))) if keep is None else sorted(keep)
-        key = (a, b, tuple(keep), tuple((x.kind, x.a, x.b) for x in self.assumed if x.a in keep and x.b in keep))
+        key = (a, b, tuple(keep), tuple(self._assumed_within(keep)))
         if key not in self.answers:
             facts = self.asked(a, b, keep)
             self.answers[key] = facts is not None and bool(
