@@ -3,7 +3,7 @@
 Its solve leases stop counting once its heartbeat is stale (3 s), so a token whose solve places it held
 gets them back on another server within seconds; its solver and intake processes notice that their
 parent is gone and end (a solver in the middle of a solve too), and multiprocessing's resource tracker
-with them. Bounds are generous (5 s for
+with them; the bodies it was reading are removed by the next server started on its spool directory. Bounds are generous (5 s for
 what takes about 3 s) and nothing depends on how busy the machine is but how long things take.
 """
 
@@ -73,7 +73,8 @@ def test_a_killed_server_frees_its_tokens_solve_places_and_leaves_no_process_beh
     intake processes, the resource tracker) ends."""
     db = str(tmp_path / "shared.sqlite3")
     settings = {"db": db, "require_tokens": True, "token_max_solves": 2, "max_concurrent_solves": 1,
-                "max_queued_solves": 2, "solve_time_limit_s": 30, "solve_kill_grace_s": 2}
+                "max_queued_solves": 2, "solve_time_limit_s": 30, "solve_kill_grace_s": 2,
+                "spool_dir": str(tmp_path / "spool")}
     token = make_token("alice", db=db)
     servers = []
     for name in ("a", "b"):
@@ -116,6 +117,14 @@ def test_a_killed_server_frees_its_tokens_solve_places_and_leaves_no_process_beh
             print(f"{len(left_behind) - len(left)} of {len(left_behind)} processes ended within "
                   f"{time.monotonic() - killed:.2f} s of the kill")
             assert not left, f"still running 5 s after the server was killed: {left}"
+
+            # a's spool still holds the bodies of its two hung posts; a server started again sweeps it.
+            spools = lambda: {p.name: sorted(f.name for f in p.iterdir()) for p in (tmp_path / "spool").iterdir()}
+            before = spools()
+            assert len(before) == 2 and any(len(files) > 1 for files in before.values()), before
+            a.start()
+            after = spools()
+            assert len(after) == 2 and len(set(after) & set(before)) == 1, (before, after)  # b's, a's new one
     finally:
         for s in flood:
             s.close()

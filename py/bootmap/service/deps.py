@@ -16,6 +16,7 @@ from ..tableau import FORMAT
 from .intake import Intake, Limits, intake_workers
 from .quotas import Quotas
 from .settings import Settings
+from .spool import Spool
 from .store import Store
 from .theory import LoadedTheory, Theories
 from .worker import (Explained, ExplainJob, Job, Rehearsed, RehearseJob, Solved, SolveGate, SolveJob, SolverPool,
@@ -31,6 +32,7 @@ class Services:
     gate: SolveGate
     intake: Intake
     quotas: Quotas
+    spool: Spool
 
     @property
     def limits(self) -> Limits:
@@ -51,7 +53,7 @@ class Services:
         gate = SolveGate(pool, settings.max_concurrent_solves, settings.max_queued_solves, settings.retry_after_s,
                          settings.token_max_running)
         intake = Intake(intake_workers(), settings.intake_memory_mb)
-        services = cls(settings, store, theories, pool, gate, intake, quotas)
+        services = cls(settings, store, theories, pool, gate, intake, quotas, Spool.open(settings.spool_dir))
         intake.warm()
         pool.warm(services.job({"format": FORMAT, "steps": [
             {"view": "a", "action": {"type": "travel", "distance_m": 1.0}}, {"view": "b"}]})[0])
@@ -62,6 +64,7 @@ class Services:
         self.intake.close()
         self.pool.close()
         self.store.close()
+        self.spool.close()
 
     def job(self, document: dict | str | pathlib.Path, stream: int | None = None) -> tuple[SolveJob, LoadedTheory]:
         """A solve of a tableau document with the current theory, and that theory (its id goes with the map).

@@ -83,6 +83,9 @@ class Settings(BaseSettings):
     max_held_body_bytes: int = Field(32 * 2**20, ge=1024, description="Bytes of request bodies the server holds "
                                      "at once (by Content-Length, else max_body_bytes); a request whose body "
                                      "does not fit waits for room before it is read.")
+    spool_dir: Path | None = Field(None, description="Where request bodies are written as they arrive (each server "
+                                   "a directory of its own, removed when it stops, or by the next server started "
+                                   "here if it was killed); default the system's temporary directory.")
     intake_memory_mb: int = Field(1024, ge=256, description="Address-space cap of each intake process (where "
                                                             "posted tableaux are parsed and checked), MiB.")
 

@@ -10,9 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import tempfile
 from contextlib import asynccontextmanager
-from pathlib import Path
 from typing import Annotated
 
 from fastapi import APIRouter, Query, Request, Response
@@ -60,13 +58,12 @@ def json_body(model: str) -> dict:
 
 
 @asynccontextmanager
-async def body_file(request: Request):
-    """The request's body, which must be JSON (415 otherwise; 422 if there is none), written to a
-    temporary file as it arrives, for an intake process to read: the server never holds it whole. The
-    file, and the prepared document the intake writes beside it (intake.PREPARED), are removed after."""
+async def body_file(request: Request, services: Services):
+    """The request's body, which must be JSON (415 otherwise; 422 if there is none), written to a file
+    in this server's spool as it arrives, for an intake process to read: the server never holds it whole.
+    The file, and the prepared document the intake writes beside it (intake.PREPARED), are removed after."""
     mime = request.headers.get("content-type", "").split(";")[0].strip().lower()
-    fd, name = tempfile.mkstemp(prefix="bootmap-body-")
-    path = Path(name)
+    fd, path = services.spool.new_file()
     try:
         with open(fd, "wb") as file:
             async for chunk in request.stream():
@@ -94,7 +91,7 @@ async def create_tableau(services: ServicesDep, caller: CallerDep, request: Requ
     (nothing is stored then), with 503 and Retry-After when every solver is busy, and with 429 when the
     token is over its limits. The tableau belongs to the caller's token."""
     # Parsed, checked and stored by an intake process (bootmap.service.intake): the server never holds the text.
-    async with body_file(request) as body:
+    async with body_file(request, services) as body:
         prepared = await services.intake.run(prepare_tableau, body, services.limits)
         solved, theory = await _solve(services, prepared.document, caller, request)
         cmap = await run_in_threadpool(_map_record, solved, 1, theory)
@@ -152,7 +149,7 @@ async def append_steps(tableau_id: TableauId, services: ServicesDep, caller: Cal
     steps are like the stored ones: view labels, or images only. 409 if another append got there first;
     403 unless the caller owns the tableau."""
     await writable(services, caller, tableau_id)
-    async with body_file(request) as body:  # the intake process reads the stored tableau itself
+    async with body_file(request, services) as body:  # the intake process reads the stored tableau itself
         prepared = await services.intake.run(prepare_append, services.settings.database_url, tableau_id, body,
                                              services.limits)
         # the assertions in force: the new revision's map honours them (read at the revision the store
