@@ -116,3 +116,32 @@ def test_score_in_unit_interval_and_matching_symmetric(pa, pb, noise):
     c, s = math.cos(t), math.sin(t)
     u, v, w = ba.transform
     assert math.hypot(x + c * u - s * v, y + s * u + c * v) < 1e-6 and angle_error(t + w, 0.0) < 1e-6
+
+
+@pytest.mark.parametrize("turn_deg", [150.0, -100.0, 180.0])
+def test_images_all_round_match_from_any_heading(turn_deg):
+    """Images of 360 beams (a place's local map is rendered so): the room seen from a pose turned half
+    round and shifted is aligned and scores near one, where two 180-degree scans would share no wall."""
+    matcher = ScanMatcher(fov_deg=360.0)
+    pa = (2.5, 2.5, 0.3)
+    pb = (3.1, 2.2, pa[2] + math.radians(turn_deg))
+    a, b = cast(ROOM, pa, beams=360, fov_deg=360), cast(ROOM, pb, beams=360, fov_deg=360)
+    m = matcher.match(a, b)
+    want = relative(pa, pb)
+    assert math.dist(m.transform[:2], want[:2]) < 0.05 and angle_error(m.transform[2], want[2]) < math.radians(1)
+    assert m.score > 0.9 and sum(m.refuted) <= 2
+    # Another room all round scores clearly lower.
+    assert matcher.match(a, cast(CORRIDOR, (5.0, 1.0, 0.0), beams=360, fov_deg=360)).score < m.score - 0.3
+
+
+def test_an_image_all_round_is_read_all_round():
+    """At 360 degrees the beams wrap: the returns of a circle of radius 2 are 2 m away all round, and its
+    surface closes between the last beam and the first (no gap behind the robot)."""
+    circle = np.full(360, 2.0)
+    points = image_points(circle, fov_deg=360)
+    assert np.allclose(np.hypot(points[:, 0], points[:, 1]), 2.0)
+    assert np.allclose(np.degrees(np.arctan2(points[[0, 90, 180, 270], 1], points[[0, 90, 180, 270], 0])),
+                       [-180.0, -90.0, 0.0, 90.0])
+    surface = surface_points(circle, fov_deg=360, resolution_m=0.01)
+    behind = surface[(surface[:, 0] < 0) & (np.abs(surface[:, 1]) < 0.02)]
+    assert len(behind) >= 2  # samples between beam 359 (+179 degrees) and beam 0 (-180)

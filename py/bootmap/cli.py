@@ -405,7 +405,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "bootmap.ingest.places)")
     p.add_argument("--no-scan-match", action="store_true",
                    help="--log: measure place recognition by the scans' distances only, without scan matching "
-                        "(which takes seconds to a minute on a long log)")
+                        "of scans and of the visits' local maps (seconds to minutes on a long log)")
     arguments.add_calibrate(p, "--log: ")
     runs = p.add_mutually_exclusive_group()
     runs.add_argument("--circuits", type=arguments.count("circuits"), metavar="N",

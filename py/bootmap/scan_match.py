@@ -69,7 +69,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .surfaces import image_points, in_3d, planar, se2, surface_points
+from .surfaces import beam_step, image_points, in_3d, planar, se2, surface_points
 
 __all__ = ["Match", "ScanMatcher", "image_points", "surface_points"]
 
@@ -102,7 +102,7 @@ class Match:
 class _Scan:
     """One image made ready for matching: its returns, its surface and the surface's k-d tree."""
 
-    __slots__ = ("ranges", "step", "points", "points3", "sparse", "surface_tree", "surface_cloud", "field",
+    __slots__ = ("ranges", "step", "all_round", "points", "points3", "sparse", "surface_tree", "surface_cloud", "field",
                  "origin")
 
     def __init__(self, image, matcher: "ScanMatcher"):
@@ -111,12 +111,13 @@ class _Scan:
         r = np.asarray(image, dtype=float).ravel()
         # A beam that saw nothing is no evidence of free space (a drop-out reads the same): never refutes.
         self.ranges = np.where(np.isfinite(r) & (r > 0.0) & (r < matcher.max_range), r, -np.inf)
-        self.step = math.pi / max(len(r) - 1, 1)
-        self.points = image_points(image, matcher.max_range)
+        self.step = beam_step(len(r), matcher.fov_deg)
+        self.all_round = matcher.fov_deg >= 360.0
+        self.points = image_points(image, matcher.max_range, matcher.fov_deg)
         self.points3 = in_3d(self.points)
         self.sparse = self.points[::matcher.search_stride]
         surface = surface_points(image, matcher.max_range, matcher.resolution_m, matcher.max_incidence_deg,
-                                 matcher.inlier_m)
+                                 matcher.inlier_m, matcher.fov_deg)
         if len(surface):
             surface3 = in_3d(surface)
             self.surface_cloud = small_gicp.PointCloud(surface3)
@@ -146,12 +147,18 @@ class _Scan:
         _, sq = self.surface_tree.batch_nearest_neighbor_search(points3)
         explained = np.asarray(sq) <= inlier_m * inlier_m
         rho = np.hypot(points3[:, 0], points3[:, 1])
-        beam = np.rint((np.arctan2(points3[:, 1], points3[:, 0]) + math.pi / 2) / self.step).astype(int)
         n = len(self.ranges)
-        inside = (beam >= 0) & (beam < n)
-        b = np.clip(beam, 0, n - 1)
-        seen = np.minimum(np.minimum(self.ranges[b], self.ranges[np.maximum(b - 1, 0)]),
-                          self.ranges[np.minimum(b + 1, n - 1)])
+        bearing = np.arctan2(points3[:, 1], points3[:, 0])
+        if self.all_round:
+            b = np.rint((bearing + math.pi) / self.step).astype(int) % n
+            inside = np.ones(len(b), dtype=bool)
+            before, after = (b - 1) % n, (b + 1) % n
+        else:
+            beam = np.rint((bearing + math.pi / 2) / self.step).astype(int)
+            inside = (beam >= 0) & (beam < n)
+            b = np.clip(beam, 0, n - 1)
+            before, after = np.maximum(b - 1, 0), np.minimum(b + 1, n - 1)
+        seen = np.minimum(np.minimum(self.ranges[b], self.ranges[before]), self.ranges[after])
         refuted = inside & ~explained & (rho < seen - inlier_m)
         return int(np.count_nonzero(explained)), int(np.count_nonzero(refuted))
 
@@ -215,6 +222,9 @@ class ScanMatcher:
         ICP iterations per stage.
     n_jobs : int
         Processes for :meth:`scores` (1: this one).
+    fov_deg : float
+        The field of view the images' beams cover (degrees, :func:`bootmap.surfaces.beam_angles`): 180, a
+        laser's, or 360 for images all round (a place's local map, :mod:`bootmap.ingest.local_maps`).
 
     Examples
     --------
@@ -227,7 +237,8 @@ class ScanMatcher:
     def __init__(self, max_range: float = 20.0, inlier_m: float = 0.10, resolution_m: float = 0.05,
                  max_incidence_deg: float = 75.0, coarse_m: float = 1.0, fine_m: float = 0.30,
                  place_radius_m: float = 3.0, search_step_m: float = 0.5, search_step_deg: float = 10.0,
-                 search_stride: int = 4, refine: int = 3, max_iterations: int = 30, n_jobs: int = 1):
+                 search_stride: int = 4, refine: int = 3, max_iterations: int = 30, n_jobs: int = 1,
+                 fov_deg: float = 180.0):
         self.max_range = max_range
         self.inlier_m = inlier_m
         self.resolution_m = resolution_m
@@ -241,6 +252,7 @@ class ScanMatcher:
         self.refine = refine
         self.max_iterations = max_iterations
         self.n_jobs = n_jobs
+        self.fov_deg = fov_deg
 
     def prepare(self, image) -> _Scan:
         """An image made ready for matching (its returns, surface and k-d tree), to match many times."""
@@ -335,7 +347,7 @@ class ScanMatcher:
         if pairs:
             i, j = np.array(pairs).T
             S[i, j] = S[j, i] = values
-        S[np.diag_indices(n)] = [1.0 if len(image_points(x, self.max_range)) else 0.0 for x in X]
+        S[np.diag_indices(n)] = [1.0 if len(image_points(x, self.max_range, self.fov_deg)) else 0.0 for x in X]
         return S
 
 

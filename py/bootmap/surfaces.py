@@ -1,6 +1,8 @@
 """A laser image's returns as points, and the surfaces they lie on.
 
-An image is the tableau's 180 ranges from -90 to +90 degrees in the robot's frame. Its *returns* are the
+An image is the tableau's 180 ranges from -90 to +90 degrees in the robot's frame (or, with a field of view
+of 360 degrees, ranges all round, as a place's local map is rendered: :mod:`bootmap.ingest.local_maps`;
+:func:`beam_angles`). Its *returns* are the
 beams that saw something, as 2-D points; its *surfaces* join consecutive returns close enough to be one
 wall and sample them every few centimetres, as an occupancy map would draw them, so that a point of
 another scan that falls on the wall between two beams lies on a surface. Shared by scan matching
@@ -17,15 +19,37 @@ import math
 import numpy as np
 
 
-def image_points(image, max_range: float = 20.0) -> np.ndarray:
+def beam_angles(n: int, fov_deg: float = 180.0) -> np.ndarray:
+    """The bearings (radians, counter-clockwise from the robot's heading) of an image's ``n`` beams: over a
+    field of view of 180 degrees (a laser's), ``linspace(-pi/2, pi/2, n)``, both ends included; all round
+    (360), ``n`` bearings from -pi, ``2 pi / n`` apart.
+
+    >>> np.degrees(beam_angles(3)).tolist(), np.degrees(beam_angles(4, 360)).tolist()
+    ([-90.0, 0.0, 90.0], [-180.0, -90.0, 0.0, 90.0])
+    """
+    if fov_deg >= 360.0:
+        return -math.pi + 2 * math.pi * np.arange(n) / max(n, 1)
+    half = math.radians(fov_deg) / 2
+    return np.linspace(-half, half, n)
+
+
+def beam_step(n: int, fov_deg: float = 180.0) -> float:
+    """The angle between neighbouring beams (radians)."""
+    return 2 * math.pi / max(n, 1) if fov_deg >= 360.0 else math.radians(fov_deg) / max(n - 1, 1)
+
+
+def image_points(image, max_range: float = 20.0, fov_deg: float = 180.0) -> np.ndarray:
     """The returns of a laser image as 2-D points in the robot's frame.
 
     Parameters
     ----------
     image : array-like of shape (n_beams,)
-        Ranges (m) at ``linspace(-pi/2, pi/2, n_beams)`` from the robot's heading, counter-clockwise.
+        Ranges (m) at :func:`beam_angles` from the robot's heading, counter-clockwise (by default
+        ``linspace(-pi/2, pi/2, n_beams)``).
     max_range : float
         The reading that means nothing was seen (m); beams at or beyond it, or not positive, give no point.
+    fov_deg : float
+        The field of view the beams cover (degrees): 180, or 360 for an image all round.
 
     Returns
     -------
@@ -38,13 +62,13 @@ def image_points(image, max_range: float = 20.0) -> np.ndarray:
     [[0.0, -1.0], [0.0, 2.0]]
     """
     r = np.asarray(image, dtype=float).ravel()
-    a = np.linspace(-math.pi / 2, math.pi / 2, len(r))
+    a = beam_angles(len(r), fov_deg)
     seen = np.isfinite(r) & (r > 0.0) & (r < max_range)
     return np.column_stack([r[seen] * np.cos(a[seen]), r[seen] * np.sin(a[seen])])
 
 
 def surface_points(image, max_range: float = 20.0, resolution_m: float = 0.05, max_incidence_deg: float = 75.0,
-                   slack_m: float = 0.10) -> np.ndarray:
+                   slack_m: float = 0.10, fov_deg: float = 180.0) -> np.ndarray:
     """The surfaces a laser image saw, sampled every ``resolution_m``: its returns, and points between
     consecutive returns close enough to be one wall.
 
@@ -61,6 +85,8 @@ def surface_points(image, max_range: float = 20.0, resolution_m: float = 0.05, m
         from its normal spaces them: ``r * beam step / cos(max_incidence_deg)`` at range ``r``.
     slack_m : float
         Added to that gap for the range noise of both returns (m).
+    fov_deg : float
+        The field of view, as for :func:`image_points` (all round, the last beam neighbours the first).
 
     Returns
     -------
@@ -75,16 +101,18 @@ def surface_points(image, max_range: float = 20.0, resolution_m: float = 0.05, m
     """
     r = np.asarray(image, dtype=float).ravel()
     n = len(r)
-    a = np.linspace(-math.pi / 2, math.pi / 2, n)
+    a = beam_angles(n, fov_deg)
     seen = np.isfinite(r) & (r > 0.0) & (r < max_range)
     xy = np.column_stack([r * np.cos(a), r * np.sin(a)])
     if n < 2:
         return xy[seen]
-    step = math.pi / (n - 1)
+    step = beam_step(n, fov_deg)
+    parts = [xy[seen]]
+    if fov_deg >= 360.0:  # all round: the last beam and the first are neighbours too
+        r, seen, xy = np.append(r, r[0]), np.append(seen, seen[0]), np.vstack([xy, xy[:1]])
     gap = np.linalg.norm(np.diff(xy, axis=0), axis=1)
     reach = np.minimum(r[:-1], r[1:]) * step / math.cos(math.radians(max_incidence_deg)) + slack_m
     joined = seen[:-1] & seen[1:] & (gap <= reach)
-    parts = [xy[seen]]
     k = np.flatnonzero(joined)
     if len(k):
         # Interior samples of every joined segment: ceil(gap / resolution) - 1 of them, evenly spaced.

@@ -7,7 +7,7 @@ import pytest
 from bootmap.cli import main
 from bootmap.errors import BadInput, LogError
 from bootmap.experiments.evaluate import DESCRIPTORS
-from bootmap.experiments.log import SCAN_MATCH, run_log_experiment
+from bootmap.experiments.log import LOCAL_MAP, SCAN_MATCH, run_log_experiment
 from bootmap.ingest.places import PlaceDetector
 
 from log_data import EXCERPT
@@ -178,6 +178,9 @@ def test_places_the_laser_shows_are_revisited_lap_after_lap_and_scan_matching_re
     assert r["map"]["dstate_accuracy"] == 1.0 and r["loop_closure"]["map"]["dstates"]["precision"] == 1.0
     matched = r["place_recognition"][SCAN_MATCH]
     assert matched["revisits"] == 8 and matched["recall_at_95_precision"] >= 0.75
+    # So does matching the corners' local maps, rendered all round (bootmap.ingest.local_maps).
+    local = r["place_recognition"][LOCAL_MAP]
+    assert local["revisits"] == 8 and local["recall_at_95_precision"] >= 0.75
     # The raw scans of a corner's two visits, a few centimetres apart, are told apart less well.
     assert matched["average_precision"] >= max(r["place_recognition"][d]["average_precision"] for d in DESCRIPTORS)
 

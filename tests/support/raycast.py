@@ -20,11 +20,14 @@ CORRIDOR = polygon_walls([(0, 0), (12, 0), (12, 10), (10, 10), (10, 2), (0, 2)])
 
 
 def cast(walls: np.ndarray, pose, beams: int = 180, max_range: float = 20.0, noise_m: float = 0.0,
-         rng=None) -> np.ndarray:
-    """The laser image seen from ``pose`` (x, y, theta): ``beams`` ranges from -90 to +90 degrees, the
-    nearest wall along each beam, ``max_range`` where none is closer; Gaussian range noise ``noise_m``."""
+         rng=None, fov_deg: float = 180.0) -> np.ndarray:
+    """The laser image seen from ``pose`` (x, y, theta): ``beams`` ranges from -90 to +90 degrees (all
+    round from -180 with ``fov_deg=360``, bootmap.surfaces.beam_angles), the nearest wall along each beam,
+    ``max_range`` where none is closer; Gaussian range noise ``noise_m``."""
+    from bootmap.surfaces import beam_angles
+
     x, y, theta = pose
-    angles = theta + np.linspace(-math.pi / 2, math.pi / 2, beams)
+    angles = theta + beam_angles(beams, fov_deg)
     d = np.column_stack([np.cos(angles), np.sin(angles)])  # (beams, 2)
     p, q = walls[:, :2], walls[:, 2:] - walls[:, :2]  # wall start, direction (walls, 2)
     w = p - np.array([x, y])

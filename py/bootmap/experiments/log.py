@@ -49,12 +49,15 @@ from .evaluate import (DESCRIPTORS, against_baselines, dead_reckoned_dstates, de
                        map_against_truth, nn_on_revisits, place_of_truth, place_recognition, sector_of_truth,
                        views_against_truth)
 from ..ingest.ingest import log_tableau, read_log, travel_ends, turn_ends
+from ..ingest.local_maps import local_images
 
 #: How k is chosen for the map's views: "auto" takes M's k unless M degenerates (k <= 2), then
 #: Davies-Bouldin's.
 VIEW_CRITERIA = ("auto", "M", "davies-bouldin")
 #: The name place recognition by scan matching is reported under, beside the scan descriptors.
 SCAN_MATCH = "scan match"
+#: ... and by scan matching each visit's local map, rendered all round (:mod:`bootmap.ingest.local_maps`).
+LOCAL_MAP = "local map"
 #: Processes scan matching runs in (its pairs are independent; the result does not depend on how many).
 SCAN_MATCH_JOBS = 2
 #: The targets this project set itself for a real log (set from an outside probe of the Killian log;
@@ -154,17 +157,20 @@ def _experiment(scans, log, lap, seed, k_max, time_limit, quantum_deg, view_crit
                 "retyped_steps": cmap.retyped_steps},
         "dead_reckoning": {"dstates": len(set(dead)), "dstate_accuracy": dstate_accuracy(truth, dead)},
         "recognition": recognition, "nn_revisited": nn, "timings": timings}
+    local = local_images(scans, tableau.meta["dstates"]["scans"], radius_m, max_range=max_range) \
+        if scan_match and recognise else None
     results.update(_slam_evaluation(results, images, poses, truth, cmap, dead, radius_m, recognise,
-                                    max_range if scan_match else None))
+                                    max_range if scan_match else None, local))
     lap("evaluate_s")
     return results, tableau, cmap
 
 
 def _slam_evaluation(r: dict, images, poses, truth, cmap, dead, radius_m, recognise_places: bool = True,
-                     scan_match_range: float | None = None) -> dict:
+                     scan_match_range: float | None = None, local: np.ndarray | None = None) -> dict:
     """The figures SLAM papers report, against the corrected poses: the map beside both baselines,
     loop closures (the map's and odometry alone's) and place recognition by each descriptor (and by
-    scan matching images clipped at ``scan_match_range``, when given)."""
+    scan matching images clipped at ``scan_match_range``, when given, and the visits' ``local`` maps
+    rendered all round)."""
     sectors = [sector_of_truth(t) for t in truth]
     odometry_alone = r["dead_reckoning"]["dstate_accuracy"]
     own = dstate_accuracy(truth, [str(i) for i in range(len(truth))])
@@ -184,6 +190,10 @@ def _slam_evaluation(r: dict, images, poses, truth, cmap, dead, radius_m, recogn
 
             matcher = ScanMatcher(max_range=scan_match_range, place_radius_m=radius_m, n_jobs=SCAN_MATCH_JOBS)
             recognition[SCAN_MATCH] = place_recognition(matcher.scores(images), poses, radius_m)
+            if local is not None:
+                matcher = ScanMatcher(max_range=scan_match_range, place_radius_m=radius_m, n_jobs=SCAN_MATCH_JOBS,
+                                      fov_deg=360.0)
+                recognition[LOCAL_MAP] = place_recognition(matcher.scores(local), poses, radius_m)
     return {"baselines": baselines, "loop_closure": loops, "place_recognition": recognition}
 
 
@@ -338,7 +348,7 @@ def evaluation_lines(r: dict) -> list[str]:
             lines.append(f"    {name}, dstates: {_joins(loops[who]['dstates'])}; places: "
                          f"{_joins(loops[who]['places'])}")
     for d, p in r["place_recognition"].items():
-        what = d if d == SCAN_MATCH else f"{d} scans"
+        what = d if d in (SCAN_MATCH, LOCAL_MAP) else f"{d} scans"
         lines.append(f"  place recognition ({what}; each visit's best earlier match, {p['revisits']} of "
                      f"{p['queries']} visits with a true revisit): recall {_pct(p['recall_at_95_precision'])} at "
                      f"95% precision, {_pct(p['recall_at_99_precision'])} at 99%; average precision "
