@@ -153,7 +153,7 @@ def test_assertions_the_map_already_honours_need_no_search_to_be_cleared(paper, 
     cmap = explainer.minimal_map(paper, Deadline.after(60))
     grounded = []
     real = explain.Grounding.ground
-    monkeypatch.setattr(explain.Grounding, "ground", lambda self: grounded.append(1) or real(self))
+    monkeypatch.setattr(explain.Grounding, "ground", lambda self, *parts: grounded.append(1) or real(self, *parts))
     honoured = said([{"same": ["t0", "t8"]}, {"apart": ["t0", "t1"]}], paper)
     assert explainer.conflict(paper, honoured, cmap=cmap, local=True) is None
     assert explainer.conflict(paper, honoured, cmap=cmap) is None and not grounded

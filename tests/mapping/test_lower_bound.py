@@ -83,3 +83,32 @@ def test_a_time_out_reports_what_its_stage_proved_and_no_more_than_brute_force_n
     views = len(set(tableau.views))
     assert (e.value.stage, e.value.lower_bound) in {("one dstate per class", views), ("the lower bounds", views + 1)}
     assert e.value.lower_bound < fewest
+
+
+@pytest.mark.parametrize("seed", [0, 3, 7])
+def test_the_prepass_reads_exactly_the_features_that_tell_a_class_apart(seed):
+    """core/prepass.lp's telling/3 is every feature only some time points show whose class shows it with
+    two values or more (computed here from all feature/3 atoms), and only the prepass grounds it."""
+    import numpy as np
+
+    from bootmap.mapping.facts import read_actions, tableau_facts
+    from bootmap.mapping.grounding import Grounding, prepass
+    from bootmap.mapping.vocabulary import CLASS_KEY, FEATURE, SHOWN_BY_ALL, TELLING
+    from support.gridworld import random_world, walk
+
+    rng = np.random.default_rng(seed)
+    tableau = walk(random_world(rng, 4, 3, extra_edges=2, landmarks=0.3), 120, rng, policy="explore")
+    resolver = Resolver()
+    facts = tableau_facts(tableau, angles=read_actions(tableau)[0])
+    grounded = prepass(resolver.theory, facts, resolver.future_depth)
+    grouping = {f for (f,) in SHOWN_BY_ALL.facts_in(grounded.control)}
+    key_of = {t.number: k for t, k in CLASS_KEY.facts_in(grounded.control)}
+    values = defaultdict(set)
+    partial = [(t.number, f, x) for t, f, x in FEATURE.facts_in(grounded.control) if f not in grouping]
+    for t, f, x in partial:
+        values[key_of[t], f].add(x)
+    expected = {(t, f, x) for t, f, x in partial if len(values[key_of[t], f]) > 1}
+    telling = {(t.number, f, x) for t, f, x in TELLING.facts_in(grounded.control)}
+    assert telling == expected and 0 < len(telling) < len(partial)
+    plain = Grounding(resolver.theory, facts, resolver.future_depth).ground()
+    assert not list(TELLING.facts_in(plain.control))

@@ -122,16 +122,19 @@ def test_the_suspect_watch_names_what_find_suspects_names_on_every_prefix(seed, 
 @given(seed=st.integers(0, 10_000), metrical=st.booleans())
 def test_the_replay_derives_what_the_prepass_derives(seed, metrical):
     # Classes, and the features only some time points show: what clingo's prepass derives from the
-    # stock axioms, the replay derives in Python (the features as the apart relation they induce).
+    # stock axioms, the replay derives in Python (the features as the apart relation they induce; the
+    # prepass reads only those that tell time points of a class apart, core/prepass.lp, the replay keeps
+    # all: the same relation).
     from bootmap.mapping.grounding import _apart
     tableau = _walk(seed, 90)
     resolver = Resolver(levels=None if metrical else ["causal", "topological"])
     grounded, classes, partial, replay = _prepass_and_replay(tableau, resolver, metrical)
     for a in range(len(tableau)):
-        assert len(replay.partial[a]) == len(partial[a]), a
+        assert len(replay.partial[a]) >= len(partial[a]), a
         for b in range(a + 1, len(tableau)):
             assert (replay.class_of[a] == replay.class_of[b]) == (classes.of_time[a] == classes.of_time[b])
-            assert _apart(replay.partial[a], replay.partial[b]) == _apart(partial[a], partial[b]), (a, b)
+            if classes.of_time[a] == classes.of_time[b]:  # (time points of two classes are apart anyway)
+                assert _apart(replay.partial[a], replay.partial[b]) == _apart(partial[a], partial[b]), (a, b)
 
 
 @pytest.mark.parametrize("seed, size", [(2, (3, 3)), (1, (4, 4)), (2, (4, 4)), (3, (4, 4)), (5, (4, 4))])

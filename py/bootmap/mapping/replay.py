@@ -16,7 +16,9 @@ what the new steps change, and :class:`Replay` keeps it as the steps arrive:
 
 What the resolver does with the longer tableau also depends on what it derives before any search, and
 :class:`Replay` keeps that too, as :mod:`.grounding`'s prepass would derive it: the classes of time points
-(view and heading), the features only some time points show (``after(S)``, ``length``), and, where some
+(view and heading), the features only some time points show (``after(S)``, ``length``: all of them,
+where the prepass reads only those its class shows with two values or more, core/prepass.lp, which
+tell the same time points apart), and, where some
 views are suspect (:class:`~.misreads.SuspectWatch`), the classes' lower bounds, recomputed only for the
 classes whose time points a step changed.
 
@@ -50,6 +52,7 @@ STOCK_DIGESTS = {
     "core/ask.lp": "2e8adf403568adf1bc5e166b19bde32ba2fdaac7f873adef0930bb9071c939ca",
     "core/partition.lp": "5a5041dcda4ff90134c77b13f5c751ef32325af467a675c6f5272a5a5f7f41c0",
     "core/assert.lp": "2c01befdceb28aa69c8a639e07b55dc2b96f6280fd2d7f052fe55fa211a76c17",
+    "core/prepass.lp": "9512eededc5220e050f04fb14b9cac6668b74e3d043d52c9ab4ecdd0c3a0ae49",
 }
 
 

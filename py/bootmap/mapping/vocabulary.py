@@ -38,6 +38,8 @@ FUTURE_DEPTH_CONST = "future_depth"
 #: What one dstate costs where misreads are priced (``#const dstate_cost`` in core/partition.lp).
 DSTATE_COST = 4
 DSTATE_COST_CONST = "dstate_cost"
+#: The program part of core/prepass.lp, grounded beside ``base`` in the prepass only.
+PREPASS_PART = "prepass"
 
 
 @dataclass(frozen=True)
@@ -161,6 +163,10 @@ PREFERRED_APART = Predicate("preferred_apart", 3, "assertion",
 # core/partition.lp
 CLASS_KEY = Predicate("class_key", 2, "derived")
 SHOWN_BY_ALL = Predicate("shown_by_all", 1, "derived")
+# core/prepass.lp, grounded in the prepass only: the features that tell time points of a class apart.
+PARTIAL = Predicate("partial", 4, "derived")
+VARIES = Predicate("varies", 2, "derived")
+TELLING = Predicate("telling", 3, "derived")
 CANDIDATE = Predicate("cand", 2, "derived")
 MISREAD = Predicate("misread", 1, "derived", "the view seen at t{0} was a misread")
 # causal.lp
