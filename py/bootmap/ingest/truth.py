@@ -2,9 +2,9 @@
 
 A log has no world file to say where its places are, only the true (optimised) pose of every scan.
 
-- **Places**: dstates whose true positions lie within ``radius_m`` of each other (directly or through
-  others) are one place, every visit to a corner; so are the two dstates of a turn (a turn never
-  leaves its place, though a robot that turns while driving ends it 2-4 m on).
+- **Places**: visits whose true positions all lie within ``radius_m`` of each other are one place (complete
+  linkage), every visit to a corner; the two dstates of a turn are one visit, at the middle of its ends
+  (a turn never leaves its place, though a robot that turns while driving ends it 2-4 m on).
 - **True dstates**: a place and a heading sector, the sectors aligned to the building's main axis (the
   dominant direction of the corridors, found from the true path), named as the simulator names them
   (``P3:N``).
@@ -37,18 +37,25 @@ SECTORS = "ENWS"  # as bootmap.sim.world.heading_sector names them, here in the 
 
 def place_labels(poses: list[Pose] | np.ndarray, radius_m: float = 3.0,
                  together: list[tuple[int, int]] = (), apart: list[tuple[int, int]] = ()) -> list[int]:
-    """A place index per pose: poses within ``radius_m`` of each other, directly or in a chain, share one,
-    and so does each pair in ``together`` (a turn's two ends: a turn never leaves its place); but never
-    a pair in ``apart`` (a travel's two ends: a travel always leaves its place, so a chain of poses that
-    would join them stops short). Pairs are joined nearest first, so a chain breaks at its longest link.
-    Places are numbered in the order they are first visited."""
+    """A place index per pose: a place is a group of *visits* whose positions all lie within ``radius_m`` of
+    each other (complete linkage: no chain of visits along a corridor makes one place of it, and two
+    visits of one place are never more than ``radius_m`` apart, the distance loop closures are judged
+    by). A visit is a pose, or the poses ``together`` joins (a turn's two ends: a turn never leaves its
+    place, though a robot that turns while driving ends it 2-4 m on), at the middle of their positions.
+    A pair in ``apart`` (a travel's two ends: a travel always leaves its place) is never in one place.
+    Places are numbered in the order they are first visited.
+
+    >>> place_labels([(0, 0, 0), (1, 0, 0), (3.5, 0, 0), (20, 0, 0), (0.5, 0, 0)], radius_m=3.0)
+    [0, 0, 1, 2, 0]
+    >>> place_labels([(0, 0, 0), (4, 0, 0), (2, 0.5, 0)], radius_m=3.0, together=[(0, 1)])
+    [0, 0, 0]
+    """
+    from scipy.cluster.hierarchy import fcluster, linkage
+    from scipy.spatial.distance import pdist
+
     xy = np.asarray(poses, dtype=float).reshape(-1, 3)[:, :2]
-    parent = list(range(len(xy)))
-    members = [{i} for i in range(len(xy))]
-    never = [set() for _ in range(len(xy))]
-    for a, b in apart:
-        never[a].add(b)
-        never[b].add(a)
+    n = len(xy)
+    parent = list(range(n))
 
     def root(i: int) -> int:
         while parent[i] != i:
@@ -56,21 +63,26 @@ def place_labels(poses: list[Pose] | np.ndarray, radius_m: float = 3.0,
             i = parent[i]
         return i
 
-    def join(a: int, b: int, forced: bool = False) -> None:
-        ra, rb = root(a), root(b)
-        if ra == rb or (not forced and any(never[i] & members[rb] for i in members[ra])):
-            return
-        parent[rb] = ra
-        members[ra] |= members[rb]
-
     for a, b in together:
-        join(a, b, forced=True)
-    pairs = cKDTree(xy).query_pairs(radius_m, output_type="ndarray").reshape(-1, 2)
-    lengths = np.hypot(*(xy[pairs[:, 0]] - xy[pairs[:, 1]]).T)
-    for k in np.argsort(lengths, kind="stable"):
-        join(int(pairs[k, 0]), int(pairs[k, 1]))
+        parent[root(b)] = root(a)
+    visits: dict[int, list[int]] = {}
+    for i in range(n):
+        visits.setdefault(root(i), []).append(i)
+    groups = list(visits.values())
+    visit_of = {i: v for v, members in enumerate(groups) for i in members}
+    if len(groups) < 2:
+        return [0] * n
+    middle = np.array([xy[members].mean(axis=0) for members in groups])
+    distance = pdist(middle)
+    far = 2.0 * radius_m + float(distance.max())  # beyond any place: complete linkage never joins them
+    m = len(groups)
+    for a, b in apart:
+        i, j = sorted((visit_of[a], visit_of[b]))
+        if i != j:
+            distance[m * i - i * (i + 1) // 2 + (j - i - 1)] = far
+    clusters = fcluster(linkage(distance, method="complete"), t=radius_m, criterion="distance")
     first_seen: dict[int, int] = {}
-    return [first_seen.setdefault(root(i), len(first_seen)) for i in range(len(xy))]
+    return [first_seen.setdefault(int(clusters[visit_of[i]]), len(first_seen)) for i in range(n)]
 
 
 def true_dstates(poses: list[Pose] | np.ndarray, radius_m: float = 3.0, axis_rad: float | None = None,
