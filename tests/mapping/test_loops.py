@@ -240,3 +240,27 @@ def test_why_names_the_axiom_that_rejects_joining_two_visits():
     assert e.verdict == "different"
     assert re.search(r"it breaks order_(irreflexive|asymmetric) \(topological\.lp:\d+\)\.$", e.sentence)
     assert e.to_dict()["rules_cited"] == [r.name for r in e.axioms] and e.axioms[0].level == "topological"
+
+
+def _turns_while_driving(second_turn_at: float) -> Tableau:
+    """A loop of four left turns taken while driving (each turn's ends 4 m apart), then the first corner's
+    turn again, begun at ``second_turn_at`` m along the first leg (the first began at 0)."""
+    x0 = second_turn_at
+    at = [(0, 0, 0), (4, 0, 90), (4, 20, 90), (4, 20, 180), (-16, 20, 180), (-16, 20, 270), (-16, 0, 270),
+          (-16, 0, 0), (x0, 0, 0), (x0 + 4, 0, 90)]
+    actions = [{"type": "turn", "angle_deg": 90}, {"type": "travel", "distance_m": 20.0}] * 4
+    actions[-1] = {"type": "travel", "distance_m": 16.0 + x0}
+    actions.append({"type": "turn", "angle_deg": 90})
+    steps = [{"view": "corner", "odometry": list(p), "action": a} for p, a in zip(at, actions)]
+    steps.append({"view": "corner", "odometry": list(at[-1])})
+    return Tableau.from_dict({"format": FORMAT, "steps": steps, "meta": {"passes_through": True}})
+
+
+def test_a_visit_is_where_the_middle_of_its_turn_is_not_its_nearest_end():
+    """Turns taken while driving end metres from where they began. The first corner turned again 4.5 m
+    further on has its nearest end 0.5 m from the first turn's, but its middle 4.5 m away, beyond the
+    place radius: not one place. Begun 1 m further on, its middle is 1 m away: one dstate."""
+    far = LoopCloser().resolve(_turns_while_driving(4.5))
+    assert far.dstate_of[8] != far.dstate_of[0] and far.dstate_of[9] != far.dstate_of[1]
+    near = LoopCloser().resolve(_turns_while_driving(1.0))
+    assert near.dstate_of[8] == near.dstate_of[0] and near.dstate_of[9] == near.dstate_of[1]

@@ -312,9 +312,15 @@ class Closing:
         return [tuple(e) for e in ends]
 
     def gap(self, i: int, j: int) -> float:
-        """How far apart dead reckoning puts the places of i and j (metres): the nearest ends of the turns
-        they belong to."""
-        return min(float(np.hypot(*(self.xy[a] - self.xy[b]))) for a in self.turn_ends[i] for b in self.turn_ends[j])
+        """How far apart dead reckoning puts the places of i and j (metres): the middles of the turns they
+        belong to (a visit is where its turn is; its ends lie metres apart when the robot turned while
+        driving)."""
+        return float(np.hypot(*(self.middle[i] - self.middle[j])))
+
+    @cached_property
+    def middle(self) -> np.ndarray:
+        """Each time point's visit, dead-reckoned: the middle of the ends of the turn it belongs to."""
+        return np.array([self.xy[list(ends)].mean(axis=0) for ends in self.turn_ends])
 
     def agreeing(self, i: int, j: int) -> int:
         """How many actions agree in a row after i and j, plus before them."""
