@@ -13,7 +13,8 @@ Every family is also read by a robot: turns with noise of sd 3 degrees, travels'
 their length 3% off (support.noise), unrounded and recorded as a log records them (centimetres, tenths
 of a degree): the same targets of accuracy hold for both.
 
-Run: make bench   (or .venv/bin/python bench/resolve_bench.py [--quick])
+Run: make bench   (or .venv/bin/python bench/resolve_bench.py [--quick] [--huge]; --huge adds a
+100,000-step walk: under 20 s and 1 GiB is its target)
 """
 
 from __future__ import annotations
@@ -41,6 +42,8 @@ from targets import Targets
 NO_METRICAL = ["causal", "topological"]
 PAPER_MAX_S = 0.1  # the paper's 401-step tableau, resolved
 LARGE_STEPS, LARGE_MAX_S = 10_000, 10.0  # the largest grid walk, resolved
+# --huge: a 100,000-step walk resolved in a process of its own (its peak memory is the resolve's)
+HUGE_STEPS, HUGE_MAX_S, HUGE_MAX_MB = 100_000, 20.0, 1024.0
 ALIASED_TIME_LIMIT_S = 10.0
 RATIO_MAX = 10.0  # ours / RPNI where both find the true map
 
@@ -147,11 +150,49 @@ def ratio_where_both_are_right(targets: Targets, sizes=(50, 250, 625), runs: int
         targets.check(f"  ours / RPNI, {len(tableau)} steps", o / r, "<=", RATIO_MAX, fmt="{:.1f}", unit="x")
 
 
+def huge(steps: int) -> dict:
+    """Resolve the 5x5 grid walk of ``steps`` steps here (the child process of :func:`huge_row`): its time,
+    dstates, whether proved minimal, and this process's peak memory (MiB) before and after."""
+    import resource
+
+    tableau = grid_walk(steps)
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    t0 = time.perf_counter()
+    cmap = Resolver(time_limit=600).resolve(tableau)
+    seconds = time.perf_counter() - t0
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    return {"steps": steps, "seconds": seconds, "dstates": cmap.n_dstates, "minimal": cmap.minimal,
+            "ground_s": cmap.stats.ground_s, "solve_s": cmap.stats.solve_s, "walk_mb": before, "peak_mb": peak}
+
+
+def huge_row(targets: Targets, steps: int = HUGE_STEPS) -> None:
+    """The walk of ``steps`` steps resolved in a child process; its figures against the targets."""
+    import json
+    import subprocess
+
+    out = subprocess.run([sys.executable, __file__, "--huge-child", str(steps)], capture_output=True, text=True,
+                         check=True)
+    r = json.loads(out.stdout.strip().splitlines()[-1])
+    print(f"\n5x5 grid, landmarks, {steps} steps: {r['dstates']} dstates, proved minimal {r['minimal']}, "
+          f"{r['seconds']:.1f} s (ground {r['ground_s']:.1f}, solve {r['solve_s']:.1f}), peak memory "
+          f"{r['peak_mb']:.0f} MiB (the tableau alone {r['walk_mb']:.0f})")
+    targets.check(f"ours, {steps} steps: time", r["seconds"], "<", HUGE_MAX_S, fmt="{:.1f}", unit=" s")
+    targets.check(f"ours, {steps} steps: peak memory", r["peak_mb"], "<", HUGE_MAX_MB, fmt="{:.0f}", unit=" MiB")
+    targets.check(f"ours, {steps} steps: proved minimal", r["minimal"], "==", True, fmt="{}", bound_text="True")
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="small tableaux only")
     ap.add_argument("--repeat", type=int, default=3, help="resolves per tableau; the median is printed")
+    ap.add_argument("--huge", action="store_true", help=f"also a {HUGE_STEPS:,}-step walk (a minute or more, "
+                    "over a GiB of memory)")
+    ap.add_argument("--huge-child", type=int, help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
+    if args.huge_child:
+        import json
+        print(json.dumps(huge(args.huge_child)))
+        return 0
     head = (f"{'tableau':52} {'steps':>6} {'true':>5} | {'ours':>5} {'acc':>6} {'ground':>7} {'solve':>7} {'total':>7}"
             f" {'uniq':>5} | {'rpni(v)':>7} {'acc':>6} {'time':>7} | {'rpni(v+h)':>9} {'acc':>6} {'time':>7}")
     print(head)
@@ -187,6 +228,8 @@ def main(argv=None) -> int:
             targets.check(f"ours, {name}: time", total, "<", LARGE_MAX_S, fmt="{:.1f}", unit=" s")
     aliasing_sweep(10 if args.quick else 40, targets)
     ratio_where_both_are_right(targets, (50,) if args.quick else (50, 250, 625))
+    if args.huge:
+        huge_row(targets)
     return targets.exit_status()
 
 
