@@ -112,3 +112,29 @@ def test_the_prepass_reads_exactly_the_features_that_tell_a_class_apart(seed):
     assert telling == expected and 0 < len(telling) < len(partial)
     plain = Grounding(resolver.theory, facts, resolver.future_depth).ground()
     assert not list(TELLING.facts_in(plain.control))
+
+
+def test_an_axiom_directory_copied_without_the_prepass_part_proves_the_same_bounds(tmp_path):
+    """A user's copy of asp/ made before core/prepass.lp existed: the lower bounds are read from every
+    feature instead of the telling ones, and come out the same."""
+    import shutil
+
+    import numpy as np
+
+    from bootmap.mapping.facts import read_actions, tableau_facts
+    from bootmap.mapping.grounding import prepass
+    from bootmap.mapping.theory import default_axioms_dir
+    from support.gridworld import random_world, walk
+
+    old = tmp_path / "asp"
+    shutil.copytree(default_axioms_dir(), old)
+    (old / "core" / "prepass.lp").unlink()
+    rng = np.random.default_rng(2)
+    tableau = walk(random_world(rng, 4, 4, extra_edges=2, landmarks=0.0), 200, rng, policy="explore")
+    facts = tableau_facts(tableau, angles=read_actions(tableau)[0])
+    bounds = []
+    for resolver in (Resolver(), Resolver(axioms=old)):
+        grounded = prepass(resolver.theory, facts, resolver.future_depth)
+        classes = grounded.classes(range(len(tableau)))
+        bounds.append(grounded.lower_bounds(classes))
+    assert bounds[0] == bounds[1] and sum(bounds[0]) > len(bounds[0])  # the bounds say more than one a class

@@ -22,8 +22,8 @@ from clingo import Symbol
 from .facts import add_facts
 from .theory import Theory
 from .trace import Instrumented, load_instrumented
-from .vocabulary import (AFTER, CLASS_KEY, CLASS_KEY_TERM, DSTATE_BOUND, FUTURE_DEPTH_CONST, PREPASS_PART, PREV_IN_CLASS,
-                         SEQUENCE, SLOTS, TELLING, VIEW_FEATURE)
+from .vocabulary import (AFTER, CLASS_KEY, CLASS_KEY_TERM, DSTATE_BOUND, FEATURE, FUTURE_DEPTH_CONST, PREPASS_PART,
+                         PREV_IN_CLASS, SEQUENCE, SHOWN_BY_ALL, SLOTS, TELLING, VIEW_FEATURE)
 
 
 @dataclass(frozen=True)
@@ -154,8 +154,15 @@ class Grounding:
         partial: dict[int, dict[int, set[int]]] = {t: defaultdict(set) for t in times}
         seen_from: dict[int, dict[int, set]] = defaultdict(lambda: defaultdict(set))
         # Only the features that tell time points of a class apart (core/prepass.lp): on the paper's
-        # tableau with an apart, 18 of 3,390 feature atoms (each a few calls into clingo to read).
-        for t, key, value in TELLING.facts_in(self.control):
+        # tableau with an apart, 18 of 3,390 feature atoms (each a few calls into clingo to read). An
+        # axiom directory copied before that file existed has no such part: there, every feature not
+        # all time points show (the same lower bounds, read more slowly).
+        if any(sig[:2] == (TELLING.name, TELLING.arity) for sig in self.control.symbolic_atoms.signatures):
+            told = TELLING.facts_in(self.control)
+        else:
+            grouping = {args[0] for args in SHOWN_BY_ALL.facts_in(self.control)}
+            told = (args for args in FEATURE.facts_in(self.control) if args[1] not in grouping)
+        for t, key, value in told:
             k = ids.get(key)
             if k is None:
                 k = ids[key] = len(ids)
