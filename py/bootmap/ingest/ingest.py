@@ -34,7 +34,7 @@ from .scans import IMAGE_ANGLE_MAX, IMAGE_ANGLE_MIN, IMAGE_BEAMS, Scan, to_image
 from .places import PlaceDetector, find_visits
 from ..paths import simplify
 from ..paths import main_axis
-from .truth import corner_recall, corners_in_poses, sector_name, true_dstates, visit_places
+from .truth import corner_recall, corners_in_poses, place_labels, sector_name, true_dstates
 
 ROS_SUFFIXES = (".bag", ".db3", ".mcap")
 #: How far the drawn true path may stray from the log's poses (metres).
@@ -191,7 +191,7 @@ def _visit_truth(scans: list[Scan], visits: list, places: PlaceDetector, radius_
     building's frame."""
     axis = main_axis([s.truth for s in scans])
     middles = [scans[(v.first + v.last) // 2].truth for v in visits]
-    place_of = visit_places(middles, radius_m)
+    place_of = place_labels(middles, radius_m)
     labels = []
     for v, place in zip(visits, place_of):
         for i in v.dstates(places.turn_deg):

@@ -26,7 +26,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from .dstates import FoundTurn, odometry_track
 from ..paths import main_axis, simplify
@@ -98,24 +97,6 @@ def true_dstates(poses: list[Pose] | np.ndarray, radius_m: float = 3.0, axis_rad
 def sector_name(heading_rad: float, axis_rad: float) -> str:
     """The heading's sector (``E``, ``N``, ``W``, ``S``) in the building's frame."""
     return SECTORS[int(np.rint(wrap(heading_rad - axis_rad) / (np.pi / 2))) % 4]
-
-
-def visit_places(poses: list[Pose] | np.ndarray, radius_m: float = 3.0) -> list[int]:
-    """A place index per visit: visits whose positions all lie within ``radius_m`` of each other
-    (complete linkage, so no chain of visits along a corridor makes one place of it), numbered in the
-    order they are first visited.
-
-    >>> visit_places([(0, 0, 0), (1, 0, 0), (4.5, 0, 0), (0.5, 0, 0)], radius_m=3.0)
-    [0, 0, 1, 0]
-    """
-    from scipy.cluster.hierarchy import fcluster, linkage
-
-    xy = np.asarray(poses, dtype=float).reshape(-1, 3)[:, :2]
-    if len(xy) < 2:
-        return [0] * len(xy)
-    clusters = fcluster(linkage(xy, method="complete"), t=radius_m, criterion="distance")
-    names: dict[int, int] = {}
-    return [names.setdefault(int(c), len(names)) for c in clusters]
 
 
 @dataclass(frozen=True)
