@@ -26,3 +26,11 @@ def test_axioms_that_do_not_load_stop_the_start(tmp_path):
     (tmp_path / "asp" / "causal.lp").write_text("broken (\n")
     out = serve("--data-dir", str(tmp_path / "data"), "--axioms", str(tmp_path / "asp"))
     assert out.returncode == 2 and "causal.lp" in out.stderr and "does not parse" in out.stderr
+
+
+def test_a_spool_dir_that_cannot_be_made_stops_the_start_naming_it(tmp_path):
+    taken = tmp_path / "a-file"
+    taken.write_text("not a directory")
+    out = serve("--data-dir", str(tmp_path / "data"), BOOTMAP_SPOOL_DIR=str(taken / "spool"))
+    assert out.returncode == 2 and "spool_dir (BOOTMAP_SPOOL_DIR)" in out.stderr and str(taken) in out.stderr
+    assert "Traceback" not in out.stderr

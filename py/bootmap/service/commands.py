@@ -7,6 +7,8 @@ which), 1 if the server fails.
 from __future__ import annotations
 
 import argparse
+import errno
+import os
 import sys
 
 from ..errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_OK, error_line
@@ -76,6 +78,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
             return EXIT_BAD_INPUT
         load_theory(settings.axioms)  # fail here, with the message, rather than inside uvicorn's start-up
         settings.data_dir.mkdir(parents=True, exist_ok=True)
+        _check_spool_dir(settings.spool_dir)
     except ValidationError as e:
         print(error_line("serve", f"bad setting: {_first_error(e)}", EXIT_BAD_INPUT), file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -160,6 +163,19 @@ def cmd_token_revoke(args: argparse.Namespace) -> int:
         return code
     print(f"revoked token {args.name!r} in {where}: refused from now on; its tableaux stay, owned by no one")
     return EXIT_OK
+
+
+def _check_spool_dir(directory) -> None:
+    """The directory request bodies are spooled to (``spool_dir``) can be made and written to: else an
+    OSError naming the setting, before uvicorn starts."""
+    if directory is None:
+        return
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+        if not os.access(directory, os.W_OK | os.X_OK):
+            raise PermissionError(errno.EACCES, "not writable")
+    except OSError as e:
+        raise OSError(f"spool_dir (BOOTMAP_SPOOL_DIR) {directory}: {e.strerror or e}") from None
 
 
 def _first_error(e) -> str:
