@@ -38,7 +38,7 @@ from typing import Sequence
 import numpy as np
 
 from ..errors import BadInput
-from .scans import Scan
+from .scans import Scan, between
 
 #: Bearings of a local map's image: one a degree, all round.
 LOCAL_BEAMS = 360
@@ -77,8 +77,6 @@ def local_images(scans: Sequence[Scan], visits: Sequence[int], reach_m: float = 
     for row, k in enumerate(visits):
         lo = int(np.searchsorted(travelled, travelled[k] - reach_m, side="left"))
         hi = int(np.searchsorted(travelled, travelled[k] + reach_m, side="right"))
-        x0, y0, th0 = odometry[k]
-        c0, s0 = math.cos(th0), math.sin(th0)
         parts = []
         for j in range(lo, hi):
             if j not in returns:
@@ -86,9 +84,7 @@ def local_images(scans: Sequence[Scan], visits: Sequence[int], reach_m: float = 
             xy = returns[j]
             if not len(xy):
                 continue
-            # scan j's frame in the visit's: odometry[k]^-1 (+) odometry[j]
-            dx, dy = odometry[j, 0] - x0, odometry[j, 1] - y0
-            tx, ty, th = c0 * dx + s0 * dy, -s0 * dx + c0 * dy, odometry[j, 2] - th0
+            tx, ty, th = between(odometry[k], odometry[j])  # scan j's frame in the visit's
             c, s = math.cos(th), math.sin(th)
             parts.append(np.column_stack([c * xy[:, 0] - s * xy[:, 1] + tx, s * xy[:, 0] + c * xy[:, 1] + ty]))
         if not parts:
@@ -105,6 +101,6 @@ def local_images(scans: Sequence[Scan], visits: Sequence[int], reach_m: float = 
 def _returns(scan: Scan, max_range: float) -> np.ndarray:
     """A scan's returns as points in its robot's frame (beams that saw something nearer than ``max_range``)."""
     r = np.asarray(scan.ranges, dtype=float)
-    a = scan.angle_min + scan.angle_increment * np.arange(len(r))
+    a = scan.angles
     seen = np.isfinite(r) & (r > 0.0) & (r < min(scan.range_max, max_range))
     return np.column_stack([r[seen] * np.cos(a[seen]), r[seen] * np.sin(a[seen])])

@@ -49,37 +49,25 @@ def place_labels(poses: list[Pose] | np.ndarray, radius_m: float = 3.0,
     >>> place_labels([(0, 0, 0), (4, 0, 0), (2, 0.5, 0)], radius_m=3.0, together=[(0, 1)])
     [0, 0, 0]
     """
-    from scipy.cluster.hierarchy import fcluster, linkage
-    from scipy.spatial.distance import pdist
+    from scipy.cluster.hierarchy import DisjointSet, fcluster, linkage
+    from scipy.spatial.distance import pdist, squareform
 
     xy = np.asarray(poses, dtype=float).reshape(-1, 3)[:, :2]
     n = len(xy)
-    parent = list(range(n))
-
-    def root(i: int) -> int:
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-
+    turns = DisjointSet(range(n))
     for a, b in together:
-        parent[root(b)] = root(a)
-    visits: dict[int, list[int]] = {}
-    for i in range(n):
-        visits.setdefault(root(i), []).append(i)
-    groups = list(visits.values())
+        turns.merge(a, b)
+    groups = sorted((sorted(members) for members in turns.subsets()), key=lambda members: members[0])
     visit_of = {i: v for v, members in enumerate(groups) for i in members}
     if len(groups) < 2:
         return [0] * n
-    middle = np.array([xy[members].mean(axis=0) for members in groups])
-    distance = pdist(middle)
+    distance = squareform(pdist(np.array([xy[members].mean(axis=0) for members in groups])))
     far = 2.0 * radius_m + float(distance.max())  # beyond any place: complete linkage never joins them
-    m = len(groups)
     for a, b in apart:
-        i, j = sorted((visit_of[a], visit_of[b]))
+        i, j = visit_of[a], visit_of[b]
         if i != j:
-            distance[m * i - i * (i + 1) // 2 + (j - i - 1)] = far
-    clusters = fcluster(linkage(distance, method="complete"), t=radius_m, criterion="distance")
+            distance[i, j] = distance[j, i] = far
+    clusters = fcluster(linkage(squareform(distance), method="complete"), t=radius_m, criterion="distance")
     first_seen: dict[int, int] = {}
     return [first_seen.setdefault(int(clusters[visit_of[i]]), len(first_seen)) for i in range(n)]
 

@@ -222,9 +222,8 @@ class Excerpts:
     """
 
     def __init__(self, facts: Sequence[Symbol]):
-        self.facts = list(facts)
-        self._whole = [sym for sym in self.facts if not sym.arguments]  # of the whole tableau (passes_through)
-        self._timed = [(sym.arguments[0].number, VIEW.matches(sym), sym) for sym in self.facts if sym.arguments]
+        self._whole = [sym for sym in facts if not sym.arguments]  # of the whole tableau (passes_through)
+        self._timed = [(sym.arguments[0].number, VIEW.matches(sym), sym) for sym in facts if sym.arguments]
 
     def __call__(self, keep: Iterable[int]) -> list[Symbol]:
         """The facts of the excerpt that keeps these time points."""
