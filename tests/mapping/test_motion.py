@@ -5,13 +5,13 @@ import json
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from bootmap.cli import main
 from bootmap.mapping import Resolver
-from bootmap.mapping.motion import (LENGTH_RATIO, LengthTypes, MotionPrimitives, exact_readings, length_types,
-                                   reading_step)
+from bootmap.mapping.motion import (LENGTH_RATIO, LENGTH_TAIL, LengthTypes, MotionPrimitives, exact_readings,
+                                   length_types, reading_step)
 from bootmap.metrics import dstate_accuracy
 from bootmap.tableau import Step, Tableau, Travel, Turn
 from support.check import true_partition
@@ -214,13 +214,15 @@ CORRIDORS_M = (1.5, 2.5, 4.0, 6.5, 10.5, 17.0)  # neighbours more than 1.6 times
 
 @settings(max_examples=80, deadline=None)
 @given(corridors=st.lists(st.sampled_from(CORRIDORS_M), min_size=1, max_size=4, unique=True),
-       reads=st.integers(5, 40), error=st.floats(0.005, 0.03), step=st.sampled_from([0.01, 0.001, 0.0]),
-       seed=st.integers(0, 2**31))
+       reads=st.one_of(st.integers(5, 40), st.integers(300, 1000)), error=st.floats(0.005, 0.04),
+       step=st.sampled_from([0.01, 0.001, 0.0]), seed=st.integers(0, 2**31))
+@example(corridors=[2.5], reads=1000, error=0.04, step=0.01, seed=1)
 def test_rounded_lengths_of_one_corridor_are_one_type(corridors, reads, error, step, seed):
     # Each corridor driven many times, its length read a share ``error`` off (sd) and recorded to the
     # centimetre, the millimetre or unrounded: rounded readings repeat (3.95 m, 3.96 m, each several
     # times), and are still one corridor. Typing each repeated value as its own length made a 20-place
-    # floor need 214 dstates.
+    # floor need 214 dstates. Driven hundreds of times, a corridor's readings spread wider than
+    # LENGTH_RATIO at their extremes (318 readings of 2 m at 3%: 1.77-2.23 m) and are still one corridor.
     rng = np.random.default_rng(seed)
     truth = [c for c in corridors for _ in range(reads)]
     read = [c * (1 + error * rng.standard_normal()) for c in truth]
@@ -239,9 +241,9 @@ def test_rounded_lengths_of_one_corridor_are_one_type(corridors, reads, error, s
 def test_no_length_type_spans_lengths_odometry_tells_apart(lengths, step):
     # A log's travels come in every length, each a small step from the next, so that splitting only where
     # one length is 25% longer than the one before chained 1.4 m and 22.9 m into one type (a log's whole
-    # drive one action, and determinism then joined every place to every other). Whatever the lengths, no
-    # type of readings that are not exact spans more than LENGTH_RATIO, and each type is a run of the
-    # sorted lengths.
+    # drive one action, and determinism then joined every place to every other). Whatever the lengths,
+    # no type of readings that are not exact spans more than LENGTH_RATIO (but for LENGTH_TAIL of its
+    # readings at either end), and each type is a run of the sorted lengths.
     read = [round(round(d / step) * step, 3) if step else d for d in lengths]
     learned = LengthTypes().fit(read)
     if learned.exact_:
@@ -249,7 +251,9 @@ def test_no_length_type_spans_lengths_odometry_tells_apart(lengths, step):
     groups: dict[int, list[float]] = {}
     for d, label in zip(read, learned.labels_):
         groups.setdefault(label, []).append(d)
-    assert all(max(g) <= LENGTH_RATIO * min(g) + 1e-9 for g in groups.values())
+    for g in groups.values():
+        g, tail = sorted(g), int(len(g) * LENGTH_TAIL)
+        assert g[-1 - tail] <= LENGTH_RATIO * g[tail] + 1e-9
     spans = sorted((min(g), max(g)) for g in groups.values())
     assert all(a[1] < b[0] for a, b in zip(spans, spans[1:]))
 
