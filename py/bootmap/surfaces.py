@@ -62,9 +62,15 @@ def image_points(image, max_range: float = 20.0, fov_deg: float = 180.0) -> np.n
     [[0.0, -1.0], [0.0, 2.0]]
     """
     r = np.asarray(image, dtype=float).ravel()
-    a = beam_angles(len(r), fov_deg)
+    return returns(r, beam_angles(len(r), fov_deg), max_range)
+
+
+def returns(ranges, angles: np.ndarray, max_range: float = 20.0) -> np.ndarray:
+    """The beams at ``angles`` (radians) that saw something nearer than ``max_range`` (finite, positive
+    readings), as 2-D points in the sensor's frame."""
+    r = np.asarray(ranges, dtype=float).ravel()
     seen = np.isfinite(r) & (r > 0.0) & (r < max_range)
-    return np.column_stack([r[seen] * np.cos(a[seen]), r[seen] * np.sin(a[seen])])
+    return np.column_stack([r[seen] * np.cos(angles[seen]), r[seen] * np.sin(angles[seen])])
 
 
 def surface_points(image, max_range: float = 20.0, resolution_m: float = 0.05, max_incidence_deg: float = 75.0,

@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 
 from bootmap.errors import BadInput
 from bootmap.ingest.local_maps import local_images
-from bootmap.ingest.scans import Scan
+from bootmap.ingest.scans import Scan, compose
 from bootmap.scan_match import ScanMatcher
 from support.raycast import cast, polygon_walls
 
@@ -24,14 +24,8 @@ def drive(odometry_frame=(0.0, 0.0, 0.0)) -> list[Scan]:
     out = [(x, 1.0, 0.0) for x in np.arange(1.0, 13.0, 0.25)]
     out += [(13.0, 1.0, math.radians(a)) for a in range(30, 180, 30)]
     out += [(x, 1.0, math.pi) for x in np.arange(13.0, 0.99, -0.25)]
-    fx, fy, fth = odometry_frame
-    c, s = math.cos(fth), math.sin(fth)
-    scans = []
-    for k, (x, y, th) in enumerate(out):
-        odometry = (fx + c * x - s * y, fy + s * x + c * y, th + fth)
-        scans.append(Scan(float(k), cast(WALLS, (x, y, th), max_range=81.9), -math.pi / 2, math.pi / 179, 81.9,
-                          odometry, truth=(x, y, th)))
-    return scans
+    return [Scan(float(k), cast(WALLS, pose, max_range=81.9), -math.pi / 2, math.pi / 179, 81.9,
+                 compose(odometry_frame, pose), truth=pose) for k, pose in enumerate(out)]
 
 
 def at(scans, x, heading):

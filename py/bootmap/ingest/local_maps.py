@@ -38,6 +38,7 @@ from typing import Sequence
 import numpy as np
 
 from ..errors import BadInput
+from ..surfaces import returns
 from .scans import Scan, between
 
 #: Bearings of a local map's image: one a degree, all round.
@@ -72,16 +73,16 @@ def local_images(scans: Sequence[Scan], visits: Sequence[int], reach_m: float = 
     odometry = np.array([s.odometry[:3] for s in scans], dtype=float).reshape(-1, 3)
     step = np.hypot(*np.diff(odometry[:, :2], axis=0).T) if len(scans) > 1 else np.zeros(0)
     travelled = np.concatenate([[0.0], np.cumsum(step)])  # odometry's path length up to each scan
-    returns: dict[int, np.ndarray] = {}
+    seen: dict[int, np.ndarray] = {}  # each scan's returns, in its robot's frame
     out = np.full((len(visits), beams), float(max_range))
     for row, k in enumerate(visits):
         lo = int(np.searchsorted(travelled, travelled[k] - reach_m, side="left"))
         hi = int(np.searchsorted(travelled, travelled[k] + reach_m, side="right"))
         parts = []
         for j in range(lo, hi):
-            if j not in returns:
-                returns[j] = _returns(scans[j], max_range)
-            xy = returns[j]
+            if j not in seen:
+                seen[j] = returns(scans[j].ranges, scans[j].angles, min(scans[j].range_max, max_range))
+            xy = seen[j]
             if not len(xy):
                 continue
             tx, ty, th = between(odometry[k], odometry[j])  # scan j's frame in the visit's
@@ -96,11 +97,3 @@ def local_images(scans: Sequence[Scan], visits: Sequence[int], reach_m: float = 
         b = np.rint((bearing + math.pi) / (2 * math.pi) * beams).astype(int) % beams
         np.minimum.at(out[row], b, rho[near])
     return out
-
-
-def _returns(scan: Scan, max_range: float) -> np.ndarray:
-    """A scan's returns as points in its robot's frame (beams that saw something nearer than ``max_range``)."""
-    r = np.asarray(scan.ranges, dtype=float)
-    a = scan.angles
-    seen = np.isfinite(r) & (r > 0.0) & (r < min(scan.range_max, max_range))
-    return np.column_stack([r[seen] * np.cos(a[seen]), r[seen] * np.sin(a[seen])])

@@ -457,8 +457,8 @@ def length_types(distances: Sequence[float], resolution_m: float | None = None) 
     and split wherever the next is more than :data:`LENGTH_RATIO` times longer, and a group whose
     longest is still more than that times its shortest (travels of every length, chained by small steps,
     as a log's are; the :data:`LENGTH_TAIL` at either end not counted) is split again at its widest step
-    until none is; exact lengths (clean experience,
-    :func:`exact_readings` at the distances' resolution, given or read) are each a type.
+    until none is; exact lengths (clean experience, :func:`exact_readings` at the distances' resolution,
+    given or read) are each a type.
 
     >>> length_types([4.02, 1.98, 3.95, 2.03, 12.1, 4.0])
     [40, 20, 40, 20, 121, 40]
