@@ -9,7 +9,8 @@ different. Concretely:
    usually that settles it, by propagation alone.
 2. Otherwise, features only some time points show (what was seen after a given sequence of actions)
    tell time points of a class apart: a set of pairwise disagreeing time points is a proved lower bound
-   on the dstates of that class. Try exactly those bounds.
+   on the dstates of that class. Try exactly those bounds, then the few just above them (by clingo's
+   core-guided optimisation, which opens a class's spare dstate only where a core asks for it).
 3. Otherwise find some valid map, allowing a few spare dstates per class: an upper bound.
 4. Ground once within that bound and let clingo minimise the number of dstates (core-guided, so what it
    learns carries from one bound to the next), then enumerate the minimal maps (up to ``max_models``):

@@ -81,8 +81,15 @@ class ExactSearch:
         state.proved = max(state.proved, state.classes.lower_bound)
 
     def bounded(self, bound: int) -> CognitiveMap | None:
-        """The minimal maps if at most ``bound`` dstates will do, else None (and the bound is proved)."""
-        outcome = self.solve(self.state.classes.layout(bound), f"at most {bound} dstates")
+        """The minimal maps if at most ``bound`` dstates will do, else None (and the bound is proved).
+
+        Above the classes' lower bound every class has spare slots. There clingo's core-guided
+        optimisation looks for the maps: it takes every spare as unused and opens those its unsatisfiable
+        cores ask for, where a search for any map within the bound tries every way of using them (2,000
+        steps with a person's apart, 104 dstates over a bound of 103: 4.5 s against 14.8 s)."""
+        spare = bound > self.state.classes.lower_bound
+        layout = self.state.classes.layout(bound) + ([MINIMISE_DSTATES()] if spare else [])
+        outcome = self.solve(layout, f"at most {bound} dstates", optimise=spare)
         if outcome.models:
             return self._map(outcome)
         self.state.proved = max(self.state.proved, bound + 1)
