@@ -96,6 +96,12 @@ def main(argv=None) -> int:
         print(f"{name}: {seconds:.1f} s", file=sys.stderr, flush=True)
     print(table(rows))
     print()
+    print("revisits whose best earlier match is right, by descriptor:")
+    for name, r, _ in runs:
+        pr = r["place_recognition"]
+        counts = ", ".join(f"{d} {p['best_correct']}" for d, p in pr.items())
+        print(f"  {name}: {counts} (of {next(iter(pr.values()))['revisits']})")
+    print()
     print("\n".join(f"anchor, {a}" for a in ANCHORS))
     print()
     targets = Targets()

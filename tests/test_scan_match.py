@@ -145,3 +145,36 @@ def test_an_image_all_round_is_read_all_round():
     surface = surface_points(circle, fov_deg=360, resolution_m=0.01)
     behind = surface[(surface[:, 0] < 0) & (np.abs(surface[:, 1]) < 0.02)]
     assert len(behind) >= 2  # samples between beam 359 (+179 degrees) and beam 0 (-180)
+
+
+def _places():
+    """Three visits each to a room and to a corridor's bend, from poses a little apart: each visit's
+    revisits are the other two of its place."""
+    rooms = [cast(ROOM, p) for p in ((2.0, 3.0, 0.2), (2.6, 3.3, 0.45), (1.8, 2.5, -0.1))]
+    bends = [cast(CORRIDOR, p) for p in ((11.0, 4.0, 1.5), (11.2, 5.0, 1.7), (10.8, 3.2, 1.3))]
+    return np.array([rooms[0], bends[0], rooms[1], bends[1], rooms[2], bends[2]])
+
+
+def test_a_shortlist_verifies_each_images_likeliest_matches_and_no_other():
+    images = _places()
+    full = MATCHER.scores(images)
+    short = ScanMatcher(shortlist=2).scores(images)
+    # Each visit's two most alike by the correlative search are its own place's other visits: those pairs
+    # are matched in full, the pairs across the two places are not (0: not verified).
+    same_place = np.equal.outer(np.arange(6) % 2, np.arange(6) % 2)
+    assert np.allclose(short[same_place], full[same_place])
+    assert (short[~same_place] == 0).all() and (full[~same_place] > 0).any()
+    assert np.allclose(ScanMatcher(shortlist=2, n_jobs=2).scores(images), short)
+    # A shortlist as long as the others are many is every pair.
+    assert np.allclose(ScanMatcher(shortlist=5).scores(images), full)
+
+
+@settings(max_examples=8, deadline=None)
+@given(k=st.integers(1, 4), order=st.permutations(range(6)))
+def test_a_shortlist_is_the_full_scores_of_at_least_k_partners_per_image(k, order):
+    images = _places()[list(order)]
+    full, short = MATCHER.scores(images), ScanMatcher(shortlist=k).scores(images)
+    verified = np.isclose(short, full)
+    # A score is the full match's or 0 (not verified); symmetric; every image has k partners verified.
+    assert (verified | (short == 0)).all() and np.allclose(short, short.T)
+    assert ((verified & ~np.eye(6, dtype=bool)).sum(axis=1) >= k).all()

@@ -47,6 +47,10 @@ deviations of the noise plus what is left of the alignment error); a place has a
 bounds the search's shifts; the search's steps (0.5 m, 10 degrees: 0.35 m at 4 m) leave the truth within
 ICP's 1 m first reach, then 30 cm.
 
+Many images: :meth:`ScanMatcher.scores` scores every pair, or, with ``shortlist=k``, only each image's k
+likeliest partners by the correlative search's best fit (step 3 alone, a tenth of a match's cost), as place
+recognition retrieves candidates cheaply and verifies them geometrically; the rest score 0.
+
 Matching is symmetric: :meth:`ScanMatcher.match` aligns the pair in one canonical order and inverts the
 motion when asked the other way round, so ``match(a, b)`` and ``match(b, a)`` have the same score and
 inverse transforms.
@@ -222,6 +226,11 @@ class ScanMatcher:
         ICP iterations per stage.
     n_jobs : int
         Processes for :meth:`scores` (1: this one).
+    shortlist : int or None
+        In :meth:`scores`, align and score in full only each image's ``shortlist`` most alike others by the
+        correlative search alone (its best fit, a tenth of the cost of a match), as place recognition
+        verifies its retrieved candidates geometrically; every other pair scores 0, not verified. None:
+        every pair in full.
     fov_deg : float
         The field of view the images' beams cover (degrees, :func:`bootmap.surfaces.beam_angles`): 180, a
         laser's, or 360 for images all round (a place's local map, :mod:`bootmap.ingest.local_maps`).
@@ -238,7 +247,7 @@ class ScanMatcher:
                  max_incidence_deg: float = 75.0, coarse_m: float = 1.0, fine_m: float = 0.30,
                  place_radius_m: float = 3.0, search_step_m: float = 0.5, search_step_deg: float = 10.0,
                  search_stride: int = 4, refine: int = 3, max_iterations: int = 30, n_jobs: int = 1,
-                 fov_deg: float = 180.0):
+                 fov_deg: float = 180.0, shortlist: int | None = None):
         self.max_range = max_range
         self.inlier_m = inlier_m
         self.resolution_m = resolution_m
@@ -253,6 +262,7 @@ class ScanMatcher:
         self.max_iterations = max_iterations
         self.n_jobs = n_jobs
         self.fov_deg = fov_deg
+        self.shortlist = shortlist
 
     def prepare(self, image) -> _Scan:
         """An image made ready for matching (its returns, surface and k-d tree), to match many times."""
@@ -276,31 +286,38 @@ class ScanMatcher:
             return Match(m.score, _inverse(m.transform), m.inliers[::-1], m.points[::-1], m.refuted[::-1])
         return self._match(self.prepare(a), self.prepare(b))
 
-    def _match(self, a: _Scan, b: _Scan) -> Match:
-        """Align ``b``'s returns onto ``a``'s surface from every start; the best start's match."""
-        import small_gicp
-
-        na, nb = len(a.points), len(b.points)
-        if na == 0 or nb == 0 or a.surface_tree is None or b.surface_tree is None:
-            return Match(0.0, (0.0, 0.0, 0.0), (0, 0), (na, nb))
-        # Global: a correlative search of b's (thinned) returns over a's likelihood field, every
-        # search_step_deg of heading and every search_step_m of shift within a place's radius.
+    def _search(self, a: _Scan, b: _Scan) -> tuple[float, list[np.ndarray]]:
+        """The correlative search of ``b``'s (thinned) returns over ``a``'s likelihood field, every
+        ``search_step_deg`` of heading and every ``search_step_m`` of shift within a place's radius: its best
+        fit as a share of those returns (in [0, 1]; 0 when either scan saw nothing), and the ``refine`` best
+        candidate motions, best first."""
+        if len(a.points) == 0 or len(b.points) == 0 or a.surface_tree is None or b.surface_tree is None:
+            return 0.0, []
         rot = np.radians(np.arange(0.0, 360.0, self.search_step_deg))
         c, s_ = np.cos(rot), np.sin(rot)
         turned = np.stack([c[:, None] * b.sparse[:, 0] - s_[:, None] * b.sparse[:, 1],
                            s_[:, None] * b.sparse[:, 0] + c[:, None] * b.sparse[:, 1]], axis=-1)  # (R, P, 2)
-        
         k = int(self.place_radius_m // self.search_step_m)
         g = np.arange(-k, k + 1) * self.search_step_m
         shifts = np.stack(np.meshgrid(g, g, indexing="ij"), axis=-1).reshape(-1, 2)
         shifts = shifts[np.hypot(shifts[:, 0], shifts[:, 1]) <= self.place_radius_m + 1e-9]  # (S, 2)
         fit = a.correlate(turned, shifts)  # (R, S)
         top = np.argsort(fit, axis=None)[::-1][:self.refine]
-        coarse = [(0, se2(*shifts[j], rot[i])) for i, j in zip(*np.unravel_index(top, fit.shape))]
-        # Refine: the best candidates by ICP on all returns; the best by the symmetric score.
+        coarse = [se2(*shifts[j], rot[i]) for i, j in zip(*np.unravel_index(top, fit.shape))]
+        return float(fit.flat[top[0]]) / len(b.sparse), coarse
+
+    def _match(self, a: _Scan, b: _Scan) -> Match:
+        """Align ``b``'s returns onto ``a``'s surface from the search's best candidates (:meth:`_search`),
+        each refined by ICP; the best by the symmetric score."""
+        import small_gicp
+
+        na, nb = len(a.points), len(b.points)
+        _, coarse = self._search(a, b)
+        if not coarse:
+            return Match(0.0, (0.0, 0.0, 0.0), (0, 0), (na, nb))
         best = None
         source = small_gicp.PointCloud(b.points3)
-        for _, T in coarse:
+        for T in coarse:
             for reach in (self.coarse_m, self.fine_m, self.inlier_m):
                 T = small_gicp.align(a.surface_cloud, source, a.surface_tree, init_T_target_source=T,
                                      registration_type="ICP", max_correspondence_distance=reach,
@@ -315,7 +332,7 @@ class ScanMatcher:
         return Match(net, planar(T), explained, (na, nb), refuted)
 
     def scores(self, images) -> np.ndarray:
-        """Scores of all pairs of images.
+        """Scores of all pairs of images (of the shortlisted pairs, with ``shortlist``).
 
         Parameters
         ----------
@@ -325,30 +342,50 @@ class ScanMatcher:
         -------
         ndarray of shape (n_images, n_images)
             ``scores[i, j]``: the score of :meth:`match` of images ``i`` and ``j`` (symmetric; higher is
-            more alike). The diagonal is 1 where an image has returns, else 0, and means nothing.
+            more alike), or 0 for a pair not on either image's shortlist. The diagonal is 1 where an image
+            has returns, else 0, and means nothing.
         """
         X = np.asarray(images, dtype=float)
         if X.ndim != 2:
             raise ValueError(f"images must be a 2-D array (n_images, n_beams), got shape {X.shape}")
         n = len(X)
         pairs = [(i, j) for i in range(n) for j in range(i + 1, n)]
-        if self.n_jobs == 1 or len(pairs) < 2:
-            values = _pair_scores(self, X, pairs)
-        else:
-            from concurrent.futures import ProcessPoolExecutor
-
-            chunks = [pairs[k::self.n_jobs * 4] for k in range(self.n_jobs * 4)]
-            with ProcessPoolExecutor(self.n_jobs) as pool:
-                parts = list(pool.map(_pair_scores, [self] * len(chunks), [X] * len(chunks), chunks))
-            values = np.empty(len(pairs))
-            for k, part in enumerate(parts):
-                values[k::self.n_jobs * 4] = part
+        if self.shortlist is not None and self.shortlist < n - 1:
+            pairs = self._shortlisted(X, pairs)
         S = np.zeros((n, n))
         if pairs:
             i, j = np.array(pairs).T
-            S[i, j] = S[j, i] = values
+            S[i, j] = S[j, i] = self._in_parallel(_pair_scores, X, pairs)
         S[np.diag_indices(n)] = [1.0 if len(image_points(x, self.max_range, self.fov_deg)) else 0.0 for x in X]
         return S
+
+    def _shortlisted(self, X: np.ndarray, pairs: list[tuple[int, int]]) -> list[tuple[int, int]]:
+        """The pairs (of ``pairs``, all pairs ``i < j``) on either image's shortlist: its ``shortlist`` best
+        fits by the correlative search (ties by index), in the order of ``pairs``."""
+        n = len(X)
+        fits = np.full((n, n), -1.0)
+        i, j = np.array(pairs).T
+        fits[i, j] = fits[j, i] = self._in_parallel(_pair_fits, X, pairs)
+        best = np.argsort(-fits, axis=1, kind="stable")[:, :self.shortlist]
+        keep = np.zeros((n, n), dtype=bool)
+        keep[np.arange(n)[:, None], best] = True
+        keep |= keep.T
+        return [(a, b) for a, b in pairs if keep[a, b]]
+
+    def _in_parallel(self, work, X: np.ndarray, pairs: list[tuple[int, int]]) -> np.ndarray:
+        """``work(self, X, pairs)`` (one value per pair), in ``n_jobs`` processes."""
+        if self.n_jobs == 1 or len(pairs) < 2:
+            return work(self, X, pairs)
+        from concurrent.futures import ProcessPoolExecutor
+
+        parts = self.n_jobs * 4
+        chunks = [pairs[k::parts] for k in range(parts)]
+        with ProcessPoolExecutor(self.n_jobs) as pool:
+            done = list(pool.map(work, [self] * parts, [X] * parts, chunks))
+        values = np.empty(len(pairs))
+        for k, part in enumerate(done):
+            values[k::parts] = part
+        return values
 
 
 def _canonical_first(a: np.ndarray, b: np.ndarray) -> bool:
@@ -361,6 +398,16 @@ def _canonical_first(a: np.ndarray, b: np.ndarray) -> bool:
 
 def _pair_scores(matcher: ScanMatcher, X: np.ndarray, pairs: list[tuple[int, int]]) -> np.ndarray:
     """Scores of the given pairs of rows of ``X`` (one process's share of :meth:`ScanMatcher.scores`)."""
+    return _per_pair(matcher, X, pairs, lambda a, b: matcher._match(a, b).score)
+
+
+def _pair_fits(matcher: ScanMatcher, X: np.ndarray, pairs: list[tuple[int, int]]) -> np.ndarray:
+    """The correlative search's best fit of each pair (one process's share of the shortlist)."""
+    return _per_pair(matcher, X, pairs, lambda a, b: matcher._search(a, b)[0])
+
+
+def _per_pair(matcher: ScanMatcher, X: np.ndarray, pairs: list[tuple[int, int]], value) -> np.ndarray:
+    """``value(a, b)`` of each pair of rows of ``X``, prepared once each, in the canonical order."""
     prepared: dict[int, _Scan] = {}
 
     def get(i: int) -> _Scan:
@@ -371,5 +418,5 @@ def _pair_scores(matcher: ScanMatcher, X: np.ndarray, pairs: list[tuple[int, int
     out = np.empty(len(pairs))
     for k, (i, j) in enumerate(pairs):
         a, b = (j, i) if _canonical_first(X[j], X[i]) else (i, j)
-        out[k] = matcher._match(get(a), get(b)).score
+        out[k] = value(get(a), get(b))
     return out
