@@ -59,5 +59,5 @@ class Search:
         if suspects:
             return self.abduction.robust(suspects, found)
         self.exact.check_asserted_same()
-        self.exact.bound_classes_from_below()
+        self.exact.bound_classes_from_below(keep_features=False)  # no view is weighed as a misread
         return self.exact.minimal_maps()

@@ -69,8 +69,7 @@ class MisreadAbduction:
         lower bound where that suffices, else by asking for an exact map within the difference."""
         state, search = self.state, self.search
         exact_facts = state.facts
-        if state.classes is None:
-            state.classes = state.first.classes(range(len(state.tableau)))
+        state.learn_classes()
         search.bound_classes_from_below()
         exact_lower = state.classes.lower
         clear = [s for s in suspects if s.clear] or suspects

@@ -65,19 +65,21 @@ class ExactSearch:
         if outcome.models:  # every class holds its one dstate: as many classes as dstates
             cmap = self._map(outcome)
             return replace(cmap, stats=replace(cmap.stats, classes=cmap.n_dstates, lower_bound=cmap.n_dstates))
-        state.classes = state.first.classes(range(len(state.tableau)))
-        state.proved = state.classes.count + 1
+        state.proved = state.learn_classes().count + 1
         return None
 
-    def bound_classes_from_below(self) -> None:
-        """The classes' proved lower bounds, from a prepass that compares the time points' futures."""
+    def bound_classes_from_below(self, keep_features: bool = True) -> None:
+        """The classes' proved lower bounds, from a prepass that compares the time points' futures; the
+        features it read are kept for the abduction (``state.features``) unless ``keep_features`` is false
+        (a dict per time point: 140 MiB at 100,000 steps)."""
         state = self.state
         self.budget.check_clock("the lower bounds")
         state.depth = state.resolver.future_depth
         grounded = prepass(state.resolver.theory, state.facts, state.depth)
         state.ground_s += grounded.ground_s
-        state.features = grounded.partial_features(state.classes.times)
-        state.classes.lower = state.features.lower_bounds(state.classes)
+        features = grounded.partial_features(state.classes.times)
+        state.classes.lower = features.lower_bounds(state.classes)
+        state.features = features if keep_features else None
         state.proved = max(state.proved, state.classes.lower_bound)
 
     def bounded(self, bound: int) -> CognitiveMap | None:
@@ -157,8 +159,7 @@ class ExactSearch:
         soft = [x for x in state.assertions if x.soft]
         if not soft or not found.minimal:
             return found
-        if state.classes is None:  # one dstate per class held: each class needs one (.one_per_class)
-            state.classes = state.first.classes(range(len(state.tableau)))
+        state.learn_classes()  # (where one dstate per class held, each class needs one: .one_per_class)
         bound = found.n_dstates + sum(x.cost for x in soft) // DSTATE_COST
         return self.optimise(found, bound) or found
 

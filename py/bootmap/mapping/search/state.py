@@ -52,6 +52,14 @@ class SearchState:
         self.ground_s = self.solve_s = 0.0
         self.tries: list[Try] = []
 
+    def learn_classes(self) -> Classes:
+        """The classes of time points, read from the first try's grounding once needed; that grounding (a
+        whole control, the largest object of a long resolution: 420 MiB at 100,000 steps) is let go then."""
+        if self.classes is None:
+            self.classes = self.first.classes(range(len(self.tableau)))
+        self.first = None
+        return self.classes
+
     def experience_facts(self, angles: Sequence[int]) -> list[Symbol]:
         """The tableau as facts with these action angles, and the person's assertions."""
         return tableau_facts(self.tableau, angles=angles) + assertion_facts(self.assertions)
