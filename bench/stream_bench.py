@@ -58,7 +58,8 @@ def main(argv=None) -> None:
           f"{cmap.n_dstates} dstates, {cmap.n_places} places, {cmap.n_paths} paths"
           f"{f'; resolves timed out at {len(timeouts)} steps (first t={timeouts[0]})' if timeouts else ''}")
     print(f"streamed: p50 {ms(streamed, 50):.0f} ms, p99 {ms(streamed, 99):.0f} ms, max {ms(streamed, 100):.0f} ms; "
-          f"{stream.extended_} steps extended the map, {stream.resolved_} resolved")
+          f"{stream.extended_} steps extended the map, {stream.joined_} placed a new transition's end, "
+          f"{stream.resolved_} resolved")
     late = streamed[len(streamed) // 2:]
     print(f"streamed, second half: p50 {ms(late, 50):.0f} ms, p99 {ms(late, 99):.0f} ms")
     print(f"full resolve per step (every {args.resolve_every}th prefix): p50 {ms(full, 50):.0f} ms, "

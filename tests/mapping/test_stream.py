@@ -41,7 +41,17 @@ def test_streaming_equals_batch_on_every_prefix_of_a_random_walk(seed, policy):
     rng = np.random.default_rng(seed)
     world = random_world(rng, 3, 3, extra_edges=1, landmarks=0.3)
     stream = streamed_equals_batch(walk(world, 60, rng, policy=policy))
-    assert stream.extended_ + stream.resolved_ == 60
+    assert stream.extended_ + stream.joined_ + stream.resolved_ == 60
+
+
+def test_a_new_transition_the_axioms_place_at_one_dstate_is_joined_without_a_search():
+    # A random walk takes actions from dstates it has not taken them from before; where the axioms accept
+    # the new step at one existing dstate only, that is the unique minimal map: no resolve, and every
+    # prefix's map is the fresh resolve's.
+    rng = np.random.default_rng(0)
+    world = random_world(rng, 3, 3, extra_edges=1, landmarks=0.3)
+    stream = streamed_equals_batch(walk(world, 60, rng, policy="random"))
+    assert stream.joined_ >= 5 and stream.resolved_ < 30
 
 
 @pytest.mark.slow

@@ -271,14 +271,15 @@ class PartialFeatures:
 
 
 def check_fixed(theory: Theory, facts: Sequence[Symbol], future_depth: int,
-                deadline: Deadline) -> tuple[list[list[Symbol]] | None, Grounding]:
-    """Whether a partition fixed among ``facts`` (``fixed/2``) satisfies the theory: one model's shown
-    symbols (empty: the axioms reject it), or None when the deadline came first; and the grounding, for
-    its times. The check of loop closing's partitions and of a streamed map extended by determinism."""
-    grounding = Grounding(theory, facts, future_depth, ["1"]).ground()
-    models: list[list[Symbol]] = []
-    result = grounding.solve(deadline, lambda m: models.append(m.symbols(shown=True)))
-    return (None if result is None else models), grounding
+                deadline: Deadline, models: int = 1) -> tuple[list[list[Symbol]] | None, Grounding]:
+    """Whether a partition fixed among ``facts`` (``fixed/2``) satisfies the theory: up to ``models``
+    models' shown symbols (empty: the axioms reject it; a time point fixed at several dstates is at one
+    of them in each model), or None when the deadline came first; and the grounding, for its times. The
+    check of loop closing's partitions and of a streamed map extended by determinism."""
+    grounding = Grounding(theory, facts, future_depth, [str(models)]).ground()
+    found: list[list[Symbol]] = []
+    result = grounding.solve(deadline, lambda m: found.append(m.symbols(shown=True)))
+    return (None if result is None else found), grounding
 
 
 def prepass(theory: Theory, facts: Sequence[Symbol], future_depth: int) -> Grounding:

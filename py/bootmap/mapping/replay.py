@@ -107,6 +107,7 @@ class Replay:
         self._lower: dict[tuple, int] = {}      # class -> its lower bound, while no step changes it
         self._without: dict[tuple, int] = {}    # ... and without the clear suspects' views
         self._cleared: frozenset[int] = frozenset()
+        self.unplaced: int | None = None        # the last extension's new time point no transition placed
 
     # ------------------------------------------------------------------------------------------------
 
@@ -132,13 +133,18 @@ class Replay:
 
     def extend(self, steps: Sequence[Step], angles: Sequence[int], lengths: dict[int, int]) -> list[str] | None:
         """The dstate of each new time point by determinism, if the map so extended satisfies the
-        stock axioms; else None (the replay is then stale: make a new one)."""
+        stock axioms; else None (the replay is then stale: make a new one). Where only the last new time
+        point is reached by a transition never taken from its dstate before, ``unplaced`` names it (the
+        experience, but no dstate, is then read up to it: :attr:`watch` and :meth:`exact_stands` hold)."""
+        self.unplaced = None
         if angles[:len(self.actions)] != self.angles or any(lengths.get(t) != v for t, v in self.lengths.items()):
             return None  # the action types learned from the longer experience read an old action anew
         for t in range(len(self.views), len(steps)):
             d_before = self.dstate_of[t - 1]
             self._observe(t, steps, angles, lengths)
             d = self.led.get((d_before, self.actions[t - 1]))
+            if d is None and t == len(steps) - 1:
+                self.unplaced = t
             if d is None or self.view_of[d] != self.views[t]:
                 return None  # a transition never taken from there, or another view at its end
             if self.metrical and self.heading_of.get(d) != self.headings[t]:

@@ -13,11 +13,20 @@ of the longer experience as well:
   determinism then places the new time point.
 
 So the result equals a fresh resolve of the same steps, which is what the tests check on every prefix
-of long walks. Anything else (a new transition, a changed action type, a view that may be a misread,
-an ambiguous map) is resolved again from scratch. Where some views are suspect (possible misreads,
-:mod:`.misreads`), the map is extended only where the resolver too would keep the exact map without
-weighing them: one dstate per class, experience too little repeated for misreads to show, or as many
-dstates as the classes' proved lower bounds.
+of long walks. A new step reached by an action never taken from its dstate before is placed by the
+axioms instead, where they allow one place only: the last map with the new time point at each dstate of
+its view, checked by clingo in one grounding (the old partition fixed, the new point's dstate chosen
+among those). If exactly one is accepted, that map is the unique minimal map of the longer experience:
+
+* minimal: it has as many dstates as the last map, which no map of the longer experience has fewer of;
+* unique: a minimal map of the longer experience restricts to the old steps' unique map, and puts the
+  new time point at one of its dstates, of which the axioms accepted one.
+
+Anything else (a new transition the axioms accept nowhere or in several places, a changed action type, a
+view that may be a misread, an ambiguous map) is resolved again from scratch. Where some views are
+suspect (possible misreads, :mod:`.misreads`), the map is extended only where the resolver too would keep
+the exact map without weighing them: one dstate per class, experience too little repeated for misreads
+to show, or as many dstates as the classes' proved lower bounds.
 
 Who checks: with the axiom files bootmap ships, :mod:`.replay` keeps, step by step, what the axioms
 derive from the experience (headings, classes, the features that tell time points apart, the suspect
@@ -71,6 +80,9 @@ class MapStream:
         The map of the last tableau given.
     extended_ : int
         Updates answered by extending the map (checked by clingo, no search).
+    joined_ : int
+        Updates answered by placing a new transition's end at the one dstate the axioms accept there
+        (checked by clingo, no search).
     resolved_ : int
         Updates answered by a full resolve.
     """
@@ -79,7 +91,9 @@ class MapStream:
         self.resolver = resolver or Resolver()
         self.map_: CognitiveMap | None = None
         self.extended_ = 0
+        self.joined_ = 0
         self.resolved_ = 0
+        self._joined = False  # the last extension placed a new transition's end (see _join)
         self._tableau: Tableau | None = None
         self._angles: list[int] = []
         # The stock axioms are replayed in Python (:mod:`.replay`); a theory a user changed, by clingo.
@@ -94,6 +108,7 @@ class MapStream:
         typing = typing_of(tableau, self.resolver.quantum_deg)
         angles, types = typing.angles, typing.types
         cmap = None
+        self._joined = False
         if not (self.resolver.retype and typing.suspects()):
             cmap = self._extended(tableau, angles, types, deadline, start)
         # (else the resolver may take an action as mistyped, against the whole experience: resolve anew)
@@ -102,6 +117,8 @@ class MapStream:
             self.resolved_ += 1
             self._replay = None
             self._images = has_images(tableau)
+        elif self._joined:
+            self.joined_ += 1
         else:
             self.extended_ += 1
         self.map_, self._tableau, self._angles = cmap, tableau, angles
@@ -124,18 +141,23 @@ class MapStream:
             return None  # the action types learned from the longer experience read an old action anew
         self._images = self._images and all(s.image is not None for s in tableau.steps[n:])
         if self._replays:
-            return self._replayed(tableau, angles, types, start)
+            return self._replayed(tableau, angles, types, deadline, start)
         if self.resolver.misreads and rare_clustered_views(tableau):
             return None  # the resolver weighs views of one or two images against any map: let it
         dstate_of = _by_determinism(cmap, tableau, angles, n)
-        if dstate_of is None:
+        placed = dstate_of or _by_determinism(cmap, tableau.prefix(len(tableau) - 1), angles, n)
+        if placed is None:
             return None
         facts = tableau_facts(tableau, angles=angles)
-        if self.resolver.misreads and self._suspect(tableau, angles) and not self._exact_stands(facts, dstate_of):
+        # (the new point placed at some old dstate: as many dstates as the last map, as _join asks)
+        partition = dstate_of or placed + [placed[-1]]
+        if self.resolver.misreads and self._suspect(tableau, angles) and not self._exact_stands(facts, partition):
             return None
+        if dstate_of is None:  # the last step's action was never taken from its dstate: the axioms place it
+            return self._join(tableau, facts, types, placed, deadline, start)
         return self._checked(tableau, facts, types, dstate_of, deadline, start)
 
-    def _replayed(self, tableau: Tableau, angles: list[int], types: list[ActionType],
+    def _replayed(self, tableau: Tableau, angles: list[int], types: list[ActionType], deadline: Deadline,
                   start: float) -> CognitiveMap | None:
         """The stock axioms' verdict on the extended map, from what the new steps change (:mod:`.replay`)."""
         old, cmap = self._tableau, self.map_
@@ -144,12 +166,14 @@ class MapStream:
         self._replay = None  # stale unless all below holds
         lengths, length_types = travel_length_types(tableau)
         dstate_of = replay.extend(tableau.steps, angles, length_labels(lengths))
-        if dstate_of is None:
+        if dstate_of is None and replay.unplaced is None:
             return None
         if self.resolver.misreads and self._images and replay.watch.rare:
             return None  # the resolver weighs views of one or two images against any map: let it
         if self.resolver.misreads and not replay.exact_stands(cmap.n_dstates, self._images):
             return None  # some views are suspect and the bounds do not prove the exact map: resolve
+        if dstate_of is None:  # the last step's action was never taken from its dstate: the axioms place it
+            return self._join(tableau, tableau_facts(tableau, angles=angles), types, replay.dstate_of, deadline, start)
         self._replay = replay
         rows = cmap.steps[:len(old) - 1] + [step_row(t, tableau.steps[t], dstate_of[t], cmap.place_of, cmap.path_of)
                                            for t in range(len(old) - 1, len(tableau))]
@@ -159,6 +183,34 @@ class MapStream:
                                        seconds),))
         return replace(cmap, steps=rows, dstate_of=list(dstate_of), action_types=types,
                        length_types=length_types, stats=stats)
+
+    def _join(self, tableau: Tableau, facts: list[Symbol], types, placed: list[str], deadline: Deadline,
+              start: float) -> CognitiveMap | None:
+        """The last map with the new last time point (``placed`` holds every other's dstate) at the one
+        dstate of its view the axioms accept it at, if exactly one: the unique minimal map (module
+        docstring). None where they accept it at none (a new dstate: how many minimal maps then, only a
+        search says) or at several. One grounding: the old partition fixed, the new point's dstate one of
+        those of its view (``fixed/2`` at each), and clingo asked for two models."""
+        t = len(tableau) - 1
+        candidates = [d for d, view in self.map_.views.items() if view == tableau.steps[t].view]
+        if not candidates or deadline.passed():
+            return None
+        group = {d: k for k, d in enumerate(dict.fromkeys(placed[:t]))}
+        fixed = [FIXED(u, fixed_dstate(group[d])) for u, d in enumerate(placed[:t])]
+        fixed += [FIXED(t, fixed_dstate(group[d])) for d in candidates]
+        # The stock axioms' after(S) features follow from determinism and the dstates' views (causal.lp):
+        # with the partition fixed they decide nothing, and the check grounds without them. A theory a
+        # user changed may read them: there, as the resolver does.
+        depth = 0 if self._replays else self.resolver.future_depth
+        models, grounding = check_fixed(self.resolver.theory, facts + fixed, depth, deadline, models=2)
+        if not models or len(models) > 1:
+            return None
+        self._joined, self._replay = True, None  # the replay knows no dstate for the new point: made anew
+        stats = SolveStats(classes=self.map_.stats.classes, lower_bound=self.map_.n_dstates,
+                           ground_s=grounding.ground_s, solve_s=grounding.solve_s, total_s=time.perf_counter() - start,
+                           bounds=(Try("the last map, the new transition's end at the one dstate the axioms accept",
+                                       "sat", grounding.ground_s + grounding.solve_s),))
+        return build_map(tableau, models, True, self.resolver.theory.levels, stats, action_types=types)
 
     def _suspect(self, tableau: Tableau, angles: list[int]) -> bool:
         actions = action_symbols(tableau, angles)
