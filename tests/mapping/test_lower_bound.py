@@ -138,3 +138,22 @@ def test_an_axiom_directory_copied_without_the_prepass_part_proves_the_same_boun
         classes = grounded.classes(range(len(tableau)))
         bounds.append(grounded.lower_bounds(classes))
     assert bounds[0] == bounds[1] and sum(bounds[0]) > len(bounds[0])  # the bounds say more than one a class
+
+
+def test_a_bound_the_caller_proved_skips_the_tries_below_it_and_keeps_the_map():
+    # A 98-step exploration whose classes bound it at 49 dstates, where the minimal maps have 51: told
+    # 51 (a stream knows it from the map before the last step), the search starts there.
+    import numpy as np
+    from support.gridworld import random_world, walk
+
+    rng = np.random.default_rng(3)
+    tableau = walk(random_world(rng, 6, 5, extra_edges=4, landmarks=0.4), 98, rng, policy="explore")
+    resolver = Resolver(time_limit=60)
+    alone = resolver.resolve(tableau)
+    told = resolver.resolve(tableau, at_least=alone.n_dstates)
+    refuted = [t.dstates for t in alone.stats.bounds if t.result == "unsat" and t.dstates.startswith("at most")]
+    assert refuted, "the classes' bound falls short here: the case needs it"
+    assert [t.result for t in told.stats.bounds] == ["unsat", "sat"]  # one dstate per class, then the answer
+    a, b = alone.to_dict(), told.to_dict()
+    a.pop("stats"), b.pop("stats")
+    assert a == b and told.minimal and told.stats.lower_bound == alone.n_dstates

@@ -121,10 +121,12 @@ class Resolver:
         return replace(self, axioms=self.theory.directory, levels=tuple(levels), diagnose=False)
 
     def resolve(self, tableau: Tableau, deadline: Deadline | None = None,
-                assertions: Sequence[Assertion] = ()) -> CognitiveMap:
+                assertions: Sequence[Assertion] = (), at_least: int = 0) -> CognitiveMap:
         """The minimal map(s) of the tableau, by ``deadline`` (default: ``time_limit`` from now); with a
         person's ``assertions`` (:mod:`.assertions`), the minimal maps that honour the hard ones and keep
-        the soft ones unless breaking them saves more than they cost.
+        the soft ones unless breaking them saves more than they cost. ``at_least``: dstates the caller has
+        proved every map of the tableau needs, reading every view as seen (a stream knows it from the
+        map before the last step, :mod:`.stream`); the search for the exact minimal maps starts there.
 
         Raises
         ------
@@ -137,7 +139,7 @@ class Resolver:
         """
         deadline = deadline or Deadline.after(self.time_limit)
         try:
-            return Search(self, tableau, deadline, assertions).run()
+            return Search(self, tableau, deadline, assertions, at_least).run()
         except InconsistentTableau as e:
             if not self.diagnose or any(not x.soft for x in assertions):
                 raise

@@ -94,6 +94,7 @@ class MapStream:
         self.joined_ = 0
         self.resolved_ = 0
         self._joined = False  # the last extension placed a new transition's end (see _join)
+        self._at_least = 0  # ... or proved that it needs a new dstate: so many dstates, for the resolve
         self._tableau: Tableau | None = None
         self._angles: list[int] = []
         # The stock axioms are replayed in Python (:mod:`.replay`); a theory a user changed, by clingo.
@@ -108,12 +109,12 @@ class MapStream:
         typing = typing_of(tableau, self.resolver.quantum_deg)
         angles, types = typing.angles, typing.types
         cmap = None
-        self._joined = False
+        self._joined, self._at_least = False, 0
         if not (self.resolver.retype and typing.suspects()):
             cmap = self._extended(tableau, angles, types, deadline, start)
         # (else the resolver may take an action as mistyped, against the whole experience: resolve anew)
         if cmap is None:
-            cmap = self.resolver.resolve(tableau, deadline)
+            cmap = self.resolver.resolve(tableau, deadline, at_least=self._at_least)
             self.resolved_ += 1
             self._replay = None
             self._images = has_images(tableau)
@@ -188,12 +189,17 @@ class MapStream:
               start: float) -> CognitiveMap | None:
         """The last map with the new last time point (``placed`` holds every other's dstate) at the one
         dstate of its view the axioms accept it at, if exactly one: the unique minimal map (module
-        docstring). None where they accept it at none (a new dstate: how many minimal maps then, only a
-        search says) or at several. One grounding: the old partition fixed, the new point's dstate one of
-        those of its view (``fixed/2`` at each), and clingo asked for two models."""
+        docstring). None where they accept it at none or at several. At none, every map of the longer
+        experience has a dstate more than the last map (one with as many restricts to it, and puts the new
+        point at one of its dstates): that is proved, for the resolve (``_at_least``); how many minimal
+        maps there are then, only a search says. One grounding: the old partition fixed, the new point's
+        dstate one of those of its view (``fixed/2`` at each), and clingo asked for two models."""
         t = len(tableau) - 1
         candidates = [d for d, view in self.map_.views.items() if view == tableau.steps[t].view]
-        if not candidates or deadline.passed():
+        if deadline.passed():
+            return None
+        if not candidates:
+            self._at_least = self.map_.n_dstates + 1
             return None
         group = {d: k for k, d in enumerate(dict.fromkeys(placed[:t]))}
         fixed = [FIXED(u, fixed_dstate(group[d])) for u, d in enumerate(placed[:t])]
@@ -203,6 +209,8 @@ class MapStream:
         # user changed may read them: there, as the resolver does.
         depth = 0 if self._replays else self.resolver.future_depth
         models, grounding = check_fixed(self.resolver.theory, facts + fixed, depth, deadline, models=2)
+        if models == []:
+            self._at_least = self.map_.n_dstates + 1
         if not models or len(models) > 1:
             return None
         self._joined, self._replay = True, None  # the replay knows no dstate for the new point: made anew

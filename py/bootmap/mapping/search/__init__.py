@@ -35,8 +35,8 @@ class Search:
     """One resolution: the search state and budget it shares, and the concerns that work on them."""
 
     def __init__(self, resolver: Resolver, tableau: Tableau, deadline: Deadline,
-                 assertions: Sequence[Assertion] = ()):
-        self.state = SearchState(resolver, tableau, assertions)
+                 assertions: Sequence[Assertion] = (), at_least: int = 0):
+        self.state = SearchState(resolver, tableau, assertions, at_least)
         self.budget = Budget(deadline, self.state.timed_out)
         self.retyping = Retyping(self.state, self.budget)
         self.exact = ExactSearch(self.state, self.budget)

@@ -49,10 +49,13 @@ class ExactSearch:
         self.state, self.budget = state, budget
 
     def minimal_maps(self) -> CognitiveMap:
-        """The minimal maps reading every view as seen, once the classes' lower bounds are known."""
+        """The minimal maps reading every view as seen, once the classes' lower bounds are known (from the
+        larger of theirs and the caller's, ``state.at_least``)."""
         classes = self.state.classes
-        if classes.lower_bound > classes.count:
-            found = self.bounded(classes.lower_bound) or self.budget.within_share(self.climb, CLIMB_SHARE)
+        lower = max(classes.lower_bound, self.state.at_least)
+        self.state.proved = max(self.state.proved, lower)
+        if lower > classes.count:
+            found = self.bounded(lower) or self.budget.within_share(self.climb, CLIMB_SHARE)
             if found:
                 return found
         return self.optimise(self.some_map())
@@ -102,8 +105,8 @@ class ExactSearch:
         bound falls just short of the truth (experience half explored: many dstates seen once), this is
         quicker than any map with a spare dstate per class and its minimisation (a 257-step exploration,
         93 dstates over a bound of 91: 37 s against 250 s)."""
-        lower = self.state.classes.lower_bound
-        for bound in range(lower + 1, lower + 1 + CLIMB_STEPS):
+        start = max(self.state.proved, self.state.at_least)  # the fewest dstates not refuted yet
+        for bound in range(start, start + CLIMB_STEPS):
             found = self.bounded(bound)
             if found:
                 return found

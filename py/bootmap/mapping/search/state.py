@@ -32,8 +32,10 @@ if TYPE_CHECKING:
 class SearchState:
     """One resolution: the tableau as facts, its classes, the figures, the best map so far."""
 
-    def __init__(self, resolver: Resolver, tableau: Tableau, assertions: Sequence[Assertion] = ()):
+    def __init__(self, resolver: Resolver, tableau: Tableau, assertions: Sequence[Assertion] = (),
+                 at_least: int = 0):
         self.resolver, self.tableau = resolver, tableau
+        self.at_least = at_least  # dstates the caller proved necessary, reading every view as seen
         self.assertions = list(assertions)  # a person's word (.assertions): facts beside the experience
         self.start = time.perf_counter()
         # the actions' angles and types, and the learned types' grid (None with a fixed quantum)
