@@ -191,3 +191,20 @@ def test_streaming_equals_batch_where_views_are_misread():
     tableau, misread = with_misreads(notched_rectangle(3), 0.01, np.random.default_rng(5))
     stream = streamed_equals_batch(tableau, every=10)
     assert misread and stream.extended_ > 0
+
+
+def test_a_resolve_in_a_stream_starts_at_the_dstates_the_last_map_proved():
+    # 105 steps of an exploration have minimal maps of 55 dstates (more than one); the next step cannot be
+    # placed, and its resolve starts at 55, where the classes' bounds alone start lower.
+    rng = np.random.default_rng(3)
+    tableau = walk(random_world(rng, 6, 5, extra_edges=4, landmarks=0.4), 2000, rng, policy="explore").prefix(106)
+    stream = MapStream(Resolver(time_limit=60))
+    before = stream.update(tableau.prefix(105))
+    after = stream.update(tableau)
+    fresh = Resolver(time_limit=60).resolve(tableau)
+    assert same_map(after, fresh) and stream.resolved_ == 2
+
+    def refuted(cmap):
+        return [t.dstates for t in cmap.stats.bounds if t.dstates.startswith("at most") and t.result == "unsat"]
+
+    assert before.minimal and refuted(fresh) and not refuted(after)

@@ -23,7 +23,9 @@ among those). If exactly one is accepted, that map is the unique minimal map of 
   new time point at one of its dstates, of which the axioms accepted one.
 
 Anything else (a new transition the axioms accept nowhere or in several places, a changed action type, a
-view that may be a misread, an ambiguous map) is resolved again from scratch. Where some views are
+view that may be a misread, an ambiguous map) is resolved again from scratch, from the dstates the last
+map proved necessary: a minimal map read as seen has as many as any map of the longer experience needs
+at least (where the axioms placed a new step nowhere, one more), so the search skips the bounds below. Where some views are
 suspect (possible misreads, :mod:`.misreads`), the map is extended only where the resolver too would keep
 the exact map without weighing them: one dstate per class, experience too little repeated for misreads
 to show, or as many dstates as the classes' proved lower bounds.
@@ -114,6 +116,8 @@ class MapStream:
             cmap = self._extended(tableau, angles, types, deadline, start)
         # (else the resolver may take an action as mistyped, against the whole experience: resolve anew)
         if cmap is None:
+            if not (self.resolver.retype and typing.suspects()):  # (a retyped action reads the old steps anew)
+                self._at_least = max(self._at_least, self._proved(tableau, angles))
             cmap = self.resolver.resolve(tableau, deadline, at_least=self._at_least)
             self.resolved_ += 1
             self._replay = None
@@ -157,6 +161,20 @@ class MapStream:
         if dstate_of is None:  # the last step's action was never taken from its dstate: the axioms place it
             return self._join(tableau, facts, types, placed, deadline, start)
         return self._checked(tableau, facts, types, dstate_of, deadline, start)
+
+    def _proved(self, tableau: Tableau, angles: list[int]) -> int:
+        """Dstates every map of the longer tableau needs, reading every view as seen: as many as the last
+        map, where that was proved minimal reading every view as seen and the old steps read as before (a
+        map of the longer experience restricts to a map of theirs); else 0."""
+        old, cmap = self._tableau, self.map_
+        if old is None or cmap is None or not cmap.minimal or cmap.suspect_steps or cmap.retyped_steps:
+            return 0
+        n = len(old)
+        if len(tableau) <= n or not _extends(tableau, old) or angles[:n - 1] != self._angles[:n - 1]:
+            return 0
+        if {t: dm for t, dm in travel_lengths(tableau).items() if t < n - 1} != travel_lengths(old):
+            return 0  # a travel's length type learned anew from the longer experience
+        return cmap.n_dstates
 
     def _replayed(self, tableau: Tableau, angles: list[int], types: list[ActionType], deadline: Deadline,
                   start: float) -> CognitiveMap | None:
