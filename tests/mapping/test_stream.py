@@ -208,3 +208,16 @@ def test_a_resolve_in_a_stream_starts_at_the_dstates_the_last_map_proved():
         return [t.dstates for t in cmap.stats.bounds if t.dstates.startswith("at most") and t.result == "unsat"]
 
     assert before.minimal and refuted(fresh) and not refuted(after)
+
+
+def test_a_last_map_that_does_not_extend_proves_a_dstate_more():
+    # After 104 steps the unique minimal map has 53 dstates; the 105th step's action leads, by determinism,
+    # where the axioms refuse it: no map has 53 dstates any more, and the resolve starts at 54.
+    rng = np.random.default_rng(3)
+    tableau = walk(random_world(rng, 6, 5, extra_edges=4, landmarks=0.4), 2000, rng, policy="explore").prefix(105)
+    stream = MapStream(Resolver(time_limit=60))
+    before = stream.update(tableau.prefix(104))
+    after = stream.update(tableau)
+    assert before.unique and before.minimal and same_map(after, Resolver(time_limit=60).resolve(tableau))
+    tried = [t.dstates for t in after.stats.bounds if t.dstates.startswith("at most")]
+    assert tried[0] == f"at most {before.n_dstates + 1} dstates"

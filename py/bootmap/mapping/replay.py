@@ -108,6 +108,7 @@ class Replay:
         self._without: dict[tuple, int] = {}    # ... and without the clear suspects' views
         self._cleared: frozenset[int] = frozenset()
         self.unplaced: int | None = None        # the last extension's new time point no transition placed
+        self.refuted = False                    # ... or the one it placed where the axioms refuse it
 
     # ------------------------------------------------------------------------------------------------
 
@@ -135,8 +136,9 @@ class Replay:
         """The dstate of each new time point by determinism, if the map so extended satisfies the
         stock axioms; else None (the replay is then stale: make a new one). Where only the last new time
         point is reached by a transition never taken from its dstate before, ``unplaced`` names it (the
-        experience, but no dstate, is then read up to it: :attr:`watch` and :meth:`exact_stands` hold)."""
-        self.unplaced = None
+        experience, but no dstate, is then read up to it: :attr:`watch` and :meth:`exact_stands` hold);
+        where determinism placed a new point where the axioms refuse it, ``refuted`` says so."""
+        self.unplaced, self.refuted = None, False
         if angles[:len(self.actions)] != self.angles or any(lengths.get(t) != v for t, v in self.lengths.items()):
             return None  # the action types learned from the longer experience read an old action anew
         for t in range(len(self.views), len(steps)):
@@ -145,12 +147,16 @@ class Replay:
             d = self.led.get((d_before, self.actions[t - 1]))
             if d is None and t == len(steps) - 1:
                 self.unplaced = t
-            if d is None or self.view_of[d] != self.views[t]:
-                return None  # a transition never taken from there, or another view at its end
+            if d is None:
+                return None  # a transition never taken from there
+            self.refuted = True  # (unless all below holds: determinism's place for t contradicts the axioms)
+            if self.view_of[d] != self.views[t]:
+                return None  # another view at its end
             if self.metrical and self.heading_of.get(d) != self.headings[t]:
                 return None  # the action's type angle does not lead to the dstate's heading
             if self.metrical and t - 1 in self.lengths and self.lengths[t - 1] != self.length_of.get(d_before):
                 return None  # a travel of another length than the dstate's travels
+            self.refuted = False
             self.dstate_of.append(d)
         return self.dstate_of
 

@@ -96,7 +96,7 @@ class MapStream:
         self.joined_ = 0
         self.resolved_ = 0
         self._joined = False  # the last extension placed a new transition's end (see _join)
-        self._at_least = 0  # ... or proved that it needs a new dstate: so many dstates, for the resolve
+        self._at_least = 0  # dstates the last map proves the longer experience needs, for a resolve
         self._tableau: Tableau | None = None
         self._angles: list[int] = []
         # The stock axioms are replayed in Python (:mod:`.replay`); a theory a user changed, by clingo.
@@ -185,6 +185,8 @@ class MapStream:
         self._replay = None  # stale unless all below holds
         lengths, length_types = travel_length_types(tableau)
         dstate_of = replay.extend(tableau.steps, angles, length_labels(lengths))
+        if replay.refuted:  # the last map, the only one with as few dstates, does not extend: one more
+            self._at_least = cmap.n_dstates + 1
         if dstate_of is None and replay.unplaced is None:
             return None
         if self.resolver.misreads and self._images and replay.watch.rare:
@@ -259,6 +261,8 @@ class MapStream:
         group = {d: n for n, d in enumerate(dict.fromkeys(dstate_of))}
         fixed = [FIXED(t, fixed_dstate(group[d])) for t, d in enumerate(dstate_of)]
         models, grounding = check_fixed(self.resolver.theory, facts + fixed, self.resolver.future_depth, deadline)
+        if models == []:  # the last map, the only one with as few dstates, does not extend: one more
+            self._at_least = self.map_.n_dstates + 1
         if not models:
             return None
         n_dstates = len(set(dstate_of))
