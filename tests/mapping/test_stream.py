@@ -193,31 +193,34 @@ def test_streaming_equals_batch_where_views_are_misread():
     assert misread and stream.extended_ > 0
 
 
+def last_step_streamed(steps: int):
+    """The first ``steps`` steps of the stream bench's 6x5 exploration (seed 3), streamed up to the last one
+    and then with it: the map before the last step, the map after, and the fresh resolve of all."""
+    rng = np.random.default_rng(3)
+    tableau = walk(random_world(rng, 6, 5, extra_edges=4, landmarks=0.4), 2000, rng, policy="explore").prefix(steps)
+    stream = MapStream(Resolver(time_limit=60))
+    before = stream.update(tableau.prefix(steps - 1))
+    after = stream.update(tableau)
+    assert stream.resolved_ == 2  # neither extended nor placed: both resolved
+    return before, after, Resolver(time_limit=60).resolve(tableau)
+
+
+def tried(cmap, result: str | None = None) -> list[str]:
+    """The bounds a map's search tried (with that result, if given)."""
+    return [t.dstates for t in cmap.stats.bounds if t.dstates.startswith("at most") and result in (None, t.result)]
+
+
 def test_a_resolve_in_a_stream_starts_at_the_dstates_the_last_map_proved():
     # 105 steps of an exploration have minimal maps of 55 dstates (more than one); the next step cannot be
     # placed, and its resolve starts at 55, where the classes' bounds alone start lower.
-    rng = np.random.default_rng(3)
-    tableau = walk(random_world(rng, 6, 5, extra_edges=4, landmarks=0.4), 2000, rng, policy="explore").prefix(106)
-    stream = MapStream(Resolver(time_limit=60))
-    before = stream.update(tableau.prefix(105))
-    after = stream.update(tableau)
-    fresh = Resolver(time_limit=60).resolve(tableau)
-    assert same_map(after, fresh) and stream.resolved_ == 2
-
-    def refuted(cmap):
-        return [t.dstates for t in cmap.stats.bounds if t.dstates.startswith("at most") and t.result == "unsat"]
-
-    assert before.minimal and refuted(fresh) and not refuted(after)
+    before, after, fresh = last_step_streamed(106)
+    assert same_map(after, fresh) and before.minimal and not before.unique
+    assert tried(fresh, "unsat") and not tried(after, "unsat")
 
 
 def test_a_last_map_that_does_not_extend_proves_a_dstate_more():
     # After 104 steps the unique minimal map has 53 dstates; the 105th step's action leads, by determinism,
     # where the axioms refuse it: no map has 53 dstates any more, and the resolve starts at 54.
-    rng = np.random.default_rng(3)
-    tableau = walk(random_world(rng, 6, 5, extra_edges=4, landmarks=0.4), 2000, rng, policy="explore").prefix(105)
-    stream = MapStream(Resolver(time_limit=60))
-    before = stream.update(tableau.prefix(104))
-    after = stream.update(tableau)
-    assert before.unique and before.minimal and same_map(after, Resolver(time_limit=60).resolve(tableau))
-    tried = [t.dstates for t in after.stats.bounds if t.dstates.startswith("at most")]
-    assert tried[0] == f"at most {before.n_dstates + 1} dstates"
+    before, after, fresh = last_step_streamed(105)
+    assert same_map(after, fresh) and before.unique and before.minimal
+    assert tried(after)[0] == f"at most {before.n_dstates + 1} dstates"
