@@ -1,8 +1,10 @@
 """Streaming maps: latency per appended step on a long exploration, against a full resolve.
 
 A random grid world is explored step by step; after each step the map is brought up to date by
-``MapStream.update`` (extend by determinism, checked by clingo; resolve only when that does not
-stand). A full resolve of the same prefix is timed on every ``--resolve-every``-th step for comparison.
+``MapStream.update`` (extend by determinism, checked by the replay or clingo; place a new transition's
+end where the axioms accept it at one dstate only; resolve only when neither stands, from the dstates the
+last map proved). A full resolve of the same prefix is timed on every ``--resolve-every``-th step for
+comparison.
 
     .venv/bin/python bench/stream_bench.py --steps 2000
 """
