@@ -199,3 +199,15 @@ def test_odometry_round_trips_and_a_bad_one_is_named():
         Tableau.from_dict(doc([steps[0], {"view": "b", "odometry": [1, 2]}]))
     with pytest.raises(TableauError, match=r"steps\[1\]\.odometry\[2\]"):
         Tableau.from_dict(doc([steps[0], {"view": "b", "odometry": [1, 2, math.nan]}]))
+
+
+def test_a_tableau_built_in_code_is_held_to_what_a_document_is():
+    from bootmap.tableau import Step, Tableau, Turn
+
+    with pytest.raises(TableauError, match=r"last step has an action") as e:
+        Tableau((Step("A", Turn(90.0)), Step("B", Turn(90.0))))
+    assert e.value.where == "tableau: steps[1].action"
+    with pytest.raises(TableauError, match=r"every step but the last needs an action") as e:
+        Tableau((Step("A"), Step("B")))
+    assert e.value.where == "tableau: steps[0].action"
+    assert len(Tableau((Step("A", Turn(90.0)), Step("B")))) == 2

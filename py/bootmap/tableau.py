@@ -99,6 +99,17 @@ class Tableau:
     world: str | None = None
     meta: dict = field(default_factory=dict)
 
+    def __post_init__(self) -> None:
+        # What from_dict checks of a document, checked of a tableau built in code too: an action leads from
+        # each step to the next, so every step has one but the last (steps[i].action is step i -> i + 1).
+        for i, step in enumerate(self.steps):
+            last = i == len(self.steps) - 1
+            if step.action is None and not last:
+                raise TableauError("missing: every step but the last needs an action to the next step",
+                                   f"tableau: steps[{i}].action")
+            if step.action is not None and last:
+                raise TableauError("the last step has an action but no step follows it", f"tableau: steps[{i}].action")
+
     def __len__(self) -> int:
         return len(self.steps)
 
