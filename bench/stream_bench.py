@@ -6,6 +6,9 @@ end where the axioms accept it at one dstate only; resolve only when neither sta
 last map proved). A full resolve of the same prefix is timed on every ``--resolve-every``-th step for
 comparison.
 
+Targets (printed beside the figures; the exit status is 1 if any is missed): per streamed step p50 under
+10 ms, p99 under 100 ms, the slowest under 500 ms.
+
     .venv/bin/python bench/stream_bench.py --steps 2000
 """
 
@@ -25,9 +28,13 @@ from bootmap.mapping import Resolver
 from bootmap.mapping.stream import MapStream
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # tests/support: grid worlds, the checker
 from support.gridworld import random_world, walk
+from targets import Targets
+
+#: Per streamed step (seconds): p50, p99, the slowest.
+TARGETS_S = {50: 0.010, 99: 0.100, 100: 0.500}
 
 
-def main(argv=None) -> None:
+def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=2000)
     ap.add_argument("--seed", type=int, default=3)
@@ -66,7 +73,13 @@ def main(argv=None) -> None:
     print(f"streamed, second half: p50 {ms(late, 50):.0f} ms, p99 {ms(late, 99):.0f} ms")
     print(f"full resolve per step (every {args.resolve_every}th prefix): p50 {ms(full, 50):.0f} ms, "
           f"p99 {ms(full, 99):.0f} ms")
+    print()
+    targets = Targets()
+    for q, bound in TARGETS_S.items():
+        name = "slowest" if q == 100 else f"p{q}"
+        targets.check(f"streamed step, {name}", ms(streamed, q), "<", 1000 * bound, fmt="{:.0f}", unit=" ms")
+    return targets.exit_status()
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())
