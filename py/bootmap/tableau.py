@@ -100,15 +100,11 @@ class Tableau:
     meta: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        # What from_dict checks of a document, checked of a tableau built in code too: an action leads from
-        # each step to the next, so every step has one but the last (steps[i].action is step i -> i + 1).
+        # What from_dict checks of a document, checked of a tableau built in code too.
         for i, step in enumerate(self.steps):
-            last = i == len(self.steps) - 1
-            if step.action is None and not last:
-                raise TableauError("missing: every step but the last needs an action to the next step",
-                                   f"tableau: steps[{i}].action")
-            if step.action is not None and last:
-                raise TableauError("the last step has an action but no step follows it", f"tableau: steps[{i}].action")
+            problem = _action_problem(step.action is not None, i == len(self.steps) - 1)
+            if problem:
+                raise TableauError(problem, f"tableau: steps[{i}].action")
 
     def __len__(self) -> int:
         return len(self.steps)
@@ -335,13 +331,22 @@ def _finite(x: float, where: str) -> float:
     return value
 
 
+def _action_problem(has_action: bool, last: bool) -> str | None:
+    """What is wrong with a step's action, if anything: an action leads from each step to the next, so
+    every step has one but the last (``steps[i].action`` is step i -> i + 1)."""
+    if not has_action and not last:
+        return "missing: every step but the last needs an action to the next step"
+    if has_action and last:
+        return "the last step has an action but no step follows it"
+    return None
+
+
 def _step(d: dict, i: int, last: bool, source: str) -> Step:
     where = f"{source}: steps[{i}]"
     a = d.get("action")
-    if a is None and not last:
-        raise TableauError("missing: every step but the last needs an action to the next step", where + ".action")
-    if a is not None and last:
-        raise TableauError("the last step has an action but no step follows it", where + ".action")
+    problem = _action_problem(a is not None, last)
+    if problem:
+        raise TableauError(problem, where + ".action")
     action = None if a is None else _action(a, where + ".action")
     image = None
     if "image" in d:

@@ -145,20 +145,24 @@ class Replay:
             d_before = self.dstate_of[t - 1]
             self._observe(t, steps, angles, lengths)
             d = self.led.get((d_before, self.actions[t - 1]))
-            if d is None and t == len(steps) - 1:
-                self.unplaced = t
-            if d is None:
-                return None  # a transition never taken from there
-            self.refuted = True  # (unless all below holds: determinism's place for t contradicts the axioms)
-            if self.view_of[d] != self.views[t]:
-                return None  # another view at its end
-            if self.metrical and self.heading_of.get(d) != self.headings[t]:
-                return None  # the action's type angle does not lead to the dstate's heading
-            if self.metrical and t - 1 in self.lengths and self.lengths[t - 1] != self.length_of.get(d_before):
-                return None  # a travel of another length than the dstate's travels
-            self.refuted = False
+            if d is None:  # a transition never taken from there
+                self.unplaced = t if t == len(steps) - 1 else None
+                return None
+            if not self._fits(t, d, d_before):
+                self.refuted = True
+                return None
             self.dstate_of.append(d)
         return self.dstate_of
+
+    def _fits(self, t: int, d: str, d_before: str) -> bool:
+        """Whether the stock axioms accept time point t at dstate d (where determinism places it)."""
+        if self.view_of[d] != self.views[t]:
+            return False  # another view at its end
+        if self.metrical and self.heading_of.get(d) != self.headings[t]:
+            return False  # the action's type angle does not lead to the dstate's heading
+        if self.metrical and t - 1 in self.lengths and self.lengths[t - 1] != self.length_of.get(d_before):
+            return False  # a travel of another length than the dstate's travels
+        return True
 
     def exact_stands(self, n_dstates: int, images: bool = False) -> bool:
         """The resolver keeps the exact map without weighing misreads: no view is suspect; or one dstate

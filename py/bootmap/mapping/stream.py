@@ -25,10 +25,11 @@ among those). If exactly one is accepted, that map is the unique minimal map of 
 Anything else (a new transition the axioms accept nowhere or in several places, a changed action type, a
 view that may be a misread, an ambiguous map) is resolved again from scratch, from the dstates the last
 map proved necessary: a minimal map read as seen has as many as any map of the longer experience needs
-at least (where the axioms placed a new step nowhere, one more), so the search skips the bounds below. Where some views are
-suspect (possible misreads, :mod:`.misreads`), the map is extended only where the resolver too would keep
-the exact map without weighing them: one dstate per class, experience too little repeated for misreads
-to show, or as many dstates as the classes' proved lower bounds.
+at least; one more where it was the only one and does not extend (a new step the axioms place nowhere, or
+not where determinism puts it); so the search skips the bounds below. Where some views are suspect
+(possible misreads, :mod:`.misreads`), the map is extended only where the resolver too would keep the
+exact map without weighing them: one dstate per class, experience too little repeated for misreads to
+show, or as many dstates as the classes' proved lower bounds.
 
 Who checks: with the axiom files bootmap ships, :mod:`.replay` keeps, step by step, what the axioms
 derive from the experience (headings, classes, the features that tell time points apart, the suspect
@@ -112,11 +113,13 @@ class MapStream:
         angles, types = typing.angles, typing.types
         cmap = None
         self._joined, self._at_least = False, 0
-        if not (self.resolver.retype and typing.suspects()):
+        # The resolver may take an action as mistyped, against the whole experience: then resolve anew, and
+        # the last map (of the old steps read as typed) proves nothing of the new one.
+        retyping = self.resolver.retype and typing.suspects()
+        if not retyping:
             cmap = self._extended(tableau, angles, types, deadline, start)
-        # (else the resolver may take an action as mistyped, against the whole experience: resolve anew)
         if cmap is None:
-            if not (self.resolver.retype and typing.suspects()):  # (a retyped action reads the old steps anew)
+            if not retyping:
                 self._at_least = max(self._at_least, self._proved(tableau, angles))
             cmap = self.resolver.resolve(tableau, deadline, at_least=self._at_least)
             self.resolved_ += 1
@@ -138,12 +141,10 @@ class MapStream:
                 or cmap.retyped_steps:  # its actions were typed against the whole experience: resolve anew
             return None
         n = len(old)
-        if len(tableau) <= n or not _extends(tableau, old):
+        if not self._continues(tableau, angles):
             return None
         if passes_through(tableau):
             return None  # a travel may end at any dstate further on: determinism alone places nothing
-        if angles[:n - 1] != self._angles[:n - 1]:
-            return None  # the action types learned from the longer experience read an old action anew
         self._images = self._images and all(s.image is not None for s in tableau.steps[n:])
         if self._replays:
             return self._replayed(tableau, angles, types, deadline, start)
@@ -154,9 +155,7 @@ class MapStream:
         if placed is None:
             return None
         facts = tableau_facts(tableau, angles=angles)
-        # (the new point placed at some old dstate: as many dstates as the last map, as _join asks)
-        partition = dstate_of or placed + [placed[-1]]
-        if self.resolver.misreads and self._suspect(tableau, angles) and not self._exact_stands(facts, partition):
+        if self.resolver.misreads and self._suspect(tableau, angles) and not self._exact_stands(facts, len(tableau)):
             return None
         if dstate_of is None:  # the last step's action was never taken from its dstate: the axioms place it
             return self._join(tableau, facts, types, placed, deadline, start)
@@ -167,14 +166,26 @@ class MapStream:
         map, where that was proved minimal reading every view as seen and the old steps read as before (a
         map of the longer experience restricts to a map of theirs); else 0."""
         old, cmap = self._tableau, self.map_
-        if old is None or cmap is None or not cmap.minimal or cmap.suspect_steps or cmap.retyped_steps:
+        if cmap is None or not cmap.minimal or cmap.suspect_steps or cmap.retyped_steps:
             return 0
-        n = len(old)
-        if len(tableau) <= n or not _extends(tableau, old) or angles[:n - 1] != self._angles[:n - 1]:
+        if not self._continues(tableau, angles):
             return 0
-        if {t: dm for t, dm in travel_lengths(tableau).items() if t < n - 1} != travel_lengths(old):
+        if {t: dm for t, dm in travel_lengths(tableau).items() if t < len(old) - 1} != travel_lengths(old):
             return 0  # a travel's length type learned anew from the longer experience
         return cmap.n_dstates
+
+    def _continues(self, tableau: Tableau, angles: list[int]) -> bool:
+        """The tableau is the last one with steps after it, its actions read as before (the action types
+        learned from the longer experience may read an old action anew)."""
+        old = self._tableau
+        if old is None or len(tableau) <= len(old) or not _extends(tableau, old):
+            return False
+        return angles[:len(old) - 1] == self._angles[:len(old) - 1]
+
+    def _one_more(self) -> None:
+        """The last map, the only minimal one, does not extend to the new steps: a map of them with as few
+        dstates would restrict to it, so every one has a dstate more (for the resolve)."""
+        self._at_least = self.map_.n_dstates + 1
 
     def _replayed(self, tableau: Tableau, angles: list[int], types: list[ActionType], deadline: Deadline,
                   start: float) -> CognitiveMap | None:
@@ -185,8 +196,8 @@ class MapStream:
         self._replay = None  # stale unless all below holds
         lengths, length_types = travel_length_types(tableau)
         dstate_of = replay.extend(tableau.steps, angles, length_labels(lengths))
-        if replay.refuted:  # the last map, the only one with as few dstates, does not extend: one more
-            self._at_least = cmap.n_dstates + 1
+        if replay.refuted:
+            self._one_more()
         if dstate_of is None and replay.unplaced is None:
             return None
         if self.resolver.misreads and self._images and replay.watch.rare:
@@ -211,15 +222,15 @@ class MapStream:
         dstate of its view the axioms accept it at, if exactly one: the unique minimal map (module
         docstring). None where they accept it at none or at several. At none, every map of the longer
         experience has a dstate more than the last map (one with as many restricts to it, and puts the new
-        point at one of its dstates): that is proved, for the resolve (``_at_least``); how many minimal
-        maps there are then, only a search says. One grounding: the old partition fixed, the new point's
-        dstate one of those of its view (``fixed/2`` at each), and clingo asked for two models."""
-        t = len(tableau) - 1
-        candidates = [d for d, view in self.map_.views.items() if view == tableau.steps[t].view]
+        point at one of its dstates): that is proved, for the resolve (:meth:`_one_more`); how many
+        minimal maps there are then, only a search says. One grounding: the old partition fixed, the new
+        point's dstate one of those of its view (``fixed/2`` at each), and clingo asked for two models."""
         if deadline.passed():
             return None
+        t = len(tableau) - 1
+        candidates = [d for d, view in self.map_.views.items() if view == tableau.steps[t].view]
         if not candidates:
-            self._at_least = self.map_.n_dstates + 1
+            self._one_more()
             return None
         group = {d: k for k, d in enumerate(dict.fromkeys(placed[:t]))}
         fixed = [FIXED(u, fixed_dstate(group[d])) for u, d in enumerate(placed[:t])]
@@ -230,7 +241,7 @@ class MapStream:
         depth = 0 if self._replays else self.resolver.future_depth
         models, grounding = check_fixed(self.resolver.theory, facts + fixed, depth, deadline, models=2)
         if models == []:
-            self._at_least = self.map_.n_dstates + 1
+            self._one_more()
         if not models or len(models) > 1:
             return None
         self._joined, self._replay = True, None  # the replay knows no dstate for the new point: made anew
@@ -244,16 +255,16 @@ class MapStream:
         actions = action_symbols(tableau, angles)
         return bool(find_suspects(tableau.views, actions))
 
-    def _exact_stands(self, facts: list[Symbol], dstate_of: list[str]) -> bool:
+    def _exact_stands(self, facts: list[Symbol], n_times: int) -> bool:
         """Where some views are suspect, the resolver keeps the exact map without weighing misreads when
         it has one dstate per class, or when the experience is too little repeated (``MIN_VISITS``): so
-        does the stream. (Where the exact map has as many dstates as the classes' lower bounds, the
-        resolver may still weigh misreads that are evident; the replay of the stock axioms mirrors that
-        rule, this check leaves it to a resolve.)"""
+        does the stream, for the last map's dstates on ``n_times`` time points (an extension, or a new
+        point placed at one of them, adds none). (Where the exact map has as many dstates as the classes'
+        lower bounds, the resolver may still weigh misreads that are evident; the replay of the stock
+        axioms mirrors that rule, this check leaves it to a resolve.)"""
         grounded = prepass(self.resolver.theory, facts, self.resolver.future_depth)
-        classes = grounded.classes(range(len(dstate_of)))
-        n_dstates = len(set(dstate_of))
-        return classes.count == n_dstates or len(dstate_of) < MIN_VISITS * classes.count
+        classes = grounded.classes(range(n_times))
+        return classes.count == self.map_.n_dstates or n_times < MIN_VISITS * classes.count
 
     def _checked(self, tableau: Tableau, facts: list[Symbol], types, dstate_of: list[str],
                  deadline: Deadline, start: float) -> CognitiveMap | None:
@@ -261,8 +272,8 @@ class MapStream:
         group = {d: n for n, d in enumerate(dict.fromkeys(dstate_of))}
         fixed = [FIXED(t, fixed_dstate(group[d])) for t, d in enumerate(dstate_of)]
         models, grounding = check_fixed(self.resolver.theory, facts + fixed, self.resolver.future_depth, deadline)
-        if models == []:  # the last map, the only one with as few dstates, does not extend: one more
-            self._at_least = self.map_.n_dstates + 1
+        if models == []:
+            self._one_more()
         if not models:
             return None
         n_dstates = len(set(dstate_of))
