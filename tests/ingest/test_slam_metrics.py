@@ -9,6 +9,7 @@ from scipy.spatial.distance import cdist
 
 from bootmap.experiments.evaluate import (against_baselines, loop_closure, place_recognition,
                                           revisit_candidates, sector_of_truth)
+from bootmap.ingest.truth import true_dstates, visit_positions
 
 # Five visits on a line: 0 and 3 at one pose, 4 back near 2, 1 alone; the robot leaves each place between,
 # so visit 1 has no earlier candidate (it is the first the robot reaches after leaving 0), 2 has 0, 3 has 0
@@ -112,3 +113,33 @@ def test_scores_that_rank_every_true_match_first_recall_everything_at_99_precisi
     r = place_recognition(-cdist(xy, xy), poses)
     assert r["recall_at_99_precision"] in (None, 1.0)
     assert r["best_correct"] == r["revisits"]
+
+
+_tours = st.lists(st.tuples(st.floats(0, 20), st.floats(0, 20), st.floats(-3.1, 3.1), st.booleans()),
+                  min_size=2, max_size=30)
+
+
+@settings(max_examples=60, deadline=None)
+@given(tour=_tours)
+def test_the_true_map_closes_no_loop_wrongly_when_visits_are_where_the_truth_places_them(tour):
+    """Loop closures judged from the visits' positions as the truth places them (a turn's two ends one
+    visit, at their middle): every join the true map makes is a true join. Judged from the turn ends'
+    own poses instead, a turn that drove 4 m puts a join of one true dstate 'farther than the radius'."""
+    poses = [(x, y, h) for x, y, h, _ in tour]
+    turns = [(k, k + 1) for k in range(len(tour) - 1) if tour[k][3]]
+    truth = true_dstates(poses, radius_m=3.0, axis_rad=0.0, together=turns)
+    loops = loop_closure(truth, visit_positions(poses, turns), 3.0, [sector_of_truth(d) for d in truth])
+    assert loops["precision"] in (None, 1.0)
+
+
+def test_a_join_of_a_turn_that_drove_on_is_judged_at_the_turns_middle():
+    # Visit 0-1 is a turn that drove 4 m (its ends at 0 and 4 m); t3 comes back near its start, facing
+    # the way the turn ended: one true dstate with t1, 1.6 m from the turn's middle but 3.5 m from t1.
+    poses = [(0.0, 0.0, 0.0), (4.0, 0.0, 1.57), (30.0, 0.0, 1.57), (0.5, 0.5, 1.57)]
+    turns = [(0, 1)]
+    labels = ["a", "b", "c", "b"]
+    truth = true_dstates(poses, radius_m=3.0, axis_rad=0.0, together=turns)
+    assert truth[1] == truth[3]
+    sectors = [sector_of_truth(d) for d in truth]
+    assert loop_closure(labels, visit_positions(poses, turns), 3.0, sectors)["precision"] == 1.0
+    assert loop_closure(labels, poses, 3.0, sectors)["precision"] == 0.0  # judged at the turn's end

@@ -49,6 +49,7 @@ from .evaluate import (DESCRIPTORS, against_baselines, dead_reckoned_dstates, de
                        map_against_truth, nn_on_revisits, place_of_truth, place_recognition, sector_of_truth,
                        views_against_truth)
 from ..ingest.ingest import log_tableau, read_log, travel_ends, turn_ends
+from ..ingest.truth import visit_positions
 from ..ingest.local_maps import local_images
 
 #: How k is chosen for the map's views: "auto" takes M's k unless M degenerates (k <= 2), then
@@ -150,6 +151,8 @@ def _experiment(scans, log, lap, seed, k_max, time_limit, quantum_deg, view_crit
                                                                                    seed)
     lap("recognise_s")
     poses = [s.pose for s in tableau.steps]
+    # Where each visit is, as the truth places it: a turn's two ends one visit, at their middle
+    positions = visit_positions(poses, turn_ends(tableau.actions))
     results = {
         "world": _name(log), "log": str(log), "seed": seed, "scans": len(scans), "images": len(images),
         "clusterer": "kmeans", "quantum_deg": quantum_deg, "dstates_at": "turns" if places is None else "places",
@@ -164,29 +167,32 @@ def _experiment(scans, log, lap, seed, k_max, time_limit, quantum_deg, view_crit
         "recognition": recognition, "nn_revisited": nn, "timings": timings}
     local = local_images(scans, tableau.meta["dstates"]["scans"], radius_m, max_range=max_range) \
         if scan_match and recognise else None
-    results.update(_slam_evaluation(results, images, poses, truth, cmap, dead, radius_m, recognise,
+    results.update(_slam_evaluation(results, images, poses, positions, truth, cmap, dead, radius_m, recognise,
                                     max_range if scan_match else None, local))
     lap("evaluate_s")
     return results, tableau, cmap
 
 
-def _slam_evaluation(r: dict, images, poses, truth, cmap, dead, radius_m, recognise_places: bool = True,
-                     scan_match_range: float | None = None, local: np.ndarray | None = None) -> dict:
+def _slam_evaluation(r: dict, images, poses, positions, truth, cmap, dead, radius_m,
+                     recognise_places: bool = True, scan_match_range: float | None = None,
+                     local: np.ndarray | None = None) -> dict:
     """The figures SLAM papers report, against the corrected poses: the map beside both baselines,
     loop closures (the map's and odometry alone's) and place recognition by each descriptor (and by
     scan matching images clipped at ``scan_match_range``, when given, and the visits' ``local`` maps
-    rendered all round)."""
+    rendered all round). A loop closure joins dstates, judged where the truth places their visits
+    (``positions``: a turn's two ends at their middle, as the true places are made); place recognition
+    matches images, judged where they were taken (``poses``)."""
     sectors = [sector_of_truth(t) for t in truth]
     odometry_alone = r["dead_reckoning"]["dstate_accuracy"]
     own = dstate_accuracy(truth, [str(i) for i in range(len(truth))])
-    loops = {"odometry_alone": {"dstates": loop_closure(dead, poses, radius_m, sectors),
-                                "places": loop_closure([place_of_truth(d) for d in dead], poses, radius_m)}}
+    loops = {"odometry_alone": {"dstates": loop_closure(dead, positions, radius_m, sectors),
+                                "places": loop_closure([place_of_truth(d) for d in dead], positions, radius_m)}}
     baselines = None
     if cmap is not None:
         baselines = against_baselines(r["map"]["dstate_accuracy"], odometry_alone, own)
         places = [cmap.place_of.get(d, d) for d in cmap.dstate_of]
-        loops["map"] = {"dstates": loop_closure(cmap.dstate_of, poses, radius_m, sectors),
-                        "places": loop_closure(places, poses, radius_m)}
+        loops["map"] = {"dstates": loop_closure(cmap.dstate_of, positions, radius_m, sectors),
+                        "places": loop_closure(places, positions, radius_m)}
     recognition = None
     if recognise_places:
         recognition = {d: place_recognition(descriptor_scores(images, d), poses, radius_m) for d in DESCRIPTORS}

@@ -49,19 +49,15 @@ def place_labels(poses: list[Pose] | np.ndarray, radius_m: float = 3.0,
     >>> place_labels([(0, 0, 0), (4, 0, 0), (2, 0.5, 0)], radius_m=3.0, together=[(0, 1)])
     [0, 0, 0]
     """
-    from scipy.cluster.hierarchy import DisjointSet, fcluster, linkage
+    from scipy.cluster.hierarchy import fcluster, linkage
     from scipy.spatial.distance import pdist, squareform
 
-    xy = np.asarray(poses, dtype=float).reshape(-1, 3)[:, :2]
-    n = len(xy)
-    turns = DisjointSet(range(n))
-    for a, b in together:
-        turns.merge(a, b)
-    groups = sorted((sorted(members) for members in turns.subsets()), key=lambda members: members[0])
+    n = len(np.asarray(poses, dtype=float).reshape(-1, 3))
+    groups, middles = _visits(poses, together)
     visit_of = {i: v for v, members in enumerate(groups) for i in members}
     if len(groups) < 2:
         return [0] * n
-    distance = squareform(pdist(np.array([xy[members].mean(axis=0) for members in groups])))
+    distance = squareform(pdist(middles))
     far = 2.0 * radius_m + float(distance.max())  # beyond any place: complete linkage never joins them
     for a, b in apart:
         i, j = visit_of[a], visit_of[b]
@@ -70,6 +66,34 @@ def place_labels(poses: list[Pose] | np.ndarray, radius_m: float = 3.0,
     clusters = fcluster(linkage(squareform(distance), method="complete"), t=radius_m, criterion="distance")
     first_seen: dict[int, int] = {}
     return [first_seen.setdefault(int(clusters[visit_of[i]]), len(first_seen)) for i in range(n)]
+
+
+def visit_positions(poses: list[Pose] | np.ndarray, together: list[tuple[int, int]] = ()) -> np.ndarray:
+    """Where each pose's visit is, as the truth places it (:func:`place_labels`): the middle of the
+    positions of the poses ``together`` joins with it (a turn's two ends), else its own position. Loop
+    closures and place recognition judge distances between visits from these, so that two poses of one
+    true place are never judged farther apart than the place's radius.
+
+    >>> visit_positions([(0, 0, 0), (4, 0, 0), (9, 0, 0)], together=[(0, 1)]).tolist()
+    [[2.0, 0.0], [2.0, 0.0], [9.0, 0.0]]
+    """
+    groups, middles = _visits(poses, together)
+    out = np.zeros((sum(len(g) for g in groups), 2))
+    for members, middle in zip(groups, middles):
+        out[members] = middle
+    return out
+
+
+def _visits(poses, together) -> tuple[list[list[int]], np.ndarray]:
+    """The visits (groups of poses ``together`` joins, in order of their first pose) and their middles."""
+    from scipy.cluster.hierarchy import DisjointSet
+
+    xy = np.asarray(poses, dtype=float).reshape(-1, 3)[:, :2]
+    turns = DisjointSet(range(len(xy)))
+    for a, b in together:
+        turns.merge(a, b)
+    groups = sorted((sorted(members) for members in turns.subsets()), key=lambda members: members[0])
+    return groups, np.array([xy[members].mean(axis=0) for members in groups]).reshape(-1, 2)
 
 
 def true_dstates(poses: list[Pose] | np.ndarray, radius_m: float = 3.0, axis_rad: float | None = None,
