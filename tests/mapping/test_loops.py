@@ -13,6 +13,7 @@ from hypothesis import strategies as st
 
 from bootmap.errors import ExplainError, SolveTimeout
 from bootmap.mapping.grounding import Deadline
+from bootmap.mapping.assertions import parse_assertions
 from bootmap.mapping.loops import LoopCloser, dead_reckoning
 from bootmap.mapping.resolver import Resolver
 from bootmap.mapping.stream import MapStream
@@ -264,3 +265,43 @@ def test_a_visit_is_where_the_middle_of_its_turn_is_not_its_nearest_end():
     assert far.dstate_of[8] != far.dstate_of[0] and far.dstate_of[9] != far.dstate_of[1]
     near = LoopCloser().resolve(_turns_while_driving(1.0))
     assert near.dstate_of[8] == near.dstate_of[0] and near.dstate_of[9] == near.dstate_of[1]
+
+
+def _chained_near_visits(last_x: float = 4.0) -> Tableau:
+    """Three visits at one corridor's west end facing east: t0 at 0 m, t8 at 12 m (after 428 m driven
+    round a block: beyond the 7.3 m a near pair may be apart), t12 at ``last_x`` m (after 888 m more: at 4 m
+    odometry puts it near each of the others, though t0 and t8 are not near each other)."""
+    x = last_x
+    at = [(0, 0, 0), (120, 0, 0), (120, 0, 90), (120, 100, 90), (120, 100, 180), (12, 100, 180), (12, 100, 270),
+          (12, 0, 270), (12, 0, 0), (452, 0, 0), (452, 0, 180), (x, 0, 180), (x, 0, 0), (x + 50, 0, 0)]
+    legs = [120, 90, 100, 90, 108, 90, 100, 90, 440, 180, 448, 180, 50]
+    steps = [{"view": "corner", "odometry": list(p)} for p in at]
+    for step, (k, leg) in zip(steps, enumerate(legs)):
+        step["action"] = ({"type": "travel", "distance_m": float(leg)} if k % 2 == 0 else
+                          {"type": "turn", "angle_deg": float(leg)})
+    return Tableau.from_dict({"format": FORMAT, "steps": steps, "meta": {"passes_through": True}})
+
+
+def test_near_proposals_make_one_dstate_only_of_visits_all_near_each_other():
+    """A dstate is one place: a near proposal joins t12 to t0 (4 m apart), and then not t8 to them,
+    although t8 is near t12 (8 m after 888 m driven), because t8 is not near t0 (12 m after 428 m).
+    Joined by chains of near pairs, a dstate could stretch along a corridor (Killian: one visit 12 m from
+    the other two of its dstate)."""
+    tableau = _chained_near_visits()
+    cmap = LoopCloser().resolve(tableau)
+    assert cmap.dstate_of[0] == cmap.dstate_of[12] and cmap.dstate_of[8] != cmap.dstate_of[12]
+    why = LoopCloser().explain(tableau, 8, 12)
+    assert why.verdict == "different"
+    assert "makes t8 and t0 one" in why.sentence and "12.0 m apart after 428 m driven" in why.sentence
+    assert "more than a near proposal allows (7.3 m)" in why.sentence
+
+
+def test_a_dstate_a_person_made_is_one_place_whatever_odometry_says_of_its_visits():
+    """t12 at 20 m is near t8 (8 m after 888 m driven) but not t0 (20 m after 1,316 m: beyond 16.2 m). Alone,
+    t12 joins t8 and t0 stays apart. A person saying t0 and t8 are one dstate makes them one place: t12,
+    near t8, then joins it too (held to the drift bound, not to the near bound towards t0)."""
+    tableau = _chained_near_visits(last_x=20.0)
+    alone = LoopCloser().resolve(tableau).dstate_of
+    assert alone[8] == alone[12] and alone[0] != alone[8]
+    said = LoopCloser().resolve(tableau, assertions=parse_assertions([{"same": [0, 8]}], len(tableau))).dstate_of
+    assert said[0] == said[8] == said[12]

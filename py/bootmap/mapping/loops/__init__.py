@@ -17,7 +17,10 @@ Here the robot's odometry proposes which visits are one dstate, and the axioms d
    nearest.
 3. A proposal is folded as the causal level demands (the same action from one dstate reaches one
    dstate: merge and fold, as RPNI does); every pair of visits the fold joins must face one way and
-   lie within the drift bound, or the proposal is dropped.
+   lie within the drift bound, or the proposal is dropped. A near proposal says the visits are in one
+   place: every pair of visits it makes one dstate must be near by the same bound, not only the pair
+   proposed (complete linkage, as the truth's places are made; a chain of near pairs along a corridor
+   is not one place). The joins determinism forces then are held to the drift bound.
 4. What is left is checked by clingo with every axiom file (the partition fixed, ``fixed/2``), views
    taken as soft evidence: each dstate shows the view most of its visits show, and the other visits
    are listed as misreads (``suspect_steps``). A proposal the axioms reject is dropped.

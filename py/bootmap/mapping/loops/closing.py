@@ -250,7 +250,8 @@ class Closing:
         self.odometry_bound = False
         try:
             for a, b in self.asserted_same:
-                if self.dstates.root[a] != self.dstates.root[b] and not self.fold(a, b, Join(a, b, "asserted")):
+                if self.dstates.root[a] != self.dstates.root[b] and \
+                        not self.fold(a, b, Join(a, b, "asserted", person=True)):
                     return False
         finally:
             self.odometry_bound = True
@@ -338,15 +339,21 @@ class Closing:
         """Join i's and j's dstates and every pair determinism then joins; False if some pair joined would
         face two ways or lie beyond the drift bound (``refused`` says which; the caller undoes the joins
         made)."""
-        queue = [why or Join(i, j, "proposed", self.kinds.get((i, j), ""))]
+        kind = self.kinds.get((i, j), "")
+        queue = [why or Join(i, j, "proposed", kind, person=kind == "preferred")]
         members = self.dstates.members
         while queue:
             join = queue.pop()
             a, b = self.dstates.root[join.x], self.dstates.root[join.y]
             if a == b:
                 continue
+            # A near proposal joins visits odometry puts in one place: so must it put every pair of visits it
+            # makes one dstate (as the truth's places are made: complete linkage), not only the pair proposed;
+            # but for a dstate a person made, whose visits odometry need not put together (``vouched``)
+            near = join.kind == "near" and not self._vouched(a, b)
+            share = self.closer.near_share if near else None
             refused = next(((x, y, cause) for x in members[a] for y in members[b]
-                            if (cause := self.kept_apart(x, y))), None)
+                            if (cause := self.kept_apart(x, y, share))), None)
             if refused:
                 self.refused = refused
                 return False
@@ -357,15 +364,22 @@ class Closing:
                 if action is not None:
                     if action in led:
                         queue.append(Join(led[action] + 1, t + 1, "forced", action=action_word(action),
-                                          after=(led[action], t)))
+                                          after=(led[action], t), person=join.person))
                     else:
                         led[action] = t
         return True
 
-    def kept_apart(self, x: int, y: int) -> str:
+    def _vouched(self, a: int, b: int) -> bool:
+        """Whether dstate a or b (roots) holds a join a person made (or one it forced): its visits are one
+        place on their word, whatever odometry says."""
+        root = self.dstates.root
+        return any(j.person and root[j.x] in (a, b) for j in self.dstates.reasons())
+
+    def kept_apart(self, x: int, y: int, share: float | None = None) -> str:
         """What keeps visits x and y from being one dstate before any axiom is asked ("" if nothing): they
         face two ways, travel on unequally far (where the robot stopped at every dstate), or lie beyond the
-        drift bound, or a person said they differ."""
+        drift bound (``share`` of the distance driven between them: by default ``drift_share``; a near
+        proposal's joins, ``near_share``), or a person said they differ."""
         if (min(x, y), max(x, y)) in self.told_apart:
             return "a person said they are different dstates"
         if self.heading[x] != self.heading[y]:
@@ -373,10 +387,12 @@ class Closing:
         lx, ly = self.length_of.get(x), self.length_of.get(y)
         if lx is not None and ly is not None and lx != ly:
             return f"the travels from them differ ({lx} and {ly} dm: length_is_feature)"
+        near = share is not None
+        share = self.closer.drift_share if share is None else share
         if self.odometry_bound and self.kinds.get((min(x, y), max(x, y))) != "preferred" \
-                and self._apart(x, y, self.closer.drift_share) > 1.0:
-            return (f"{self.odometry(x, y)}, more than odometry may drift "
-                    f"({self.drift_bound(x, y, self.closer.drift_share):.1f} m)")
+                and self._apart(x, y, share) > 1.0:
+            allowed = "a near proposal allows" if near else "odometry may drift"
+            return f"{self.odometry(x, y)}, more than {allowed} ({self.drift_bound(x, y, share):.1f} m)"
         return ""
 
     def odometry(self, x: int, y: int) -> str:

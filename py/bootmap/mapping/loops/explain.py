@@ -64,6 +64,7 @@ class Join:
     kind: str = ""                           # proposed: "near" or "retraced"
     action: str = ""                         # forced: the action both took
     after: tuple[int, int] | None = None     # forced: the time points that took it
+    person: bool = False                     # made on a person's word (asserted, preferred) or forced by one
 
     def text(self, evidence: Callable[[int, int], str]) -> str:
         if self.how == "asserted":
@@ -144,9 +145,10 @@ class _Explaining:
         cause = closing.kept_apart(a, b)
         if cause:
             return f"t{a} and t{b} are different dstates: {cause}.", []
+        proposed = closing.kinds.get((min(a, b), max(a, b)))
         mark = closing.dstates.mark()
         try:
-            if not closing.fold(a, b, Join(a, b, "asked")):
+            if not closing.fold(a, b, Join(a, b, "asked", proposed or "")):
                 x, y, cause = closing.refused
                 return (f"t{a} and t{b} are different dstates: making them one makes t{x} and t{y} one (by their "
                         f"dstates, or by determinism), but {cause}."), []
@@ -156,7 +158,6 @@ class _Explaining:
         if failing:
             return (f"t{a} and t{b} are different dstates: the axioms reject the map that makes them one (with "
                     f"what determinism then joins): it breaks {' and '.join(r.cite() for r in failing)}."), failing
-        proposed = closing.kinds.get((min(a, b), max(a, b)))
         why = (f"it was proposed ({proposed}) but rejected beside joins made before it" if proposed else
                f"nothing proposed them ({closing.odometry(a, b)}: beyond "
                f"{closing.drift_bound(a, b, closer.near_share):.1f} m for visits proposed as near; "
