@@ -193,6 +193,17 @@ def test_streaming_equals_batch_where_views_are_misread():
     assert misread and stream.extended_ > 0
 
 
+@pytest.mark.parametrize("seed", [1, 2])
+def test_streaming_equals_batch_where_an_action_is_mistyped(seed):
+    # A turn read past the neighbouring type: the resolver retypes it against the whole experience, so the
+    # stream must resolve anew wherever retyping is in play, and equal the batch on every prefix.
+    from support.noise import with_mistyped_action, with_odometry_noise
+    rng = np.random.default_rng(seed)
+    tableau, at = with_mistyped_action(with_odometry_noise(notched_rectangle(4), 3.0, 1.5, rng), rng)
+    stream = streamed_equals_batch(tableau)
+    assert [s["t"] for s in stream.map_.retyped_steps] == [at] and stream.extended_ > 0
+
+
 def last_step_streamed(steps: int):
     """The first ``steps`` steps of the stream bench's 6x5 exploration (seed 3), streamed up to the last one
     and then with it: the map before the last step, the map after, and the fresh resolve of all."""
