@@ -349,7 +349,7 @@ class Closing:
                 continue
             # A near proposal joins visits odometry puts in one place: so must it put every pair of visits it
             # makes one dstate (as the truth's places are made: complete linkage), not only the pair proposed;
-            # but for a dstate a person made, whose visits odometry need not put together (``vouched``)
+            # but not in a dstate a person made, whose visits odometry need not put together (_vouched)
             near = join.kind == "near" and not self._vouched(a, b)
             share = self.closer.near_share if near else None
             refused = next(((x, y, cause) for x in members[a] for y in members[b]
