@@ -305,3 +305,12 @@ def test_a_dstate_a_person_made_is_one_place_whatever_odometry_says_of_its_visit
     assert alone[8] == alone[12] and alone[0] != alone[8]
     said = LoopCloser().resolve(tableau, assertions=parse_assertions([{"same": [0, 8]}], len(tableau))).dstate_of
     assert said[0] == said[8] == said[12]
+
+
+def test_of_two_near_visits_that_are_not_near_each_other_the_nearer_in_metres_is_joined():
+    """t12 at 6.5 m: 6.5 m from t0 (after 1,316 m driven: a sixth of the 16.2 m allowed) and 5.5 m from t8
+    (after 888 m: nearly half of 11.9 m). t0 and t8 cannot both join it (12 m apart after 428 m). The
+    nearer in metres is joined, as the truth's places are drawn, not the one nearer as a share of the
+    drift odometry is allowed."""
+    cmap = LoopCloser().resolve(_chained_near_visits(last_x=6.5))
+    assert cmap.dstate_of[8] == cmap.dstate_of[12] != cmap.dstate_of[0]

@@ -14,7 +14,7 @@ Here the robot's odometry proposes which visits are one dstate, and the axioms d
    same actions (turn types, travel length types) for ``context`` steps before and after them, they
    show one view, and they are within ``radius_m`` plus ``drift_share`` of the distance driven (a long
    loop driven again, whose ends dead reckoning has drifted apart). Longest context first, then
-   nearest.
+   nearest in metres.
 3. A proposal is folded as the causal level demands (the same action from one dstate reaches one
    dstate: merge and fold, as RPNI does); every pair of visits the fold joins must face one way and
    lie within the drift bound, or the proposal is dropped. A near proposal says the visits are in one

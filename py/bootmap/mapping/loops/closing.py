@@ -290,7 +290,9 @@ class Closing:
                 retraced = (agree >= self.closer.context and self.views[i] == self.views[j]
                             and self._apart(i, j, self.closer.drift_share) <= 1.0)
                 if near <= 1.0 or retraced:
-                    ranked.append((-agree, near, i, j))
+                    # nearest in metres, as the truth's places are drawn (not as a share of the drift allowed:
+                    # that ranks a pair far apart after a long drive before a close pair after a short one)
+                    ranked.append((-agree, self.gap(i, j), i, j))
                     self.kinds[i, j] = "near" if near <= 1.0 else "retraced"
         ranked.sort()
         return [(i, j) for _, _, i, j in ranked]
