@@ -145,14 +145,14 @@ def _experiment(scans, log, lap, seed, k_max, time_limit, quantum_deg, view_crit
     lap("map_s")
     nn = {d: nn_on_revisits(images, truth, d) for d in DESCRIPTORS} if recognise else None
     odometry = [s.odometry for s in scans]
+    turns = turn_ends(tableau.actions)  # a turn's two ends are one visit, as the truth's places are made
     dead = dead_reckoned_dstates([odometry[i] for i in tableau.meta["dstates"]["scans"]], odometry, radius_m,
-                                 turn_ends(tableau.actions), travel_ends(tableau.actions))
+                                 turns, travel_ends(tableau.actions))
     recognition = None if cmap is None or not recognise else recognition_section(images, cmap.dstate_of, "1-NN",
                                                                                    seed)
     lap("recognise_s")
     poses = [s.pose for s in tableau.steps]
-    # Where each visit is, as the truth places it: a turn's two ends one visit, at their middle
-    positions = visit_positions(poses, turn_ends(tableau.actions))
+    positions = visit_positions(poses, turns)  # where the truth places each visit
     results = {
         "world": _name(log), "log": str(log), "seed": seed, "scans": len(scans), "images": len(images),
         "clusterer": "kmeans", "quantum_deg": quantum_deg, "dstates_at": "turns" if places is None else "places",

@@ -52,9 +52,9 @@ def place_labels(poses: list[Pose] | np.ndarray, radius_m: float = 3.0,
     from scipy.cluster.hierarchy import fcluster, linkage
     from scipy.spatial.distance import pdist, squareform
 
-    n = len(np.asarray(poses, dtype=float).reshape(-1, 3))
     groups, middles = _visits(poses, together)
     visit_of = {i: v for v, members in enumerate(groups) for i in members}
+    n = len(visit_of)
     if len(groups) < 2:
         return [0] * n
     distance = squareform(pdist(middles))
@@ -78,7 +78,7 @@ def visit_positions(poses: list[Pose] | np.ndarray, together: list[tuple[int, in
     [[2.0, 0.0], [2.0, 0.0], [9.0, 0.0]]
     """
     groups, middles = _visits(poses, together)
-    out = np.zeros((sum(len(g) for g in groups), 2))
+    out = np.zeros((sum(map(len, groups)), 2))
     for members, middle in zip(groups, middles):
         out[members] = middle
     return out
