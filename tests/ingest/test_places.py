@@ -127,3 +127,34 @@ def test_a_log_with_fewer_than_two_places_is_refused():
 def test_anywhere_along_a_corridor_facing_along_it_is_a_path(x, offset, turned):
     """Off the corridor's axis by up to 0.4 m and turned by up to 20 degrees, away from the crossing."""
     assert topology(CROSSING, (x, offset, math.radians(turned))) == PATH
+
+
+def test_a_visit_that_wandered_is_judged_where_its_dstates_are(monkeypatch):
+    """A visit that turns has two dstates, where it arrives and where it leaves, and its true place is
+    theirs: this one arrives at a hall's door facing east, wanders 17 m into the hall and back, and leaves
+    by the door facing west. A pass by the door later, facing east, is one true dstate with its arrival;
+    judged at the scan halfway through the visit (17 m into the hall) it was another place, and the true
+    map then joined visits 'farther apart than a place' by the positions loop closures are judged at."""
+    from bootmap.experiments.evaluate import loop_closure, sector_of_truth
+    from bootmap.ingest.ingest import turn_ends
+    from bootmap.ingest.places import Visit
+    from bootmap.ingest.truth import visit_positions
+
+    east, west = 0.0, math.pi
+    poses = ([(0.0, 0.0, east)] + [(x, 0.0, east) for x in (2, 5, 9, 13, 17)]       # in at the door, into the hall
+             + [(x, 0.0, west) for x in (13, 9, 5, 2, 0.5)]                          # back, out by the door
+             + [(x, 0.0, west) for x in (-3, -7, -11)]                               # away west
+             + [(-15.0, 0.0, west), (-15.5, 0.0, math.pi / 2), (-15.0, 0.0, east)]  # a turn at the far end
+             + [(x, 0.0, east) for x in (-11, -7, -3)] + [(0.3, 0.2, east), (3.0, 0.0, east)])  # past the door
+    scans = [Scan(float(k), np.full(180, 5.0), -math.pi / 2, math.pi / 179, 30.0, p, truth=p)
+             for k, p in enumerate(poses)]
+    visits = [Visit(0, 10, 180.0), Visit(14, 16, 180.0), Visit(19, 21, 0.0)]
+    monkeypatch.setattr("bootmap.ingest.ingest.find_visits", lambda *args, **kwargs: visits)
+    tableau = log_tableau(scans, places=PlaceDetector(), source="hall", calibrate=False)
+    assert tableau.meta["dstates"]["scans"] == [0, 10, 14, 16, 20]
+    truth = [s.truth for s in tableau.steps]
+    assert truth[0] == truth[4] != truth[1]  # the door facing east, twice; facing west once
+    assert truth[0].split(":")[0] != truth[2].split(":")[0]  # the far end is another place
+    positions = visit_positions([s.pose for s in tableau.steps], turn_ends(tableau.actions))
+    loops = loop_closure(truth, positions, 3.0, [sector_of_truth(d) for d in truth])
+    assert loops["precision"] in (None, 1.0) and loops["true_joins"] == 1

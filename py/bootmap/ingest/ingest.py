@@ -34,7 +34,7 @@ from .scans import IMAGE_ANGLE_MAX, IMAGE_ANGLE_MIN, IMAGE_BEAMS, Scan, to_image
 from .places import PlaceDetector, find_visits
 from ..paths import simplify
 from ..paths import main_axis
-from .truth import corner_recall, corners_in_poses, place_labels, sector_name, true_dstates
+from .truth import corner_recall, corners_in_poses, true_dstates
 
 ROS_SUFFIXES = (".bag", ".db3", ".mcap")
 #: How far the drawn true path may stray from the log's poses (metres).
@@ -136,7 +136,7 @@ def log_tableau(scans: list[Scan], detector: TurnDetector = TurnDetector(), max_
     elif visits is None:
         truth = _truth(scans, chosen, actions, radius_m)
     else:
-        truth = _visit_truth(scans, visits, places, radius_m)
+        truth = _truth(scans, chosen, actions, radius_m, travels_leave=False)
     steps = tuple(Step(action=actions[k] if k < len(actions) else None,
                        image=to_image(scans[i], IMAGE_BEAMS, max_range), truth=truth[k],
                        pose=_rounded(scans[i].truth) if has_truth else None, odometry=_rounded(scans[i].odometry))
@@ -177,26 +177,18 @@ def travel_ends(actions: list) -> list[tuple[int, int]]:
     return [(k, k + 1) for k, action in enumerate(actions) if isinstance(action, Travel)]
 
 
-def _truth(scans: list[Scan], chosen: list[int], actions: list, radius_m: float) -> list[str]:
+def _truth(scans: list[Scan], chosen: list[int], actions: list, radius_m: float,
+           travels_leave: bool = True) -> list[str]:
     """True dstates of the chosen scans, sectors aligned to the axis of the whole true path: places of
-    poses within the radius, a turn's two ends in one, a travel's never."""
+    poses within the radius, a turn's two ends in one (at their middle), and with ``travels_leave`` a
+    travel's two ends never in one. A dstate's place is judged where the robot was at it, as loop
+    closures are judged (:func:`~bootmap.ingest.truth.visit_positions`): at places too, a visit that
+    turned is placed at the middle of its two dstates, not at some scan in between (a visit may wander
+    through a hall and leave where it came in). At places a travel may end in the place it left (the
+    laser can show one place as two visits in a row), so it need not leave it."""
     axis = main_axis([s.truth for s in scans])
-    return true_dstates([scans[i].truth for i in chosen], radius_m, axis, turn_ends(actions), travel_ends(actions))
-
-
-def _visit_truth(scans: list[Scan], visits: list, places: PlaceDetector, radius_m: float) -> list[str]:
-    """True dstates of the visits' dstates: one place per group of visits whose middles' true positions
-    all lie within ``radius_m`` of each other (complete linkage: no chain of visits stretches a place
-    along a corridor), both dstates of a turn in their visit's place; the heading's sector in the
-    building's frame."""
-    axis = main_axis([s.truth for s in scans])
-    middles = [scans[(v.first + v.last) // 2].truth for v in visits]
-    place_of = place_labels(middles, radius_m)
-    labels = []
-    for v, place in zip(visits, place_of):
-        for i in v.dstates(places.turn_deg):
-            labels.append(f"P{place}:{sector_name(scans[i].truth[2], axis)}")
-    return labels
+    return true_dstates([scans[i].truth for i in chosen], radius_m, axis, turn_ends(actions),
+                        travel_ends(actions) if travels_leave else ())
 
 
 def _rounded(pose) -> tuple[float, float, float]:
