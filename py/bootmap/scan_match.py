@@ -306,13 +306,15 @@ class ScanMatcher:
         coarse = [se2(*shifts[j], rot[i]) for i, j in zip(*np.unravel_index(top, fit.shape))]
         return float(fit.flat[top[0]]) / len(b.sparse), coarse
 
-    def _match(self, a: _Scan, b: _Scan) -> Match:
-        """Align ``b``'s returns onto ``a``'s surface from the search's best candidates (:meth:`_search`),
-        each refined by ICP; the best by the symmetric score."""
+    def _match(self, a: _Scan, b: _Scan, coarse: list[np.ndarray] | None = None) -> Match:
+        """Align ``b``'s returns onto ``a``'s surface from the search's best candidates (:meth:`_search`,
+        run here unless its ``coarse`` candidates are given), each refined by ICP; the best by the
+        symmetric score."""
         import small_gicp
 
         na, nb = len(a.points), len(b.points)
-        _, coarse = self._search(a, b)
+        if coarse is None:
+            _, coarse = self._search(a, b)
         if not coarse:
             return Match(0.0, (0.0, 0.0, 0.0), (0, 0), (na, nb))
         best = None
@@ -350,39 +352,45 @@ class ScanMatcher:
             raise ValueError(f"images must be a 2-D array (n_images, n_beams), got shape {X.shape}")
         n = len(X)
         pairs = [(i, j) for i in range(n) for j in range(i + 1, n)]
+        coarse = None  # each pair's candidate motions, where the shortlist's search found them
         if self.shortlist is not None and self.shortlist < n - 1:
-            pairs = self._shortlisted(X, pairs)
+            pairs, coarse = self._shortlisted(X, pairs)
         S = np.zeros((n, n))
         if pairs:
             i, j = np.array(pairs).T
-            S[i, j] = S[j, i] = self._in_parallel(_pair_scores, X, pairs)
+            S[i, j] = S[j, i] = self._in_parallel(_pair_scores, X, pairs, coarse)
         S[np.diag_indices(n)] = [1.0 if len(image_points(x, self.max_range, self.fov_deg)) else 0.0 for x in X]
         return S
 
-    def _shortlisted(self, X: np.ndarray, pairs: list[tuple[int, int]]) -> list[tuple[int, int]]:
+    def _shortlisted(self, X: np.ndarray, pairs: list[tuple[int, int]]) -> tuple[list[tuple[int, int]], list]:
         """The pairs (of ``pairs``, all pairs ``i < j``) on either image's shortlist: its ``shortlist`` best
-        fits by the correlative search (ties by index), in the order of ``pairs``."""
+        fits by the correlative search (ties by index), in the order of ``pairs``; and each kept pair's
+        candidate motions from that search (its matching starts there, not from a second search)."""
         n = len(X)
         fits = np.full((n, n), -1.0)
+        searched = self._in_parallel(_pair_searches, X, pairs)
         i, j = np.array(pairs).T
-        fits[i, j] = fits[j, i] = self._in_parallel(_pair_fits, X, pairs)
+        fits[i, j] = fits[j, i] = [fit for fit, _ in searched]
         best = np.argsort(-fits, axis=1, kind="stable")[:, :self.shortlist]
         keep = np.zeros((n, n), dtype=bool)
         keep[np.arange(n)[:, None], best] = True
         keep |= keep.T
-        return [(a, b) for a, b in pairs if keep[a, b]]
+        kept = [k for k, (a, b) in enumerate(pairs) if keep[a, b]]
+        return [pairs[k] for k in kept], [searched[k][1] for k in kept]
 
-    def _in_parallel(self, work, X: np.ndarray, pairs: list[tuple[int, int]]) -> np.ndarray:
-        """``work(self, X, pairs)`` (one value per pair), in ``n_jobs`` processes."""
+    def _in_parallel(self, work, X: np.ndarray, pairs: list[tuple[int, int]], given: list | None = None) -> list:
+        """``work(self, X, pairs, given)`` (one value per pair; ``given``: something per pair, or None), in
+        ``n_jobs`` processes."""
         if self.n_jobs == 1 or len(pairs) < 2:
-            return work(self, X, pairs)
+            return work(self, X, pairs, given)
         from concurrent.futures import ProcessPoolExecutor
 
         parts = self.n_jobs * 4
         chunks = [pairs[k::parts] for k in range(parts)]
+        extras = [None if given is None else given[k::parts] for k in range(parts)]
         with ProcessPoolExecutor(self.n_jobs) as pool:
-            done = list(pool.map(work, [self] * parts, [X] * parts, chunks))
-        values = np.empty(len(pairs))
+            done = list(pool.map(work, [self] * parts, [X] * parts, chunks, extras))
+        values: list = [None] * len(pairs)
         for k, part in enumerate(done):
             values[k::parts] = part
         return values
@@ -396,18 +404,22 @@ def _canonical_first(a: np.ndarray, b: np.ndarray) -> bool:
     return bool(len(differ)) and bool(a[differ[0]] < b[differ[0]])
 
 
-def _pair_scores(matcher: ScanMatcher, X: np.ndarray, pairs: list[tuple[int, int]]) -> np.ndarray:
-    """Scores of the given pairs of rows of ``X`` (one process's share of :meth:`ScanMatcher.scores`)."""
-    return _per_pair(matcher, X, pairs, lambda a, b: matcher._match(a, b).score)
+def _pair_scores(matcher: ScanMatcher, X: np.ndarray, pairs: list[tuple[int, int]],
+                 coarse: list | None = None) -> list[float]:
+    """Scores of the given pairs of rows of ``X`` (one process's share of :meth:`ScanMatcher.scores`), from
+    each pair's search candidates where given."""
+    return _per_pair(matcher, X, pairs,
+                     lambda a, b, k: matcher._match(a, b, None if coarse is None else coarse[k]).score)
 
 
-def _pair_fits(matcher: ScanMatcher, X: np.ndarray, pairs: list[tuple[int, int]]) -> np.ndarray:
-    """The correlative search's best fit of each pair (one process's share of the shortlist)."""
-    return _per_pair(matcher, X, pairs, lambda a, b: matcher._search(a, b)[0])
+def _pair_searches(matcher: ScanMatcher, X: np.ndarray, pairs: list[tuple[int, int]], _=None) -> list[tuple]:
+    """The correlative search of each pair: its best fit and candidate motions (one process's share of the
+    shortlist)."""
+    return _per_pair(matcher, X, pairs, lambda a, b, k: matcher._search(a, b))
 
 
-def _per_pair(matcher: ScanMatcher, X: np.ndarray, pairs: list[tuple[int, int]], value) -> np.ndarray:
-    """``value(a, b)`` of each pair of rows of ``X``, prepared once each, in the canonical order."""
+def _per_pair(matcher: ScanMatcher, X: np.ndarray, pairs: list[tuple[int, int]], value) -> list:
+    """``value(a, b, k)`` of each pair ``k`` of rows of ``X``, prepared once each, in the canonical order."""
     prepared: dict[int, _Scan] = {}
 
     def get(i: int) -> _Scan:
@@ -415,8 +427,8 @@ def _per_pair(matcher: ScanMatcher, X: np.ndarray, pairs: list[tuple[int, int]],
             prepared[i] = matcher.prepare(X[i])
         return prepared[i]
 
-    out = np.empty(len(pairs))
+    out = []
     for k, (i, j) in enumerate(pairs):
         a, b = (j, i) if _canonical_first(X[j], X[i]) else (i, j)
-        out[k] = value(get(a), get(b))
+        out.append(value(get(a), get(b), k))
     return out
