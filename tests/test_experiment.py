@@ -99,7 +99,7 @@ def test_experiment_command_exits_1_when_a_check_fails(tmp_path):
     # room folds into two places (learned, the default, it is the paper's four: the fixture above). Each
     # of the room's true dstates then shares a dstate of the map with the one across the room.
     out = subprocess.run([sys.executable, "-m", "bootmap.cli", "experiment", "notched_rectangle", "--circuits", "15",
-                          "--seed", "1", "--quantum", "180", "-o", str(tmp_path)],
+                          "--seed", "1", "--quantum", "180", "--learner", "1-NN", "-o", str(tmp_path)],
                          capture_output=True, text=True, timeout=300)
     assert out.returncode == 1, out.stdout + out.stderr
     assert "map: 8 dstates, 2 places, 2 paths (truth 8, 4, 4)" in out.stdout
@@ -116,7 +116,9 @@ def test_seeds_report_mean_and_spread_and_exit_1_when_one_seed_fails(tmp_path, c
     from bootmap.cli import main
 
     # At 15 circuits (120 images), seed 4's nearest neighbour is 83.3% at 90 images, seed 3's 90.8%.
-    assert main(["experiment", "notched_rectangle", "--seeds", "3,4", "--circuits", "15", "-o", str(tmp_path)]) == 1
+    # (nearest neighbour alone: the other learners are not what the summary is about)
+    assert main(["experiment", "notched_rectangle", "--seeds", "3,4", "--circuits", "15", "--learner", "1-NN",
+                 "-o", str(tmp_path)]) == 1
     printed = capsys.readouterr().out
     assert "notched_rectangle (seed 3)" in printed and "notched_rectangle (seed 4)" in printed
     assert "the paper's figures: NOT (nearest neighbour at 90 images >= 85%)" in printed
@@ -240,6 +242,7 @@ def test_bad_seed_list_exits_2():
     (["--circuits", "0"], "expected circuits >= 1"),
     (["--k-max", "0"], "expected views >= 1"),
     (["--time-limit", "-1"], "expected seconds"),
+    (["--learner", "oracle"], "unknown learner 'oracle'; known: 1-NN, 3-NN,"),
 ])
 def test_bad_experiment_arguments_exit_2_with_a_message(args, message, capsys):
     from bootmap.cli import main
@@ -247,6 +250,21 @@ def test_bad_experiment_arguments_exit_2_with_a_message(args, message, capsys):
     with pytest.raises(SystemExit) as e:
         main(["experiment", "notched_rectangle", *args])
     assert e.value.code == 2 and message in capsys.readouterr().err
+
+
+def test_the_learner_named_is_the_one_drawn_beside_nearest_neighbour(capsys, tmp_path):
+    from bootmap.arguments import DEFAULT_LEARNER, LEARNERS
+    from bootmap.cli import main
+    from bootmap.recognise import default_learners
+
+    assert LEARNERS == tuple(default_learners()) and DEFAULT_LEARNER in LEARNERS  # the command line's list
+    assert main(["experiment", "notched_rectangle", "--circuits", "3", "--learner", "3-NN", "--no-progress",
+                 "-o", str(tmp_path)]) in (0, 1)
+    r = json.loads((tmp_path / "results.json").read_text())
+    assert r["recognition"]["learner"] == "3-NN" and r["recognition"]["learner_cv_mean"]
+    # On a robot's log the learners are not what is measured: said, not ignored.
+    assert main(["experiment", "--log", "killian", "--learner", "3-NN"]) == 2
+    assert "--learner: for an experiment on a world" in capsys.readouterr().err
 
 
 def test_circuits_on_an_explored_world_are_refused(capsys, tmp_path):

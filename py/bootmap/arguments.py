@@ -8,6 +8,18 @@ import argparse
 #: Where a log's dstates are chosen (``--dstates``): at odometry's turns, or at the places the laser shows.
 DSTATE_CHOICES = ("turns", "places")
 
+#: The learners an experiment can draw beside nearest neighbour (``--learner``): the names of
+#: :func:`bootmap.recognise.default_learners`, listed here so that the command line starts without scikit-learn.
+LEARNERS = ("1-NN", "3-NN", "logistic", "linear SVM", "RBF SVM", "MLP (32)", "despiked LDA")
+DEFAULT_LEARNER = "despiked LDA"
+
+
+def learner(text: str) -> str:
+    """A learner's name, one of :data:`LEARNERS`."""
+    if text not in LEARNERS:
+        raise argparse.ArgumentTypeError(f"unknown learner {text!r}; known: {', '.join(LEARNERS)}")
+    return text
+
 
 def levels(text: str) -> list[str]:
     """'causal,topological' -> the level names (checked against the axiom directory when it is loaded)."""

@@ -25,6 +25,7 @@ from typing import Callable
 
 import numpy as np
 
+from ..arguments import DEFAULT_LEARNER
 from ..errors import BadInput, BootmapError, SolveTimeout
 from ..mapping.resolver import Resolver
 from ..metrics import dstate_accuracy
@@ -58,7 +59,7 @@ class Laps:
 def run_experiment(world: str | World, circuits: int | None = None, steps: int | None = None, seed: int = 0,
                    out_dir: str | Path | None = None, k_max: int = 12, progress: bool = False,
                    time_limit: float = 60.0, levels: list[str] | None = None,
-                   quantum_deg: float | None = None, clusterer: str = "kmeans", learner: str = "despiked LDA",
+                   quantum_deg: float | None = None, clusterer: str = "kmeans", learner: str = DEFAULT_LEARNER,
                    blas_threads: int | None = 1, policy: str | None = None) -> dict:
     """Run the experiment on one world; see the module docstring.
 
