@@ -204,6 +204,20 @@ def test_streaming_equals_batch_where_an_action_is_mistyped(seed):
     assert [s["t"] for s in stream.map_.retyped_steps] == [at] and stream.extended_ > 0
 
 
+def test_streaming_equals_batch_on_a_grid_walk_with_a_mistyped_turn():
+    # A random grid walk read by a robot's odometry, one turn read past the neighbouring type (seed 22: a
+    # turn at t21). From the step whose reading makes an action a suspect, the resolver weighs retyping it
+    # against the whole experience, which the last map cannot speak for: a stream that extended the last
+    # map there gave another map of as many dstates at the 32nd step.
+    from support.noise import with_mistyped_action, with_odometry_noise
+    rng = np.random.default_rng(22)
+    world = random_world(rng, 3, 3, extra_edges=1, landmarks=0.3)
+    tableau, at = with_mistyped_action(with_odometry_noise(walk(world, 50, rng, policy="explore"), 3.0, 1.5, rng), rng)
+    assert at == 21
+    stream = streamed_equals_batch(tableau.prefix(34))
+    assert stream.extended_ > 0
+
+
 def last_step_streamed(steps: int):
     """The first ``steps`` steps of the stream bench's 6x5 exploration (seed 3), streamed up to the last one
     and then with it: the map before the last step, the map after, and the fresh resolve of all."""
