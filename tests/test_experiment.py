@@ -265,6 +265,7 @@ def test_the_learner_named_is_the_one_drawn_beside_nearest_neighbour(capsys, tmp
     # On a robot's log the learners are not what is measured: said, not ignored.
     assert main(["experiment", "--log", "killian", "--learner", "3-NN"]) == 2
     assert "--learner: for an experiment on a world" in capsys.readouterr().err
+    assert main(["experiment", "--log", "killian", "--learner", DEFAULT_LEARNER]) == 2  # named, even the default
 
 
 def test_circuits_on_an_explored_world_are_refused(capsys, tmp_path):

@@ -160,7 +160,7 @@ def cmd_experiment(args: argparse.Namespace) -> int:
     if args.log is None and args.world == "killian":
         args.log, args.world = "killian", None  # the short form: no world is called killian
     if args.log is not None:
-        if args.learner != arguments.DEFAULT_LEARNER:
+        if args.learner is not None:
             raise BadInput("--learner: for an experiment on a world; on a robot's log, nearest neighbour and "
                            "place recognition are measured")
         return _log_experiment(args)
@@ -180,7 +180,7 @@ def cmd_experiment(args: argparse.Namespace) -> int:
     if args.seeds:
         out = run_seeds(world, args.seeds, out_dir=args.output, circuits=args.circuits, steps=args.steps,
                         k_max=args.k_max, time_limit=args.time_limit, quantum_deg=args.quantum, progress=not args.no_progress,
-                        policy=args.policy, learner=args.learner)
+                        policy=args.policy, learner=args.learner or arguments.DEFAULT_LEARNER)
         runs = out["runs"]
         for r in runs:
             _print_summary(r)
@@ -188,7 +188,8 @@ def cmd_experiment(args: argparse.Namespace) -> int:
     else:
         runs = [run_experiment(world, circuits=args.circuits, steps=args.steps, seed=args.seed,
                                out_dir=args.output, k_max=args.k_max, progress=not args.no_progress, time_limit=args.time_limit,
-                               quantum_deg=args.quantum, policy=args.policy, learner=args.learner)]
+                               quantum_deg=args.quantum, policy=args.policy,
+                               learner=args.learner or arguments.DEFAULT_LEARNER)]
         _print_summary(runs[0])
         print(f"report: {args.output}/report.md")
     # A run that did not show what the paper's experiment must show (no map, a map not proved minimal,
@@ -423,7 +424,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="repeat over these seeds (e.g. 1,2,3,4,5 or 1-5) and report mean and spread")
     p.add_argument("--k-max", type=arguments.count("views"), default=12, metavar="K",
                    help="largest number of views tried (default 12)")
-    p.add_argument("--learner", type=arguments.learner, default=arguments.DEFAULT_LEARNER, metavar="NAME",
+    p.add_argument("--learner", type=arguments.learner, metavar="NAME",
                    help="the learner whose learning curve is drawn beside nearest neighbour's (the paper's, always "
                         f"measured): one of {', '.join(arguments.LEARNERS)} (default {arguments.DEFAULT_LEARNER}; "
                         "1-NN alone is the quickest)")
