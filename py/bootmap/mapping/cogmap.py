@@ -227,6 +227,24 @@ def action_text(action) -> str:
     return f"travel {action.distance_m:g} m{bend}"
 
 
+def canonical_order(models: list[list[Symbol]], n: int) -> list[list[Symbol]]:
+    """Minimal maps in an order that depends on the maps alone, not on how clingo found them: by their
+    partitions (each time point's dstate numbered by first appearance, compared time point by time
+    point), then by their atoms. The first is the map shown; the rest are its alternatives. So the same
+    experience shows the same map whichever search found its minimal maps (a stream's resolve starts at
+    a higher bound than a fresh one, and clingo enumerates the same maps in another order).
+
+    >>> from clingo import Function, Number
+    >>> def model(*ds):
+    ...     return [Function("is", [Number(t), Function("d", [Number(d)])]) for t, d in enumerate(ds)]
+    >>> [[str(a.arguments[1]) for a in m] for m in canonical_order([model(5, 7, 5), model(2, 2, 9)], 3)]
+    [['d(2)', 'd(2)', 'd(9)'], ['d(5)', 'd(7)', 'd(5)']]
+    """
+    if len(models) < 2:
+        return models
+    return sorted(models, key=lambda m: (_number_dstates(Atoms(m)[IS], n)[1], sorted(map(str, m))))
+
+
 def _number_dstates(is_atoms, n: int) -> tuple[dict[Symbol, int], list[int]]:
     """Dstate terms numbered by first appearance (S0, S1, ...), and the number of each time point's.
     Clingo symbols are hashed once here: comparing them costs a C call each, so the rest uses ints."""
@@ -240,11 +258,13 @@ def _number_dstates(is_atoms, n: int) -> tuple[dict[Symbol, int], list[int]]:
 def build_map(tableau: Tableau, models: list[list[Symbol]], exhausted: bool, levels, stats: SolveStats,
               minimal: bool = True, action_types: list[ActionType] | None = None,
               misread_costs: dict[int, int] | None = None, retyped_steps: list[dict] | None = None) -> CognitiveMap:
-    """The map of the first model, named as the paper names it; the other models are alternatives.
+    """The map of the first model in :func:`canonical_order`, named as the paper names it; the other models
+    are alternatives.
     ``exhausted``: clingo enumerated every minimal model (so one model means a unique map);
     ``misread_costs``: what taking each suspect view as a misread cost; ``retyped_steps``: the actions
     taken as mistyped."""
     n = len(tableau)
+    models = canonical_order(models, n)
     atoms = Atoms(models[0])
     ids, seq = _number_dstates(atoms[IS], n)
     S = [f"S{i}" for i in range(len(ids))]

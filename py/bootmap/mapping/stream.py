@@ -25,11 +25,13 @@ among those). If exactly one is accepted, that map is the unique minimal map of 
 Anything else (a new transition the axioms accept nowhere or in several places, a changed action type, a
 view that may be a misread, an ambiguous map) is resolved again from scratch, from the dstates the last
 map proved necessary: a minimal map read as seen has as many as any map of the longer experience needs
-at least; one more where it was the only one and does not extend (a new step the axioms place nowhere, or
-not where determinism puts it); so the search skips the bounds below. Where some views are suspect
-(possible misreads, :mod:`.misreads`), the map is extended only where the resolver too would keep the
-exact map without weighing them: one dstate per class, experience too little repeated for misreads to
-show, or as many dstates as the classes' proved lower bounds.
+at least; one more where it was the only one and does not extend (a new step the axioms place nowhere,
+or not where determinism puts it); so the search skips the bounds below. (The minimal maps it finds are
+shown in their canonical order, as a fresh resolve shows them; where they are more than the resolver
+lists, which ones are listed depends on the search's path, and the stream resolves from scratch.) Where
+some views are suspect (possible misreads, :mod:`.misreads`), the map is extended only where the
+resolver too would keep the exact map without weighing them: one dstate per class, experience too little
+repeated for misreads to show, or as many dstates as the classes' proved lower bounds.
 
 Who checks: with the axiom files bootmap ships, :mod:`.replay` keeps, step by step, what the axioms
 derive from the experience (headings, classes, the features that tell time points apart, the suspect
@@ -121,7 +123,15 @@ class MapStream:
         if cmap is None:
             if not retyping:
                 self._at_least = max(self._at_least, self._proved(tableau, angles))
-            cmap = self.resolver.resolve(tableau, deadline, at_least=self._at_least)
+            # Where the minimal maps are more than the resolver lists, which ones it lists depends on the
+            # search's path, and a search from the bounds the last map proved takes another path than a
+            # fresh one: there the stream resolves as a fresh resolve does (where every minimal map is
+            # listed, their order is canonical whatever the path: cogmap.canonical_order). A last map
+            # with too many to list says the next likely has too.
+            capped = self.map_ is not None and self.map_.models_capped
+            cmap = self.resolver.resolve(tableau, deadline, at_least=0 if capped else self._at_least)
+            if cmap.models_capped and self._at_least and not capped:
+                cmap = self.resolver.resolve(tableau, deadline)
             self.resolved_ += 1
             self._replay = None
             self._images = has_images(tableau)
