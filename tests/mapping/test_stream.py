@@ -260,5 +260,5 @@ def test_streaming_equals_batch_where_the_experience_leaves_several_minimal_maps
     # listed, the same ones (seed 3).
     from support.noise import with_misreads
     tableau = with_misreads(notched_rectangle(6), 0.02, np.random.default_rng(seed))[0].prefix(steps)
-    stream = streamed_equals_batch(tableau, since=36)
+    stream = streamed_equals_batch(tableau, since=steps)  # every prefix streamed, the last compared
     assert stream.map_.n_models > 1 and stream.map_.models_capped == (seed == 3)
