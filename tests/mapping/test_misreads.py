@@ -99,6 +99,33 @@ def test_two_misreads_in_a_row_are_expected_as_their_true_views_and_named(seed):
 
 
 @pytest.mark.slow
+def test_a_misread_before_the_hundredth_step_is_named_when_both_sides_find_it_surprising():
+    # The paper's room: a view misread at t65, two steps before the map is asked for. Read as seen, it sets
+    # every time point before it apart (each lap is the same, so determinism carries the difference back
+    # to the start): 66 dstates. After the same view and turn, and before the same turn and view, the
+    # circuits show another view eight times: a suspect, however short the tableau.
+    tableau, misread = with_misreads(notched_rectangle(16), 0.02, np.random.default_rng(0))
+    assert misread[0] == 65
+    steps = tableau.prefix(68)
+    assert [s.t for s in find_suspects(steps.views, [s.action for s in steps.steps]) if s.clear] == [65]
+    cmap = Resolver(time_limit=30).resolve(steps)
+    assert cmap.n_dstates == 8 and [s["t"] for s in cmap.suspect_steps] == [65]
+    assert dstate_accuracy(true_partition(steps), cmap.dstate_of) == 1.0
+
+
+@pytest.mark.parametrize("before, after, short, long", [
+    (0.1, 1.0, False, True),    # surprising after what came before it only: weak evidence in a short tableau
+    (1.0, 0.2, False, True),    # ... before what came after it only
+    (0.1, 0.2, True, True),     # on both sides: a suspect at any length
+    (0.1, 0.6, False, True),    # strongly on one side, weakly on the other: one-sided
+    (0.3, 0.3, False, False),   # not strongly surprising on either side: never
+])
+def test_surprise_on_one_side_only_waits_for_a_tableau_long_enough_to_tell(before, after, short, long):
+    from bootmap.mapping.misreads import MIN_STEPS, _surprising
+    sides = [(before, ("V",), 8, None), (after, ("V",), 8, None)]
+    assert _surprising(sides, MIN_STEPS - 1) is short and _surprising(sides, MIN_STEPS) is long
+
+
 def test_clean_experience_resolves_as_if_every_view_were_read_as_seen():
     clean, _ = exploration(46, turn_sd=0.0)
     robust = Resolver(time_limit=60).resolve(clean)
