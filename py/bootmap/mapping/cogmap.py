@@ -240,9 +240,17 @@ def canonical_order(models: list[list[Symbol]], n: int) -> list[list[Symbol]]:
     >>> [[str(a.arguments[1]) for a in m] for m in canonical_order([model(5, 7, 5), model(2, 2, 9)], 3)]
     [['d(2)', 'd(2)', 'd(9)'], ['d(5)', 'd(7)', 'd(5)']]
     """
+    return [models[k] for k in _canonical(models, [Atoms(m) for m in models], n)]
+
+
+def _canonical(models: list[list[Symbol]], atoms: list[Atoms], n: int) -> list[int]:
+    """The indices of ``models`` (whose atoms are read in ``atoms``) in :func:`canonical_order`: by
+    partition, and by atoms only where partitions tie (a model's atoms as text cost a call each)."""
     if len(models) < 2:
-        return models
-    return sorted(models, key=lambda m: (_number_dstates(Atoms(m)[IS], n)[1], sorted(map(str, m))))
+        return list(range(len(models)))
+    parts = [tuple(_number_dstates(a[IS], n)[1]) for a in atoms]
+    tied = {p for p in parts if parts.count(p) > 1}
+    return sorted(range(len(models)), key=lambda k: (parts[k], sorted(map(str, models[k])) if parts[k] in tied else []))
 
 
 def _number_dstates(is_atoms, n: int) -> tuple[dict[Symbol, int], list[int]]:
@@ -264,8 +272,10 @@ def build_map(tableau: Tableau, models: list[list[Symbol]], exhausted: bool, lev
     ``misread_costs``: what taking each suspect view as a misread cost; ``retyped_steps``: the actions
     taken as mistyped."""
     n = len(tableau)
-    models = canonical_order(models, n)
-    atoms = Atoms(models[0])
+    read = [Atoms(m) for m in models]
+    order = _canonical(models, read, n)
+    models, read = [models[k] for k in order], [read[k] for k in order]
+    atoms = read[0]
     ids, seq = _number_dstates(atoms[IS], n)
     S = [f"S{i}" for i in range(len(ids))]
     views = {S[ids[d]]: v.string for d, v in atoms[VIEW_OF]}
@@ -305,8 +315,7 @@ def build_map(tableau: Tableau, models: list[list[Symbol]], exhausted: bool, lev
     paths = {pa: _ordered_places(pa, on, order) for pa in sorted(set(paname.values()), key=_natural1)}
     steps = [step_row(t, tableau.steps[t], S[i], place_of, path_of) for t, i in enumerate(seq)]
     alternatives, alternative_places = [], []
-    for m in models[1:]:
-        alt_atoms = Atoms(m)
+    for alt_atoms in read[1:]:
         alt_ids, alt = _number_dstates(alt_atoms[IS], n)
         alternatives.append([f"S{i}" for i in alt])
         place_of_alt = {alt_ids[d]: str(p) for d, p in alt_atoms[PLACE_OF]}
