@@ -10,6 +10,7 @@ import pytest
 from bootmap.examples import notched_rectangle
 from bootmap.mapping import Resolver
 from bootmap.mapping.explain import Explainer, _Question
+from bootmap.mapping.facts import action_symbols, read_actions
 from bootmap.mapping.grounding import Deadline
 from bootmap.mapping.misreads import RARE_VIEW_COST, find_suspects, rare_views
 from bootmap.metrics import dstate_accuracy
@@ -111,6 +112,18 @@ def test_a_misread_before_the_hundredth_step_is_named_when_both_sides_find_it_su
     cmap = Resolver(time_limit=30).resolve(steps)
     assert cmap.n_dstates == 8 and [s["t"] for s in cmap.suspect_steps] == [65]
     assert dstate_accuracy(true_partition(steps), cmap.dstate_of) == 1.0
+
+
+def test_two_misreads_in_a_row_before_the_hundredth_step_are_both_named():
+    # The paper's room, views misread at t63 and t64. t64 is surprising on both sides; t63 only after what
+    # came before it: its other side saw t64's misread (a context never seen before, so ordinary). A side
+    # next to a clear suspect is no evidence: t63 is a suspect too, and both are named.
+    tableau, misread = with_misreads(notched_rectangle(12), 0.02, np.random.default_rng(228))
+    assert misread == [63, 64]
+    actions = action_symbols(tableau, read_actions(tableau)[0])  # as the axioms name them
+    assert {s.t for s in find_suspects(tableau.views, actions) if s.clear} == {63, 64}
+    cmap = Resolver(time_limit=10).resolve(tableau)
+    assert cmap.n_dstates == 8 and [s["t"] for s in cmap.suspect_steps] == [63, 64]
 
 
 @pytest.mark.parametrize("before, after, short, long", [

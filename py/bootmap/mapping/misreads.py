@@ -138,6 +138,12 @@ def find_suspects(views: Sequence[Hashable], actions: Sequence[Hashable],
     sides_of = [[side for side in pair if side is not None] for pair in around]
     surprising = [_surprising(sides, n) for sides in sides_of]
     clear_at = {t for t in range(n) if surprising[t] and _clear(sides_of[t])}
+    # The first of two misreads in a row: its side towards the second saw that misread (a context never
+    # seen, so ordinary), and its other side is all the evidence there is. (A view with one or two images
+    # is as likely a place seen once as a misread: the time points beside it are read as they are.)
+    beside = {t for t in range(n) if not surprising[t] and _beside_clear(around[t], t, clear_at - rare)}
+    surprising = [surprising[t] or t in beside for t in range(n)]
+    clear_at |= beside
     found = []
     for t in range(n):
         sides = sides_of[t]
@@ -167,6 +173,14 @@ def _trusted(around: tuple, t: int, clear_at: set[int]) -> list:
     the caller then reads both sides."""
     return [side for side, neighbour in zip(around, (t - 1, t + 1))
             if side is not None and neighbour not in clear_at]
+
+
+def _beside_clear(around: tuple, t: int, clear_at) -> bool:
+    """t's view is strongly surprising on one side (``STRONG``), and its other side is next to a clear
+    suspect: a side that saw a misread is no evidence that t's view is ordinary there."""
+    before, after = around
+    return ((before is not None and after is not None)
+            and ((t + 1 in clear_at and before[0] <= STRONG) or (t - 1 in clear_at and after[0] <= STRONG)))
 
 
 def _clear(sides: list) -> bool:
@@ -210,9 +224,17 @@ class SuspectWatch:
             watch._add(view, actions[t - 1] if t else None)
         n = len(views)
         watch.rare = _rare(watch._at, n, typical=RARE_AMONG)
-        watch.suspects = {t for t in range(n)
-                          if watch.contexts.views[t] in watch.rare or _surprising(watch.contexts.sides(t), n)}
+        watch.suspects = {t for t in range(n) if watch._suspect(t, n)}
         return watch
+
+    def _suspect(self, t: int, n: int) -> bool:
+        """Does :func:`find_suspects` name t (of ``n`` time points)?"""
+        contexts = self.contexts
+        if contexts.views[t] in self.rare or _surprising(contexts.sides(t), n):
+            return True
+        clear_at = {u for u in (t - 1, t + 1) if 0 <= u < n and contexts.views[u] not in self.rare
+                    and _surprising(contexts.sides(u), n) and _clear(contexts.sides(u))}
+        return bool(clear_at) and _beside_clear((contexts.before(t), contexts.after(t)), t, clear_at)
 
     def _add(self, view: Hashable, action_before: Hashable | None) -> set[int]:
         v = self._view_ids.setdefault(view, len(self._view_ids))
@@ -243,10 +265,12 @@ class SuspectWatch:
         for x in rare ^ self.rare:
             again.update(self._at[x])
         self.rare = rare
+        # A time point's neighbours read it (a suspect beside a clear one: _beside_clear).
+        again |= {u for t in again for u in (t - 1, t + 1) if 0 <= u < n}
         if n == MIN_STEPS:
             again = range(n)
         for t in again:
-            if self.contexts.views[t] in rare or _surprising(self.contexts.sides(t), n):
+            if self._suspect(t, n):
                 self.suspects.add(t)
             else:
                 self.suspects.discard(t)
