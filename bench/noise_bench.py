@@ -66,16 +66,21 @@ def tableaux(turn_sd: float, seeds=SEEDS, rounding=None):
                                         rounding=rounding)
 
 
-def run(resolver: Resolver, tableau) -> tuple[int | None, float, float]:
-    truth = true_partition(tableau)
+def resolved(resolver: Resolver, tableau):
+    """The map (on a time-out, the best map so far, or None), whether the time ran out, and the seconds."""
     t0 = time.perf_counter()
     try:
-        cmap = resolver.resolve(tableau)
+        cmap, timed_out = resolver.resolve(tableau), False
     except SolveTimeout as e:
-        best = e.best_map
-        return (None if best is None else best.n_dstates), \
-            (0.0 if best is None else dstate_accuracy(truth, best.dstate_of)), time.perf_counter() - t0
-    return cmap.n_dstates, dstate_accuracy(truth, cmap.dstate_of), time.perf_counter() - t0
+        cmap, timed_out = e.best_map, True
+    return cmap, timed_out, time.perf_counter() - t0
+
+
+def run(resolver: Resolver, tableau) -> tuple[int | None, float, float]:
+    cmap, _, secs = resolved(resolver, tableau)
+    if cmap is None:
+        return None, 0.0, secs
+    return cmap.n_dstates, dstate_accuracy(true_partition(tableau), cmap.dstate_of), secs
 
 
 def main() -> int:
@@ -166,14 +171,8 @@ def early_misreads(targets: Targets) -> None:
     rows = []
     for seed in EARLY_SEEDS:
         tableau, wrong = with_misreads(examples.notched_rectangle(EARLY_CIRCUITS), 0.02, np.random.default_rng(seed))
-        truth = true_partition(tableau)
-        t0 = time.perf_counter()
-        try:
-            cmap, timed_out = resolver.resolve(tableau), False
-        except SolveTimeout as e:
-            cmap, timed_out = e.best_map, True
-        secs = time.perf_counter() - t0
-        acc = 0.0 if cmap is None else dstate_accuracy(truth, cmap.dstate_of)
+        cmap, timed_out, secs = resolved(resolver, tableau)
+        acc = 0.0 if cmap is None else dstate_accuracy(true_partition(tableau), cmap.dstate_of)
         rows.append((timed_out, acc, secs))
         print(f"  seed {seed}: {len(tableau)} steps, misreads at {wrong}: {'-' if cmap is None else cmap.n_dstates} "
               f"dstates{' (time-out: the best map so far)' if timed_out and cmap else ''}, {acc:.1%} of the time "

@@ -137,7 +137,7 @@ def find_suspects(views: Sequence[Hashable], actions: Sequence[Hashable],
     around = [(contexts.before(t), contexts.after(t)) for t in range(n)]
     sides_of = [[side for side in pair if side is not None] for pair in around]
     surprising = [_surprising(sides, n) for sides in sides_of]
-    clear_at = {t for t in range(n) if surprising[t] and _clear(sides_of[t])}
+    clear_at = {t for t in range(n) if _clear_suspect(sides_of[t], n)}
     # The first of two misreads in a row: its side towards the second saw that misread (a context never
     # seen, so ordinary), and its other side is all the evidence there is. (A view with one or two images
     # is as likely a place seen once as a misread: the time points beside it are read as they are.)
@@ -181,6 +181,11 @@ def _beside_clear(around: tuple, t: int, clear_at) -> bool:
     before, after = around
     return ((before is not None and after is not None)
             and ((t + 1 in clear_at and before[0] <= STRONG) or (t - 1 in clear_at and after[0] <= STRONG)))
+
+
+def _clear_suspect(sides: list, n: int) -> bool:
+    """Surprising in its contexts (:func:`_surprising`), and on both sides (:func:`_clear`)."""
+    return _surprising(sides, n) and _clear(sides)
 
 
 def _clear(sides: list) -> bool:
@@ -230,11 +235,17 @@ class SuspectWatch:
     def _suspect(self, t: int, n: int) -> bool:
         """Does :func:`find_suspects` name t (of ``n`` time points)?"""
         contexts = self.contexts
-        if contexts.views[t] in self.rare or _surprising(contexts.sides(t), n):
+        if contexts.views[t] in self.rare:
             return True
-        clear_at = {u for u in (t - 1, t + 1) if 0 <= u < n and contexts.views[u] not in self.rare
-                    and _surprising(contexts.sides(u), n) and _clear(contexts.sides(u))}
-        return bool(clear_at) and _beside_clear((contexts.before(t), contexts.after(t)), t, clear_at)
+        around = (contexts.before(t), contexts.after(t))
+        sides = [side for side in around if side is not None]
+        if _surprising(sides, n):
+            return True
+        if len(sides) < 2 or min(side[0] for side in sides) > STRONG:
+            return False  # no side strongly surprising: no neighbour can make it a suspect
+        clear_at = {u for u in (t - 1, t + 1)
+                    if 0 <= u < n and contexts.views[u] not in self.rare and _clear_suspect(contexts.sides(u), n)}
+        return _beside_clear(around, t, clear_at)
 
     def _add(self, view: Hashable, action_before: Hashable | None) -> set[int]:
         v = self._view_ids.setdefault(view, len(self._view_ids))
