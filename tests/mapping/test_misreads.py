@@ -139,6 +139,16 @@ def test_surprise_on_one_side_only_waits_for_a_tableau_long_enough_to_tell(befor
     assert _surprising(sides, MIN_STEPS - 1) is short and _surprising(sides, MIN_STEPS) is long
 
 
+@pytest.mark.parametrize("share, suspect", [(0.1, True), (0.25, True), (0.3, False), (1.0, False)])
+def test_the_first_and_last_time_points_are_read_by_their_one_side_at_any_length(share, suspect):
+    # An end of the experience has one side: strongly surprising there is all the evidence there is (a
+    # stream's newest view, misread, is a suspect at the step it is seen). Never a clear suspect.
+    from bootmap.mapping.misreads import MIN_STEPS, _clear, _surprising
+    side = [(share, ("V",), 8, None)]
+    assert _surprising(side, 10) is suspect and _surprising(side, MIN_STEPS) is suspect
+    assert not _clear(side)
+
+
 def test_clean_experience_resolves_as_if_every_view_were_read_as_seen():
     clean, _ = exploration(46, turn_sd=0.0)
     robust = Resolver(time_limit=60).resolve(clean)

@@ -195,6 +195,20 @@ def test_streaming_equals_batch_where_views_are_misread():
     assert misread and stream.extended_ > 0
 
 
+def test_a_misread_in_the_newest_step_is_named_at_that_step():
+    # The paper's room, a view misread at t65: at the 66th step it is the newest, with nothing after it.
+    # Read as seen it set every time point apart (66 dstates, 3.5 s, for one step); surprising after what
+    # came before it, it is a suspect, and the stream names it at once, as a fresh resolve does.
+    from support.noise import with_misreads
+    tableau, misread = with_misreads(notched_rectangle(16), 0.02, np.random.default_rng(0))
+    assert misread[0] == 65
+    stream = MapStream(Resolver(time_limit=30))
+    for n in range(1, 67):
+        cmap = stream.update(tableau.prefix(n))
+    assert cmap.n_dstates == 8 and [s["t"] for s in cmap.suspect_steps] == [65]
+    assert same_map(cmap, Resolver(time_limit=30).resolve(tableau.prefix(66)))
+
+
 @pytest.mark.parametrize("seed", [1, 2])
 def test_streaming_equals_batch_where_an_action_is_mistyped(seed):
     # A turn read past the neighbouring type: the resolver retypes it against the whole experience, so the

@@ -158,7 +158,9 @@ def find_suspects(views: Sequence[Hashable], actions: Sequence[Hashable],
             # the search still takes a misread only where it saves dstates.
             evidence = min(side[2] for side in sides)
             cost = base if clear else int(round(base * max(1.0, FULL_EVIDENCE / max(evidence, 1))))
-            reason = "unlike what the experience around it shows" + ("" if clear else " on one side")
+            reason = ("unlike what the experience around it shows" + ("" if clear else " on one side")
+                      if len(sides) == 2 else
+                      f"unlike what the experience {'before' if t else 'after'} it shows (an end of the experience)")
             found.append(Suspect(t, cost, expected, reason, clear,
                                  tuple(contexts.describe(side[3]) for side in sides)))
     return found
@@ -190,13 +192,16 @@ def _clear_suspect(sides: list, n: int) -> bool:
 
 def _clear(sides: list) -> bool:
     """Surprising on both sides: at most ``WEAK`` on the less surprising one."""
-    return max(side[0] for side in sides) <= WEAK
+    return len(sides) == 2 and max(side[0] for side in sides) <= WEAK
 
 
 def _surprising(sides: list, n: int) -> bool:
     """A view is a suspect for its contexts: a view seen where, on one side at least, other views were
-    seen far more often (on one side only, in a tableau long enough to tell: ``MIN_STEPS``)."""
-    return len(sides) == 2 and min(side[0] for side in sides) <= STRONG and (n >= MIN_STEPS or _clear(sides))
+    seen far more often (on one side only, in a tableau long enough to tell: ``MIN_STEPS``). The first
+    and the last time point have one side: there it is all the evidence, at any length (a stream's newest
+    view, misread, would otherwise be read as seen until the next step gives it a side after)."""
+    strongly = bool(sides) and min(side[0] for side in sides) <= STRONG
+    return strongly and (len(sides) == 1 or n >= MIN_STEPS or _clear(sides))
 
 
 class SuspectWatch:
