@@ -380,3 +380,37 @@ def test_one_side_is_the_only_rule_that_keeps_a_place_off_both_sides_of_a_path(a
     assert without_rule.n_dstates == 8 and without_rule.unique
     assert without_rule.same(0, 5) and without_rule.same(3, 9)          # one dstate per view
     assert (without_rule.n_places, without_rule.n_paths) == (3, 3)
+
+
+@pytest.mark.parametrize("left, ground_s, solves", [
+    (None, 100.0, True),   # no time limit: always
+    (60.0, 4.0, True),     # the preparation (about 1.5 times the grounding) ends well inside the limit
+    (0.5, 6.3, False),     # half a second left after a grounding of 6.3 s: the solve would start 9 s late
+    (0.0, 0.2, True),      # a small grounding's preparation fits in the grace
+])
+def test_a_search_grounded_near_the_deadline_is_solved_only_if_its_preparation_ends_in_time(left, ground_s, solves):
+    from bootmap.mapping.grounding import Deadline
+    from bootmap.mapping.search.budget import Budget
+
+    class Fixed(Deadline):  # a clock that does not move: the verdict depends on nothing but the figures
+        def remaining(self):
+            return left
+
+    budget = Budget(Fixed(None, None), lambda what, improving, limit: SolveTimeout(what))
+    assert budget.prepares_in_time(ground_s) is solves
+
+
+def test_a_search_whose_solve_would_not_start_in_time_is_not_solved(paper_tableau, monkeypatch):
+    # Every search grounding ends with no time to prepare its solve: the resolver stops at the first one,
+    # with the best map known, and never asks clingo to solve it.
+    from bootmap.mapping.grounding import Grounding
+    from bootmap.mapping.search.budget import Budget
+
+    solved: list[str] = []
+    real_solve = Grounding.solve
+    monkeypatch.setattr(Budget, "prepares_in_time", lambda self, ground_s: False)
+    monkeypatch.setattr(Grounding, "solve", lambda self, *a, **k: solved.append("solve") or real_solve(self, *a, **k))
+    with pytest.raises(SolveTimeout) as e:
+        Resolver(levels=NO_METRICAL).resolve(paper_tableau)
+    assert "grounded, not solved" in str(e.value)
+    assert solved == ["solve"]  # the first try (one dstate per class) only

@@ -75,6 +75,8 @@ SEEN_RARELY = 2
 RARE_VIEW = "a view with one or two images"
 #: Why a view no rule here suspected became a suspect (the resolver finds these: :mod:`.search.abduction`).
 GHOST = "a dstate of its own in a first map"
+#: ... or became one beside a suspect, where the suspects could not explain the experience.
+BESIDE = "beside a suspect the experience needs more misreads around"
 #: A misread costs more where its contexts showed the other views fewer times than this (3 times: double).
 FULL_EVIDENCE = 6
 #: With images, the cost runs from the boundary's to the cluster core's.

@@ -21,7 +21,7 @@ from ...tableau import Tableau
 from ..cogmap import CognitiveMap
 from ..facts import action_symbols
 from ..grounding import key_with_view
-from ..misreads import (GHOST, MIN_VISITS, MISREAD_COST, RARE_VIEW, Suspect, context_views, find_suspects,
+from ..misreads import (BESIDE, GHOST, MIN_VISITS, MISREAD_COST, RARE_VIEW, Suspect, context_views, find_suspects,
                         has_images, rare_clustered_views)
 from ..vocabulary import DSTATE_COST, MAY_BE, SUSPECT
 
@@ -168,7 +168,7 @@ class MisreadAbduction:
                     break
                 chosen, lowest = chosen + ghosts, lowered
         if chosen is not clear:
-            misread = search.optimise(None, lowest)
+            misread = search.optimise(None, lowest) or self._beside(exact_facts, chosen, lowest)
             if misread is not None:
                 return misread
             state.classes.lower, state.proved = planned, max(proved, lowest + 1)
@@ -187,6 +187,30 @@ class MisreadAbduction:
             fewest += 1
             state.proved = max(state.proved, fewest)
             misread = search.optimise(None, fewest)
+        return misread
+
+    def _beside(self, exact_facts: list[Symbol], chosen: list[Suspect], bound: int) -> CognitiveMap | None:
+        """The best map with misreads in the layout ``bound`` set (the ghosts' bounds), where the time points
+        beside the suspects ``chosen`` may be misreads too; None if there is none.
+
+        Where a dstate was seen only three or four times and two of those visits were misread, its
+        contexts hold as many misreads as true views: the misread there looks ordinary, and the time point
+        whose transition it breaks, next to it, is the one suspected. Allowed beside every suspect, the
+        missed misread is found in the same layout (which keeps every class's dstates: a small search,
+        where a dstate more in the bound would give every class a slot more)."""
+        state = self.state
+        layout = list(state.classes.lower)
+        taken = {s.t for s in chosen}
+        near = sorted({u for t in taken for u in (t - 1, t + 1) if 0 <= u < len(state.tableau)} - taken)
+        if not near:
+            return None
+        expected = context_views(state.tableau.views, action_symbols(state.tableau, state.angles), near)
+        self._allow_misreads(exact_facts, chosen + [Suspect(t, MISREAD_COST, expected[t], BESIDE) for t in near])
+        state.classes.lower = layout  # the suspects beside may lower the bounds: the layout stays the ghosts'
+        misread = self.search.optimise(None, bound)
+        if misread is None:
+            self._allow_misreads(exact_facts, chosen)
+            state.classes.lower = layout
         return misread
 
     def _ghosts(self) -> list[Suspect]:

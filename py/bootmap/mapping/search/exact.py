@@ -20,7 +20,7 @@ from ...errors import InconsistentTableau
 from ..cogmap import CognitiveMap, Try
 from ..grounding import Grounding, prepass
 from ..vocabulary import DSTATE_COST, MINIMISE_DSTATES, ONE_PER_CLASS
-from .budget import grounding_size
+from .budget import PREPARE_FACTOR, grounding_size
 
 if TYPE_CHECKING:
     from .budget import Budget
@@ -187,6 +187,11 @@ class ExactSearch:
             budget.first_try_grounded(grounding.ground_s, len(state.tableau))
         else:
             budget.search_grounded(grounding.ground_s, size)
+            if not budget.prepares_in_time(grounding.ground_s):
+                state.ground_s += grounding.ground_s
+                state.tries.append(Try(what, "timeout", grounding.ground_s))
+                raise budget.timed_out(f"{what} (grounded, not solved: the solve would take about "
+                                       f"{(PREPARE_FACTOR - 1) * grounding.ground_s:.0f} s to start)", [])
         optimal: list[list[Symbol]] = []
         improving: list[list[Symbol]] = []
 
