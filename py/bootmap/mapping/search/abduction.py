@@ -11,6 +11,7 @@ views that make a dstate of their own (*ghosts*) become suspects too.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -197,15 +198,21 @@ class MisreadAbduction:
         contexts hold as many misreads as true views: the misread there looks ordinary, and the time point
         whose transition it breaks, next to it, is the one suspected. Allowed beside every suspect, the
         missed misread is found in the same layout (which keeps every class's dstates: a small search,
-        where a dstate more in the bound would give every class a slot more)."""
+        where a dstate more in the bound would give every class a slot more). A suspect next to such a
+        misread was expected, by the side that saw it, to be what the misread showed (a true .FR. read as
+        L..B after a true L..B read as LFRB was expected only as LFRB): each suspect may then also have
+        been misread from any view its one-step contexts saw."""
         state = self.state
         layout = list(state.classes.lower)
         taken = {s.t for s in chosen}
         near = sorted({u for t in taken for u in (t - 1, t + 1) if 0 <= u < len(state.tableau)} - taken)
         if not near:
             return None
-        expected = context_views(state.tableau.views, action_symbols(state.tableau, state.angles), near)
-        self._allow_misreads(exact_facts, chosen + [Suspect(t, MISREAD_COST, expected[t], BESIDE) for t in near])
+        seen = context_views(state.tableau.views, action_symbols(state.tableau, state.angles), near + sorted(taken))
+        # (A suspect that expects any view, expected == (), stays so.)
+        widened = [replace(s, expected=tuple(sorted(set(s.expected) | set(seen[s.t]), key=str))) if s.expected else s
+                   for s in chosen]
+        self._allow_misreads(exact_facts, widened + [Suspect(t, MISREAD_COST, seen[t], BESIDE) for t in near])
         state.classes.lower = layout  # the suspects beside may lower the bounds: the layout stays the ghosts'
         misread = self.search.optimise(None, bound)
         if misread is None:
