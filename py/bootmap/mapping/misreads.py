@@ -12,7 +12,8 @@ experience is resolved exactly as before and the search stays small:
 
 * a view seen where the experience around it says otherwise: after the same one or two views and
   actions, or before the same one or two actions and views, other views were seen at least three times
-  as often (a misread breaks both transitions; where views alias, one of them may look ordinary);
+  as often (a misread breaks both transitions; where views alias, one of them may look ordinary; the
+  first and the last time point have one side, and are read by it);
 * a view with one or two images in a tableau whose views have many (:func:`rare_views`):
   as likely a misread image as a place, it is cheap to call a misread (half a dstate).
 
@@ -76,7 +77,7 @@ RARE_VIEW = "a view with one or two images"
 #: Why a view no rule here suspected became a suspect (the resolver finds these: :mod:`.search.abduction`).
 GHOST = "a dstate of its own in a first map"
 #: ... or became one beside a suspect, where the suspects could not explain the experience.
-BESIDE = "beside a suspect the experience needs more misreads around"
+BESIDE = "next to a suspect, where the suspects alone could not explain the experience"
 #: A misread costs more where its contexts showed the other views fewer times than this (3 times: double).
 FULL_EVIDENCE = 6
 #: With images, the cost runs from the boundary's to the cluster core's.
