@@ -414,3 +414,30 @@ def test_a_search_whose_solve_would_not_start_in_time_is_not_solved(paper_tablea
         Resolver(levels=NO_METRICAL).resolve(paper_tableau)
     assert "grounded, not solved" in str(e.value)
     assert solved == ["solve"]  # the first try (one dstate per class) only
+
+
+def test_a_first_try_slowed_by_a_busy_host_does_not_refuse_the_search(monkeypatch):
+    # The paper's room with misclustered views read as seen, 43 steps, resolved as a stream resolves it,
+    # told the dstates the last map proved: the first try grounds in a few milliseconds, and the search at
+    # that bound (first of all) is predicted from it, a thousandfold. While the process waited for the
+    # processor (a busy host), its first grounding took 0.2 s by the wall clock: predicted from that, the
+    # search "would take about 50 s" and was refused. The process's CPU time is what predicts it.
+    import numpy as np
+    from support.noise import with_misreads
+
+    from bootmap.mapping.grounding import Grounding
+
+    tableau = with_misreads(examples.notched_rectangle(6), 0.02, np.random.default_rng(3))[0].prefix(43)
+    quiet = Resolver(time_limit=30, misreads=False).resolve(tableau)
+    real, grounded = Grounding.ground, []
+
+    def first_waited(self, *args, **kwargs):
+        out = real(self, *args, **kwargs)
+        if not grounded:
+            self.ground_s += 0.2  # the wall clock ran on; the process's CPU time did not
+        grounded.append(self)
+        return out
+
+    monkeypatch.setattr(Grounding, "ground", first_waited)
+    busy = Resolver(time_limit=30, misreads=False).resolve(tableau, at_least=quiet.n_dstates)
+    assert len(grounded) > 1 and busy.dstate_of == quiet.dstate_of and busy.n_models == quiet.n_models

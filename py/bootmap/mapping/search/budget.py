@@ -93,7 +93,10 @@ class Budget:
     def first_try_grounded(self, ground_s: float, time_points: int) -> None:
         """The first try (one slot for each time point) was grounded in ``ground_s``: what every grounding of
         this tableau costs (the theory, the facts), and until a search is grounded, how fast this machine
-        grounds."""
+        grounds. The caller gives the process's CPU time where it is the smaller: a small first try is
+        extrapolated a hundredfold and more, and a moment the process spent waiting for the processor (a
+        busy host: 84 ms for a grounding of 5 ms) would refuse every search ("about 50 s with 29.9 s
+        left", the paper's room at 43 steps)."""
         self.fixed_ground_s = ground_s
         self.ground_rate = FIRST_TRY_SHARE * ground_s / max(time_points, 1) ** GROUND_POWER
 

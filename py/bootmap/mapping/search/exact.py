@@ -184,7 +184,7 @@ class ExactSearch:
             options += ["--opt-mode=optN", "--opt-strategy=usc"]
         grounding = Grounding(state.resolver.theory, state.facts + layout, state.depth, options).ground()
         if size is None:
-            budget.first_try_grounded(grounding.ground_s, len(state.tableau))
+            budget.first_try_grounded(min(grounding.ground_s, grounding.ground_cpu_s), len(state.tableau))
         else:
             budget.search_grounded(grounding.ground_s, size)
             if not budget.prepares_in_time(grounding.ground_s):
