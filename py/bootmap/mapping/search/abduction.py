@@ -215,9 +215,8 @@ class MisreadAbduction:
         self._allow_misreads(exact_facts, widened + [Suspect(t, MISREAD_COST, seen[t], BESIDE) for t in near])
         state.classes.lower = layout  # the suspects beside may lower the bounds: the layout stays the ghosts'
         misread = self.search.optimise(None, bound)
-        if misread is None:
+        if misread is None:  # the suspects as they were (the caller lays the classes out anew)
             self._allow_misreads(exact_facts, chosen)
-            state.classes.lower = layout
         return misread
 
     def _ghosts(self) -> list[Suspect]:
