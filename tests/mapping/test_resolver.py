@@ -441,3 +441,54 @@ def test_a_first_try_slowed_by_a_busy_host_does_not_refuse_the_search(monkeypatc
     monkeypatch.setattr(Grounding, "ground", first_waited)
     busy = Resolver(time_limit=30, misreads=False).resolve(tableau, at_least=quiet.n_dstates)
     assert len(grounded) > 1 and busy.dstate_of == quiet.dstate_of and busy.n_models == quiet.n_models
+
+
+class _WakesEarly:
+    """A real clingo solve handle whose first wait ends at once, reporting "not done", as clasp's wait
+    does when its condition variable wakes before the time-out."""
+
+    def __init__(self, handle):
+        self.handle, self.waits = handle, 0
+
+    def wait(self, timeout=None):
+        self.waits += 1
+        return False if self.waits == 1 else self.handle.wait(timeout)
+
+
+def test_a_wait_that_wakes_early_is_not_taken_for_the_deadline():
+    # A resolve of a small random walk ended "time limit of 60 s reached while looking for one dstate per
+    # class" a few seconds after it began: clasp's wait came back early, and one early "not done" was
+    # taken for the time-out.
+    import clingo
+
+    from bootmap.mapping.grounding import Deadline, wait_until
+
+    control = clingo.Control(["0"])
+    control.add("base", [], "{ a(1..14) }.")
+    control.ground([("base", [])])
+    models = []
+    with control.solve(on_model=lambda m: models.append(1), async_=True) as handle:
+        woken = _WakesEarly(handle)
+        assert wait_until(woken, Deadline.after(60))
+        assert woken.waits >= 2
+        assert handle.get().satisfiable
+    assert len(models) == 2 ** 14
+
+
+def test_a_search_that_outlasts_its_deadline_is_waited_for_until_the_deadline_only():
+    import time
+
+    import clingo
+
+    from bootmap.mapping.grounding import Deadline, wait_until
+
+    control = clingo.Control()  # twelve pigeons in eleven holes: far longer than the deadline
+    control.add("base", [], "p(1..12). h(1..11). { in(P, H) : h(H) } = 1 :- p(P). "
+                            ":- in(P1, H), in(P2, H), P1 < P2.")
+    control.ground([("base", [])])
+    start = time.perf_counter()
+    with control.solve(async_=True) as handle:
+        woken = _WakesEarly(handle)
+        assert not wait_until(woken, Deadline.after(0.3))
+        handle.cancel()
+    assert time.perf_counter() - start >= 0.3  # not at the early wake-up

@@ -52,6 +52,18 @@ class Deadline:
         return Deadline(time.perf_counter() + span, self.limit_s)
 
 
+def wait_until(handle, deadline: Deadline) -> bool:
+    """Wait for an asynchronous solve (a ``clingo.SolveHandle``) until it is done (True) or ``deadline``
+    has passed (False). One ``handle.wait(timeout)`` is not enough: clasp waits once on a condition
+    variable and reports "not done" at its first wake-up, which may come before the time-out (a spurious
+    wake-up); taken for the time-out, it made a solve that needed a fraction of a second end as out of
+    its 60 s."""
+    while not handle.wait(deadline.remaining()):
+        if deadline.passed():
+            return False
+    return True
+
+
 class Grounding:
     """The theory and a set of facts in one clingo control.
 
@@ -98,7 +110,7 @@ class Grounding:
         """Solve until done or the deadline: clingo's result, or None when the deadline came first."""
         t0 = time.perf_counter()
         with self.control.solve(assumptions=list(assumptions), on_model=on_model, async_=True) as handle:
-            finished = handle.wait(deadline.remaining())
+            finished = wait_until(handle, deadline)
             if not finished:
                 handle.cancel()
             result = handle.get()
