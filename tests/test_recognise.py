@@ -129,6 +129,7 @@ def test_cv_sizes_beyond_training_folds_are_dropped():
 
 # -- comparisons -------------------------------------------------------------------------------------
 
+@pytest.mark.slow
 def test_compare_learners_scores_every_learner_and_more_images_help():
     X, y = blobs(n_per=15, dim=40, spread=2.0)
     rows = compare_learners(X, y, at=(30, 90))

@@ -86,6 +86,7 @@ def test_the_table_is_written_as_json_lines_and_csv_with_a_summary_and_figures(l
     assert (out / "sweep.toml").read_text() == tiny().text
 
 
+@pytest.mark.slow
 def test_the_same_sweep_on_a_dask_local_cluster_gives_the_same_table(local, tmp_path):
     pytest.importorskip("distributed", reason="dask.distributed is not installed: pip install 'bootmap[dask]'")
     from distributed import LocalCluster
@@ -98,6 +99,7 @@ def test_the_same_sweep_on_a_dask_local_cluster_gives_the_same_table(local, tmp_
     assert {r["worker"] for r in result.table}.isdisjoint({r["worker"] for r in local[0].table})
 
 
+@pytest.mark.slow
 def test_resume_runs_only_the_cells_without_a_result(local, tmp_path):
     _, out = local
     shutil.copytree(out, tmp_path / "resumed")
@@ -218,6 +220,7 @@ def test_the_grid_is_every_combination_once_with_stable_ids(seeds, levels, learn
     assert [c.id for c in loads_spec(text).cells] == [c.id for c in cells]
 
 
+@pytest.mark.slow
 def test_a_log_is_an_axis_of_the_grid_beside_worlds(tmp_path, monkeypatch):
     # A robot's log (a synthetic CARMEN log of a square, truth known by hand) runs as `bootmap experiment
     # --log` does, one cell per seed, beside a world's cells; its row has the log's own figures.

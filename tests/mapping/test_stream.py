@@ -37,6 +37,7 @@ def test_the_papers_tableau_streamed_step_by_step_is_the_papers_map():
     assert stream.extended_ > stream.resolved_  # most steps repeat a known transition
 
 
+@pytest.mark.slow
 @settings(max_examples=4, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(seed=st.integers(0, 10_000), policy=st.sampled_from(["random", "explore"]))
 def test_streaming_equals_batch_on_every_prefix_of_a_random_walk(seed, policy):

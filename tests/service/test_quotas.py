@@ -183,6 +183,7 @@ def test_a_database_of_the_previous_version_opens(tmp_path):
 
 # --- Against a server -------------------------------------------------------------------------------
 
+@pytest.mark.slow
 def test_a_tokens_reads_go_on_while_another_connection_holds_the_write_lock(tmp_path):
     """A request writes nothing: reads with a token are answered while the database cannot be written
     for 12 s, longer than SQLite's 10 s busy timeout (each once waited for it and failed, 500 'database

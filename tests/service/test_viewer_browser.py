@@ -368,6 +368,7 @@ def killian(viewer_server) -> int:
         return r.json()["id"]
 
 
+@pytest.mark.slow
 def test_a_real_logs_map_is_decluttered_and_readable_once_zoomed(page, viewer_server, killian):
     """Killian's 80-odd dstates at 38 places: the whole map shows its places' names and hides the dstate
     labels that have no room; zoomed in on the densest part, they show, and every label stays as large
