@@ -37,7 +37,7 @@ from __future__ import annotations
 
 from collections import Counter
 from dataclasses import dataclass
-from typing import Hashable, Sequence
+from typing import Collection, Hashable, Sequence
 
 import numpy as np
 from clingo import Symbol
@@ -315,6 +315,34 @@ def context_views(views: Sequence[Hashable], actions: Sequence[Hashable], times:
             if key is not None:
                 seen |= {v for v in contexts.seen[key] if v != contexts.views[t]}
         out[t] = tuple(sorted((names[v] for v in seen), key=str))
+    return out
+
+
+def skipping_views(views: Sequence[Hashable], actions: Sequence[Hashable], times: Sequence[int],
+                   suspects: Collection[int]) -> dict:
+    """For each of ``times`` next to a suspect, the other views seen where the same actions lead on from
+    (or back to) the view beyond that suspect: its context with the suspect skipped. A misread next to a
+    misread has a context that shows what the other misread showed; skipping it reads what the robot saw
+    around both.
+
+    >>> skipping_views(list("ABCABCAXY"), ["turn"] * 8, [8], {7})
+    {8: ('C',)}
+    """
+    n = len(views)
+    out = {}
+    for t in times:
+        seen = set()
+        if t - 1 in suspects and t >= 2:
+            for u in range(2, n):
+                if views[u - 2] == views[t - 2] and actions[u - 2] == actions[t - 2] and actions[u - 1] == actions[t - 1]:
+                    seen.add(views[u])
+        if t + 1 in suspects and t + 2 < n:
+            for u in range(n - 2):
+                if views[u + 2] == views[t + 2] and actions[u] == actions[t] and actions[u + 1] == actions[t + 1]:
+                    seen.add(views[u])
+        seen.discard(views[t])
+        if seen:
+            out[t] = tuple(sorted(seen, key=str))
     return out
 
 

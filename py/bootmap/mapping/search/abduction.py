@@ -23,7 +23,7 @@ from ..cogmap import CognitiveMap
 from ..facts import action_symbols
 from ..grounding import key_with_view
 from ..misreads import (BESIDE, GHOST, MIN_VISITS, MISREAD_COST, RARE_VIEW, Suspect, context_views, find_suspects,
-                        has_images, rare_clustered_views)
+                        has_images, rare_clustered_views, skipping_views)
 from ..vocabulary import DSTATE_COST, MAY_BE, SUSPECT
 
 if TYPE_CHECKING:
@@ -201,18 +201,26 @@ class MisreadAbduction:
         where a dstate more in the bound would give every class a slot more). A suspect next to such a
         misread was expected, by the side that saw it, to be what the misread showed (a true .FR. read as
         L..B after a true L..B read as LFRB was expected only as LFRB): each suspect may then also have
-        been misread from any view its one-step contexts saw."""
+        been misread from any view its one-step contexts saw. And a context next to a suspect shows the
+        suspect's view, misread or not: each time point beside a suspect (and each suspect beside another)
+        may also have been misread from what the contexts that skip that suspect saw (three misreads in a
+        row, at places seen four and seven times, each expected only as the next misread showed)."""
         state = self.state
         layout = list(state.classes.lower)
         taken = {s.t for s in chosen}
         near = sorted({u for t in taken for u in (t - 1, t + 1) if 0 <= u < len(state.tableau)} - taken)
         if not near:
             return None
-        seen = context_views(state.tableau.views, action_symbols(state.tableau, state.angles), near + sorted(taken))
-        # (A suspect that expects any view, expected == (), stays so.)
-        widened = [replace(s, expected=tuple(sorted(set(s.expected) | set(seen[s.t]), key=str))) if s.expected else s
-                   for s in chosen]
-        self._allow_misreads(exact_facts, widened + [Suspect(t, MISREAD_COST, seen[t], BESIDE) for t in near])
+        actions = action_symbols(state.tableau, state.angles)
+        seen = context_views(state.tableau.views, actions, near + sorted(taken))
+        skipped = skipping_views(state.tableau.views, actions, near + sorted(taken), taken)
+
+        def widen(s: Suspect) -> Suspect:  # a suspect that expects any view (expected == ()) stays so
+            more = set(seen[s.t]) | set(skipped.get(s.t, ()))
+            return replace(s, expected=tuple(sorted(set(s.expected) | more, key=str))) if s.expected else s
+
+        beside = [widen(Suspect(t, MISREAD_COST, seen[t], BESIDE)) for t in near]
+        self._allow_misreads(exact_facts, [widen(s) for s in chosen] + beside)
         state.classes.lower = layout  # the suspects beside may lower the bounds: the layout stays the ghosts'
         misread = self.search.optimise(None, bound)
         if misread is None:  # the suspects as they were (the caller lays the classes out anew)
