@@ -23,7 +23,8 @@ true), or neither; the misreads named, and the seconds against the limit.
 
 Targets: the true map on every tableau up to 10 degrees of turn noise, and up to 2% misreads,
 each in under 5 s, unrounded and rounded alike; in early experience the true map on at least 90% of the
-seeds, none timed out (20 s); at 5%, the true map among the minimal maps on at least 90% of the seeds, each within its limit.
+seeds, none timed out (20 s); at 5%, the true map among the minimal maps on at least 90% of the seeds,
+each within its limit.
 Writes docs/noise_sweep.png. Run: .venv/bin/python bench/noise_bench.py
 """
 

@@ -35,7 +35,7 @@ Only t21 is surprising on both sides; its neighbours are surprising on the side 
 
 from __future__ import annotations
 
-from collections import Counter
+from collections import Counter, defaultdict
 from dataclasses import dataclass
 from typing import Collection, Hashable, Sequence
 
@@ -329,18 +329,20 @@ def skipping_views(views: Sequence[Hashable], actions: Sequence[Hashable], times
     {8: ('C',)}
     """
     n = len(views)
+    # What was seen two actions after a view, and two actions before one, by the actions taken between.
+    after: dict = defaultdict(set)
+    before: dict = defaultdict(set)
+    for u in range(2, n):
+        after[views[u - 2], actions[u - 2], actions[u - 1]].add(views[u])
+        before[views[u], actions[u - 2], actions[u - 1]].add(views[u - 2])
     out = {}
     for t in times:
-        seen = set()
+        seen: set = set()
         if t - 1 in suspects and t >= 2:
-            for u in range(2, n):
-                if views[u - 2] == views[t - 2] and actions[u - 2] == actions[t - 2] and actions[u - 1] == actions[t - 1]:
-                    seen.add(views[u])
+            seen |= after[views[t - 2], actions[t - 2], actions[t - 1]]
         if t + 1 in suspects and t + 2 < n:
-            for u in range(n - 2):
-                if views[u + 2] == views[t + 2] and actions[u] == actions[t] and actions[u + 1] == actions[t + 1]:
-                    seen.add(views[u])
-        seen.discard(views[t])
+            seen |= before[views[t + 2], actions[t], actions[t + 1]]
+        seen = seen - {views[t]}
         if seen:
             out[t] = tuple(sorted(seen, key=str))
     return out
