@@ -134,7 +134,7 @@ def test_compare_learners_scores_every_learner_and_more_images_help():
     X, y = blobs(n_per=15, dim=40, spread=2.0)
     rows = compare_learners(X, y, at=(30, 90))
     assert [r["learner"] for r in rows] == ["1-NN", "3-NN", "logistic", "linear SVM", "RBF SVM", "MLP (32)",
-                                          "despiked LDA"]
+                                          "despiked LDA", "aligned LDA"]
     for r in rows:
         assert {"learner", "sizes", "accuracy", "accuracy_std", "fit_time",
                 "acc@30", "acc@90"} <= r.keys()

@@ -10,8 +10,8 @@ DSTATE_CHOICES = ("turns", "places")
 
 #: The learners an experiment can draw beside nearest neighbour (``--learner``): the names of
 #: :func:`bootmap.recognise.default_learners`, listed here so that the command line starts without scikit-learn.
-LEARNERS = ("1-NN", "3-NN", "logistic", "linear SVM", "RBF SVM", "MLP (32)", "despiked LDA")
-DEFAULT_LEARNER = "despiked LDA"
+LEARNERS = ("1-NN", "3-NN", "logistic", "linear SVM", "RBF SVM", "MLP (32)", "despiked LDA", "aligned LDA")
+DEFAULT_LEARNER = "aligned LDA"
 
 
 def learner(text: str) -> str:

@@ -70,7 +70,7 @@ def run_experiment(world: str | World, circuits: int | None = None, steps: int |
     ``clusterer`` clusters the images into views for each k (:data:`bootmap.views.CLUSTERERS`; the
     paper's k-means by default); ``learner`` is a name of :func:`bootmap.recognise.default_learners`
     whose cross-validated curve is reported beside nearest neighbour's (the paper's, which the checks use);
-    by default the despiked discriminant, which holds up as the laser's noise grows.
+    by default the aligned discriminant, which holds up best as the laser's noise grows.
     A map that is not proved minimal in ``time_limit`` seconds is reported as such (with the best map
     found, if any) rather than raised: the report says what was and was not achieved.
 
