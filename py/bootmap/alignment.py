@@ -18,12 +18,12 @@ image takes the motion out:
    moved, by least squares on the beams' range residuals (the mean's Jacobian as the model: the motion is
    millimetres to centimetres, where it is nearly linear), with a prior on the pose (:data:`POSE_PRIOR`: a
    stop's scatter, not another place) so that a direction the walls do not fix (along a corridor) stays
-   put; after the first step without the beams more than three robust standard deviations off (drop-outs, and the notch
-   itself, which is what must stay visible). Each step ends in a reprojection from the pose so far, and
-   the next fits what is left (:data:`ITERATIONS` steps).
+   put. After the first step, the beams more than three robust standard deviations off are left out
+   (drop-outs, and the notch itself, which is what must stay visible). Each step ends in a reprojection
+   from the pose so far, and the next fits what is left (:data:`ITERATIONS` steps).
 
 Why not ICP (:mod:`bootmap.scan_match`, ``small_gicp``): point-to-point ICP pairs each return with the
-nearest return of the other scan, which along a wall lies up to a beam's spacing away (3 cm at 2 m), as
+nearest return of the other scan, which along a wall lies up to a beam's spacing away (3.5 cm at 2 m), as
 large as the motion to be found; matching places metres apart, that does not matter. Here the residuals
 are taken along each beam against the mean's own surface, which the mean, an average of many images, draws
 with a fraction of one image's noise.

@@ -665,7 +665,7 @@ class AlignedDiscriminant(ClassifierMixin, BaseEstimator):
     Why both: where look-alike dstates differ in a few beams (the paper's notched rectangle), alignment
     brings out the difference a centimetre of motion hides; where a dstate has few images (Taylor Hall: five
     each in 100), its mean is noisy and so is an alignment to it; the images as read keep that in check.
-    (Measured with the despiked discriminant alone: docs/results/noise.md.)
+    (docs/results/noise.md has the figures, beside the despiked discriminant alone.)
 
     Parameters
     ----------
