@@ -749,12 +749,12 @@ class AlignedDiscriminant(ClassifierMixin, BaseEstimator):
         at row i), their own dstate's mean taken without them."""
         means = self.references_.means
         nearest = np.argsort(((X[:, None, :] - means[None]) ** 2).sum(axis=2), axis=1)[:, :self.candidates]
-        rows = np.repeat(np.arange(len(X)), nearest.shape[1])
-        aligned, _, residual = self.references_.align(X[rows], nearest.ravel())
-        if own_without is not None:
-            own, without = own_without
-            mine = nearest.ravel() == own[rows]
-            aligned[mine], _, residual[mine] = without.align(X[rows[mine]], rows[mine])
+        rows, to = np.repeat(np.arange(len(X)), nearest.shape[1]), nearest.ravel()
+        aligned, residual = np.empty((len(rows), X.shape[1])), np.empty(len(rows))
+        mine = np.zeros(len(rows), dtype=bool) if own_without is None else to == own_without[0][rows]
+        aligned[~mine], _, residual[~mine] = self.references_.align(X[rows[~mine]], to[~mine])
+        if mine.any():
+            aligned[mine], _, residual[mine] = own_without[1].align(X[rows[mine]], rows[mine])
         best = np.argmin(residual.reshape(nearest.shape), axis=1)
         return aligned.reshape(len(X), nearest.shape[1], -1)[np.arange(len(X)), best]
 
