@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from sklearn.neighbors import KNeighborsClassifier
 
-from bootmap.recognise import (Recogniser, compare_clusterers, compare_learners, default_learners,
-                               learning_curve_cv, online_curve, online_hits)
+from bootmap.recognise import (AlignedDiscriminant, DespikedDiscriminant, Recogniser, compare_clusterers,
+                               compare_learners, default_learners, learning_curve_cv, online_curve, online_hits)
 
 
 def blobs(n_per=30, n_states=8, dim=180, spread=1.0, seed=0, order="circuits"):
@@ -105,6 +105,22 @@ def test_cv_curve_rises_and_is_deterministic():
     assert a.scores.shape == (3, 10)
     assert a.at(10) < a.at(90)
     assert a.at(90) > 0.9
+
+
+@pytest.mark.parametrize("learner", [None, DespikedDiscriminant(), AlignedDiscriminant()], ids=["1-NN", "despiked", "aligned"])
+@pytest.mark.parametrize("seed", [0, 3])
+def test_the_curve_scores_the_folds_as_scikit_learns_learning_curve(learner, seed):
+    # The same folds, the same shuffled training subsets, the same test scores (without scoring every model
+    # on its own training images, which scikit-learn's function does too).
+    from sklearn.model_selection import KFold, learning_curve
+
+    X, y = blobs(n_per=15, dim=40, spread=2.0, seed=seed)
+    ours = learning_curve_cv(X, y, sizes=(10, 50, 90), learner=learner, random_state=seed)
+    _, _, theirs = learning_curve(learner or KNeighborsClassifier(1), X, y, train_sizes=[10, 50, 90],
+                                  cv=KFold(10, shuffle=True, random_state=seed), scoring="accuracy",
+                                  shuffle=True, random_state=seed)
+    np.testing.assert_array_equal(ours.scores, theirs)
+    assert ours.sizes.tolist() == [10, 50, 90] and ours.fit_times.shape == (3, 10)
 
 
 def test_cv_shuffling_matters_on_data_recorded_dstate_by_dstate():
