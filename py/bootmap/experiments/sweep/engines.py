@@ -3,8 +3,8 @@
 Both take cells and yield their rows as they finish (in any order), so the sweep can write each row to
 disk at once. Neither is home-made: :class:`LocalPool` is ``concurrent.futures.ProcessPoolExecutor``,
 :class:`DaskCluster` a ``dask.distributed.Client``. Each worker caps BLAS and OpenMP at one thread
-(environment variables before numpy loads, threadpoolctl in every experiment), so N workers use N cores
-and do not fight over them.
+(threadpoolctl in every experiment; environment variables for what a cell starts), so N workers use N
+cores and do not fight over them.
 """
 
 from __future__ import annotations
@@ -24,11 +24,11 @@ DASK_HINT = "pip install 'bootmap[dask]'"
 
 
 def one_thread_per_worker() -> None:
-    """A worker's initializer: BLAS and OpenMP pools of one thread, set before numpy is imported (spawned
-    workers import it after this runs); Ctrl-C left to the sweep (a terminal sends it to every process
-    of the command, and the sweep stops its workers itself); then one tiny experiment, so that what the
-    first experiment of a process pays once (lazy imports, reading the axioms) is paid here and
-    inherited by every cell's forked child, rather than paid again in each (about 0.2 s a cell)."""
+    """A worker's initializer: BLAS and OpenMP pools of one thread (for what the cells start; every
+    experiment also caps its own pools with threadpoolctl); Ctrl-C left to the sweep (a terminal sends it
+    to every process of the command, and the sweep stops its workers itself); then one tiny experiment, so
+    that what the first experiment of a process pays once (lazy imports, reading the axioms) is paid here
+    and inherited by every cell's forked child, rather than paid again in each (about 0.2 s a cell)."""
     for var in THREAD_VARIABLES:
         os.environ[var] = "1"
     signal.signal(signal.SIGINT, signal.SIG_IGN)
@@ -37,11 +37,18 @@ def one_thread_per_worker() -> None:
     run_experiment("notched_rectangle", circuits=2, seed=0, time_limit=10.0)
 
 
+#: What every worker imports, loaded once by the process that starts them (2 s of it scikit-learn and scipy).
+PRELOAD = ["bootmap.experiments.world"]
+
+
 class LocalPool:
     """``workers`` processes on this machine (default: one per core).
 
-    Workers are spawned, not forked: a parent that has already used OpenMP (a test run, a notebook)
-    would pass a broken thread pool on to forked children."""
+    Workers are not forked from the sweep's own process: one that has already used OpenMP (a test run, a
+    notebook) would pass a broken thread pool on to forked children. They are forked from multiprocessing's
+    *forkserver*, a fresh process that has only imported what a cell needs (:data:`PRELOAD`), so that the
+    imports are paid once rather than by every worker (spawned workers each took 2 s of them). The
+    forkserver lives as long as the sweep's process and serves its later pools too."""
 
     def __init__(self, workers: int | None = None):
         self.workers = workers or os.cpu_count() or 1
@@ -50,17 +57,22 @@ class LocalPool:
         return f"local pool of {self.workers} worker(s)"
 
     def run(self, cells: Iterable[Cell]) -> Iterator[dict]:
-        context = multiprocessing.get_context("spawn")
+        if "forkserver" in multiprocessing.get_all_start_methods():
+            context = multiprocessing.get_context("forkserver")
+            context.set_forkserver_preload(PRELOAD)  # (no effect once this process's forkserver is running)
+        else:  # (a platform without fork: each worker imports for itself)
+            context = multiprocessing.get_context("spawn")
         with ProcessPoolExecutor(self.workers, mp_context=context, initializer=one_thread_per_worker) as pool:
             futures = {pool.submit(run_cell, cell): cell for cell in cells}
             try:
                 for future in as_completed(futures):
                     yield _row(future, futures[future])
-            finally:  # interrupted (Ctrl-C, or the caller stopped reading): drop what has not started ...
-                for future in futures:
-                    future.cancel()
+            finally:  # interrupted (Ctrl-C, or the caller stopped reading): stop the cells at work rather
+                # than wait for them; the pool, broken, then fails those not started, which nobody reads.
+                # (Not cancelled first: Python 3.11's executor then fails a cancelled one and its thread
+                # raises InvalidStateError, which prints a traceback at Ctrl-C.)
                 if not all(f.done() for f in futures):
-                    _stop_workers(pool)  # ... and stop the cells at work, rather than wait for them
+                    _stop_workers(pool)
 
 
 def _stop_workers(pool: ProcessPoolExecutor) -> None:
