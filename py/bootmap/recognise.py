@@ -50,6 +50,7 @@ from .alignment import Reference
 from .errors import BadInput, BootmapError
 from .images import as_images
 from .tableau import Tableau
+from .views import label_means
 
 __all__ = [
     "AlignedDiscriminant",
@@ -726,14 +727,14 @@ class AlignedDiscriminant(ClassifierMixin, BaseEstimator):
         self.range_max_ = float(X.max())
         self.as_read_ = DespikedDiscriminant(1, self.dimensions, self.random_state).fit(X, y)
         self.classes_ = self.as_read_.classes_
-        own, n = np.searchsorted(self.classes_, y), len(self.classes_)
-        aligned = Reference(_class_means(X, own, n), self.fov_deg, self.range_max_).align(X, own)[0]
-        means = _class_means(aligned, own, n)
+        own, means = label_means(X, y)  # own[i]: image i's dstate, an index into classes_ (both sorted)
+        aligned = Reference(means, self.fov_deg, self.range_max_).align(X, own)[0]
+        means = label_means(aligned, own)[1]
         self.references_ = Reference(means, self.fov_deg, self.range_max_)
         # A training image is aligned as a new one would be, but to its own dstate's mean without it: with
         # it, the mean leans towards the image (by a fifth at five images a dstate), the aligned images of a
         # dstate lie closer together than new ones will, and the aligned discriminant is overconfident.
-        counts = np.bincount(own, minlength=n)[own]
+        counts = np.bincount(own)[own]
         without = np.where((counts > 1)[:, None],
                            (means[own] * counts[:, None] - aligned) / np.maximum(counts - 1, 1)[:, None], means[own])
         # The aligned images vary less but along the same directions: as many components as the images as
@@ -767,13 +768,6 @@ class AlignedDiscriminant(ClassifierMixin, BaseEstimator):
             aligned[mine], _, residual[mine] = own_without[1].align(X[rows[mine]], rows[mine])
         best = np.argmin(residual.reshape(nearest.shape), axis=1)
         return aligned.reshape(len(X), nearest.shape[1], -1)[np.arange(len(X)), best]
-
-
-def _class_means(X: np.ndarray, classes: np.ndarray, n_classes: int) -> np.ndarray:
-    """The mean of each class's rows (``classes``: each row's class index; every class has a row)."""
-    sums = np.zeros((n_classes, X.shape[1]))
-    np.add.at(sums, classes, X)
-    return sums / np.bincount(classes, minlength=n_classes)[:, None]
 
 
 class NoImages(BootmapError):

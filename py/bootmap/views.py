@@ -246,16 +246,17 @@ def _gaussian_mixture(x: np.ndarray, k: int, n_init: int, seed: int) -> tuple[np
     # the near-constant beams (wall at the same distance in every image) from collapsing a component.
     model = GaussianMixture(n_components=k, covariance_type="diag", n_init=max(1, n_init // 3), reg_covar=1e-4,
                             random_state=seed)
-    return _with_means(x, model.fit_predict(x))
+    return label_means(x, model.fit_predict(x))
 
 
 def _ward(x: np.ndarray, k: int, n_init: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
-    return _with_means(x, AgglomerativeClustering(n_clusters=k, linkage="ward").fit_predict(x))  # deterministic
+    return label_means(x, AgglomerativeClustering(n_clusters=k, linkage="ward").fit_predict(x))  # deterministic
 
 
-def _with_means(x: np.ndarray, labels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Labels renumbered 0..n-1 (a mixture can leave a component empty) and each cluster's mean image,
-    the centre :meth:`ViewClusterer.predict` assigns new images to."""
+def label_means(x: np.ndarray, labels) -> tuple[np.ndarray, np.ndarray]:
+    """Labels renumbered 0..n-1 in the order of the distinct labels sorted (a mixture can leave a component
+    empty), and each label's mean image: a cluster's centre, the one :meth:`ViewClusterer.predict`
+    assigns new images to, or a dstate's mean image."""
     labels = np.unique(labels, return_inverse=True)[1].astype(int)
     return labels, np.array([x[labels == c].mean(axis=0) for c in range(int(labels.max()) + 1)])
 
