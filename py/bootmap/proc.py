@@ -1,4 +1,6 @@
-"""Work that ends by a deadline for sure: run in a forked child, killed if it runs over.
+"""Child processes: work that ends by a deadline for sure, and long-lived helpers that start cheaply.
+
+Work that ends by a deadline for sure (:func:`in_child`): run in a forked child, killed if it runs over.
 
 clingo cannot interrupt a grounding, and a large or hostile tableau can ground for longer than any time
 limit; an experiment can get stuck. So the command line resolves, and a sweep runs each cell, in a child
@@ -11,13 +13,14 @@ forbids to have children; and the work is inherited, so nothing is pickled on th
 
 from __future__ import annotations
 
+import multiprocessing
 import os
 import pickle
 import select
 import signal
 import time
 import traceback
-from typing import Callable
+from typing import Callable, Sequence
 
 
 def in_child(work: Callable[[], object], timeout: float) -> tuple:
@@ -87,3 +90,47 @@ def _read_until(fd: int, deadline: float) -> tuple[bytes, bool]:
         if not chunk:
             return b"".join(chunks), True
         chunks.append(chunk)
+
+
+def preloaded_context(modules: Sequence[str]):
+    """A multiprocessing context whose processes start with ``modules`` already imported.
+
+    Long-lived helper processes (a sweep's workers, the service's solvers and intake processes) are not
+    forked from their parent, which may have threads (a server) or an OpenMP pool (a test run, a notebook)
+    that a forked child would inherit broken. Spawned, each imported what it needs for itself (a second
+    or two of CPU each, again for every solver replaced after a kill). They are forked from
+    multiprocessing's *forkserver* instead: a fresh, single-threaded process that imports ``modules``
+    once and forks every helper from there. Its forked children's parent is the forkserver, which ends
+    when the process that started it ends (see :func:`parent_gone`).
+
+    The forkserver is one per process and reads its preload list once, at its start: every caller in
+    one process should name every module its helpers need. Where the platform has no forkserver, the
+    processes are spawned and import for themselves."""
+    if "forkserver" not in multiprocessing.get_all_start_methods():
+        return multiprocessing.get_context("spawn")
+    context = multiprocessing.get_context("forkserver")
+    context.set_forkserver_preload(list(modules))  # (no effect once this process's forkserver is running)
+    return context
+
+
+def parent_gone(owner_pid: int, first_parent: int) -> bool:
+    """Whether the process that started this one (``owner_pid``) is gone.
+
+    ``first_parent`` is this process's parent as it started (``os.getppid()`` then): the owner itself
+    (spawned) or the owner's forkserver (:func:`preloaded_context`), which ends with the owner. Either
+    way, the owner's end changes this process's parent (it is handed to init or a subreaper); and a
+    process whose parent was already neither when it started (the owner died before it ran) has lost
+    its owner too."""
+    parent = os.getppid()
+    if parent != first_parent:
+        return True
+    if first_parent == owner_pid:
+        return False
+    try:  # started by the forkserver: the owner must still be there
+        os.kill(owner_pid, 0)
+    except ProcessLookupError:
+        return True
+    except PermissionError:  # there, owned by another user (it cannot be ours, but it is alive)
+        return False
+    return False
+

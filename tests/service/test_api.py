@@ -286,14 +286,18 @@ def test_a_solver_that_dies_is_logged_where_the_problem_says(client, server):
     _wait_for(lambda: client.get("/health").json()["solvers"] == 1, timeout=30)
 
 
-def _solver_pids(parent: int, memory_mb: int = 2048) -> list[int]:
-    """The server's solver processes: its children whose address space is capped at the solvers' memory
-    (the intake processes have another cap, multiprocessing's resource tracker none)."""
-    children = []
-    for task in Path(f"/proc/{parent}/task").iterdir():
-        children += [int(p) for p in (task / "children").read_text().split()]
+def _solver_pids(server: int, memory_mb: int = 2048) -> list[int]:
+    """The server's solver processes: the processes under it (children of its forkserver) whose address
+    space is capped at the solvers' memory (the intake processes have another cap, multiprocessing's
+    resource tracker and the forkserver none)."""
+    found, todo = [], [server]
+    while todo:
+        for task in Path(f"/proc/{todo.pop()}/task").iterdir():
+            children = [int(p) for p in (task / "children").read_text().split()]
+            found += children
+            todo += children
     cap = ["Max", "address", "space", str(memory_mb * 2**20)]
-    return [p for p in children if any(line.split()[:4] == cap for line in Path(f"/proc/{p}/limits").open())]
+    return [p for p in found if any(line.split()[:4] == cap for line in Path(f"/proc/{p}/limits").open())]
 
 
 def test_unknown_routes_and_methods_are_problems_too(client):

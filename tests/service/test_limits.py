@@ -43,20 +43,24 @@ def test_hard_solves_time_out_cleanly_without_stalling_the_server(client, server
         p.start()
     _wait_for(lambda: _solves(client) == (1, 1))
 
-    # One solving, one waiting: the line is full. A third solve is refused at once, saying when to retry.
-    t0 = time.monotonic()
+    # One solving, one waiting: the line is full. A third solve is refused without waiting for a place in
+    # the line (the line is still full after the answer), saying when to retry.
     busy = client.post("/tableaux", json=paper_doc)
-    assert busy.status_code == 503 and time.monotonic() - t0 < 1
+    assert busy.status_code == 503 and _solves(client) != (0, 0)
     assert busy.headers["retry-after"] == "3" and busy.headers["content-type"] == "application/problem+json"
     assert busy.json()["type"].endswith("/solvers-busy")
 
-    # Meanwhile every other request is answered at once: solves run off the event loop.
+    # Meanwhile every other request is answered while a solve runs (solves run off the event loop): a read
+    # answered with a solve still running after it. Whether it is fast is the machine's business, not this
+    # test's (the solves' own limit is what bounds how long this loop runs).
+    answered_during_a_solve = 0
     while any(p.is_alive() for p in posters):
-        t0 = time.monotonic()
         assert client.get(f"/tableaux/{paper_id}/map").status_code == 200
-        assert client.get("/health").status_code == 200
-        assert time.monotonic() - t0 < 0.5
+        health = client.get("/health")
+        assert health.status_code == 200
+        answered_during_a_solve += health.json()["solves_running"] == 1
         time.sleep(0.1)
+    assert answered_during_a_solve >= 1
 
     for r, seconds in outcomes:
         assert r.status_code == 422 and r.json()["type"].endswith("/solve-timeout"), r.text

@@ -28,7 +28,6 @@ import asyncio
 import dataclasses
 import functools
 import json
-import multiprocessing
 import os
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
@@ -303,14 +302,17 @@ def _problem(p) -> tuple:
 # ---------------------------------------------------------------------------------------------------
 
 class Intake:
-    """``workers`` intake processes (spawned, address space capped at ``memory_mb`` MiB)."""
+    """``workers`` intake processes (forked from the server's forkserver, address space capped at
+    ``memory_mb`` MiB)."""
 
     def __init__(self, workers: int, memory_mb: int):
         self.workers, self.memory_mb = workers, memory_mb
         self._pool = self._new_pool()
 
     def _new_pool(self) -> ProcessPoolExecutor:
-        return ProcessPoolExecutor(self.workers, mp_context=multiprocessing.get_context("spawn"),
+        from .worker import helper_context
+
+        return ProcessPoolExecutor(self.workers, mp_context=helper_context(),
                                    initializer=_start, initargs=(self.memory_mb, os.getpid()))
 
     def warm(self) -> None:

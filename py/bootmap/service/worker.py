@@ -2,7 +2,8 @@
 
 clingo cannot interrupt grounding from inside the process, and a hostile tableau can ground for far
 longer than the resolver's time limit, or grow to gigabytes. So each solve runs in a long-lived solver
-process (spawned, not forked: the server has threads) whose address space is capped with RLIMIT_AS.
+process (forked from the server's forkserver, not from the server, which has threads:
+:func:`helper_context`) whose address space is capped with RLIMIT_AS.
 The resolver's own time limit (SolveTimeout, with the dstates proved necessary) ends most slow solves;
 a process still busy ``kill_grace_s`` after it is killed and replaced. Images-only tableaux are
 clustered into views in the solver process too, under the same deadline; explanations
@@ -16,7 +17,6 @@ clustered into views in the solver process too, under the same deadline; explana
 from __future__ import annotations
 
 import logging
-import multiprocessing
 import os
 import queue
 import signal
@@ -29,12 +29,23 @@ from typing import Any, Awaitable, Callable
 
 from ..errors import (AssertionConflict, AxiomError, BootmapError, ExplainError, InconsistentTableau, SolveTimeout,
                       TableauError)
+from ..proc import parent_gone, preloaded_context
 from ..tableau import Tableau
 
 log = logging.getLogger("bootmap.service")
-READY_TIMEOUT_S = 60.0
-CANCEL_POLL_S = 0.1  # how often a waiting solve looks whether its client went away  # a fresh solver imports clingo and scikit-learn; generous for a loaded machine
+READY_TIMEOUT_S = 60.0  # for a new solver to say it is ready: generous for a loaded machine
+CANCEL_POLL_S = 0.1  # how often a waiting solve looks whether its client went away
+#: What the server's solver and intake processes import, once, in the forkserver they are forked from
+#: (:func:`bootmap.proc.preloaded_context`). Spawned, each imported them itself: a new solver answered its
+#: first paper's tableau after 0.36 s (0.09 s forked; again for every solver replaced after a kill), an
+#: intake process took 0.7 s of CPU to start.
+HELPER_PRELOAD = ["bootmap.mapping.api", "bootmap.service.worker", "bootmap.service.intake", "bootmap.service.models"]
 PARENT_POLL_S = 0.5  # how often a solver or intake process looks whether the server is still there
+
+
+def helper_context():
+    """The multiprocessing context the server starts its solver and intake processes with."""
+    return preloaded_context(HELPER_PRELOAD)
 
 
 class SolverBusy(BootmapError):
@@ -146,21 +157,23 @@ class Solved:
 # ---------------------------------------------------------------------------------------------------
 
 def exit_with_parent(parent_pid: int) -> None:
-    """End this process as soon as ``parent_pid`` (the server that started it) is no longer its parent.
+    """End this process as soon as the server that started it (``parent_pid``) is gone.
 
     A server killed outright (SIGKILL, the OOM killer) closes nothing: its solver and intake processes
     would live on, each with its memory, and keep multiprocessing's resource tracker alive too (it ends
-    once no process holds its pipe). A daemon thread polls ``os.getppid()``, which changes when the
-    parent dies and the process is handed to init. (Not prctl's PR_SET_PDEATHSIG: that fires when the
-    *thread* that spawned the process ends, and solvers are replaced from short-lived pool threads.)
-    ``parent_pid`` is the server's pid as it spawned the process, so a server that died before this
-    runs is noticed too.
+    once no process holds its pipe). A daemon thread polls :func:`bootmap.proc.parent_gone`: the
+    process's parent (the server's forkserver, which ends with the server) changes when it dies. (Not
+    prctl's PR_SET_PDEATHSIG: that fires when the *thread* that started the process ends, and solvers are
+    replaced from short-lived pool threads.) ``parent_pid`` is the server's pid as it started the
+    process, so a server that died before this runs is noticed too.
 
     The process's address space is capped (RLIMIT_AS), and glibc would give the thread a malloc arena of
     its own, 64 MiB of address space it never uses: glibc is told to keep every thread of this process
     in one arena (M_ARENA_MAX), and the thread gets a small stack."""
+    first_parent = os.getppid()
+
     def watch() -> None:
-        while os.getppid() == parent_pid:
+        while not parent_gone(parent_pid, first_parent):
             time.sleep(PARENT_POLL_S)
         os._exit(1)
 
@@ -188,7 +201,8 @@ def _serve(conn, memory_mb: int, parent_pid: int) -> None:
     for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ[var] = "1"  # one solve per process; BLAS thread pools would only reserve memory
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C on the server: the server stops its solvers
-    from .. import mapping  # noqa: F401  (warm: the first job should not pay for the import)
+    from ..mapping import api  # noqa: F401  (warm: the first job should not pay for the import; forked
+    # from the forkserver, it is there already)
 
     conn.send("ready")
     cache: dict = {}
@@ -422,7 +436,7 @@ class SolverPool:
     """``size`` solver processes, each capped at ``memory_mb`` MiB. :meth:`solve` blocks until one is free."""
 
     def __init__(self, size: int, memory_mb: int, kill_grace_s: float = 2.0):
-        self._ctx = multiprocessing.get_context("spawn")  # fork would copy the server's threads and locks
+        self._ctx = helper_context()
         self.size, self.memory_mb, self.kill_grace_s = size, memory_mb, kill_grace_s
         self._idle: queue.Queue[_Worker] = queue.Queue()
         self._workers: list[_Worker] = []

@@ -9,13 +9,13 @@ cores and do not fight over them.
 
 from __future__ import annotations
 
-import multiprocessing
 import os
 import signal
 from collections.abc import Iterable, Iterator
 from concurrent.futures import ProcessPoolExecutor, as_completed
 
 from ...errors import BootmapError, SweepError
+from ...proc import preloaded_context
 from .cells import failed_row, run_cell
 from .spec import Cell
 
@@ -45,10 +45,10 @@ class LocalPool:
     """``workers`` processes on this machine (default: one per core).
 
     Workers are not forked from the sweep's own process: one that has already used OpenMP (a test run, a
-    notebook) would pass a broken thread pool on to forked children. They are forked from multiprocessing's
-    *forkserver*, a fresh process that has only imported what a cell needs (:data:`PRELOAD`), so that the
-    imports are paid once rather than by every worker (spawned workers each took 2 s of them). The
-    forkserver lives as long as the sweep's process and serves its later pools too."""
+    notebook) would pass a broken thread pool on to forked children. They are forked from a forkserver
+    that has imported what a cell needs (:data:`PRELOAD`, :func:`bootmap.proc.preloaded_context`), so
+    that the imports are paid once rather than by every worker (spawned workers each took 2 s of them).
+    The forkserver lives as long as the sweep's process and serves its later pools too."""
 
     def __init__(self, workers: int | None = None):
         self.workers = workers or os.cpu_count() or 1
@@ -57,11 +57,7 @@ class LocalPool:
         return f"local pool of {self.workers} worker(s)"
 
     def run(self, cells: Iterable[Cell]) -> Iterator[dict]:
-        if "forkserver" in multiprocessing.get_all_start_methods():
-            context = multiprocessing.get_context("forkserver")
-            context.set_forkserver_preload(PRELOAD)  # (no effect once this process's forkserver is running)
-        else:  # (a platform without fork: each worker imports for itself)
-            context = multiprocessing.get_context("spawn")
+        context = preloaded_context(PRELOAD)
         with ProcessPoolExecutor(self.workers, mp_context=context, initializer=one_thread_per_worker) as pool:
             futures = {pool.submit(run_cell, cell): cell for cell in cells}
             try:

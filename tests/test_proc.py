@@ -1,0 +1,40 @@
+"""Helper processes forked from a forkserver that preloaded their modules, and how they tell that the
+process that started them is gone."""
+
+import multiprocessing
+import os
+import subprocess
+import sys
+
+from bootmap.proc import parent_gone, preloaded_context
+
+
+def _modules_and_parent(_):
+    return "bootmap.tableau" in sys.modules, os.getppid()
+
+
+def test_helpers_start_with_the_preloaded_modules_from_a_forkserver():
+    # In a process of its own: the forkserver is one per process and reads its preload list once.
+    code = ("import os\n"
+            "from bootmap.proc import preloaded_context\n"
+            "import test_proc\n"
+            "ctx = preloaded_context(['bootmap.tableau'])\n"
+            "with ctx.Pool(1) as pool:\n"
+            "    loaded, parent = pool.apply(test_proc._modules_and_parent, (0,))\n"
+            "print(ctx.get_start_method(), loaded, parent != os.getpid())\n")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60,
+                         cwd=os.path.dirname(__file__))
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.split() == ["forkserver", "True", "True"]  # imported before the fork, by the forkserver
+
+
+def test_the_owner_is_gone_when_the_parent_changed_or_the_owner_no_longer_runs():
+    me, parent = os.getpid(), os.getppid()
+    assert not parent_gone(parent, parent)  # spawned by its owner, who is there
+    # Forked by a forkserver (here: this process's parent), owned by another process (here: this one).
+    assert not parent_gone(me, parent)  # the owner runs
+    assert parent_gone(parent, first_parent=me)  # the parent is no longer the one it started with...
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    assert parent_gone(dead.pid, parent)  # ...or the owner no longer runs
+    assert preloaded_context(["bootmap.tableau"]).get_start_method() in multiprocessing.get_all_start_methods()
