@@ -69,6 +69,7 @@ def test_a_small_sweep_on_the_local_pool_runs_every_cell_as_the_experiment_does(
     assert deterministic([result.table[3]]) == deterministic([here])
     assert result.table[3]["settings"] == {"laser.dropout": 0.002, "laser.noise_sd": 0.02}
     assert len({r["worker"] for r in result.table}) >= 1 and all(r["seconds"] > 0 for r in result.table)
+    assert len(list((out / "simulations").glob("*.json.gz"))) == 4  # two seeds, two noise levels: four runs kept
 
 
 def test_the_table_is_written_as_json_lines_and_csv_with_a_summary_and_figures(local):

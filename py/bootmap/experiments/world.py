@@ -35,6 +35,7 @@ from ..sim import simulate
 from ..agent import POLICIES, make_policy
 from ..sim.world import World, load_world
 from ..views import ViewClusterer, view_labels, view_table
+from .runs import RunStore
 
 CURVE_SIZES = (10, 20, 30, 40, 50, 60, 70, 80, 90)
 PAPER_CIRCUITS = 50  # the paper's notched-rectangle run: 50 circuits, 400 images
@@ -60,7 +61,8 @@ def run_experiment(world: str | World, circuits: int | None = None, steps: int |
                    out_dir: str | Path | None = None, k_max: int = 12, progress: bool = False,
                    time_limit: float = 60.0, levels: list[str] | None = None,
                    quantum_deg: float | None = None, clusterer: str = "kmeans", learner: str = DEFAULT_LEARNER,
-                   blas_threads: int | None = 1, policy: str | None = None) -> dict:
+                   blas_threads: int | None = 1, policy: str | None = None,
+                   runs: RunStore | None = None) -> dict:
     """Run the experiment on one world; see the module docstring.
 
     The run length defaults to the paper's: 50 circuits of a room (``circuits`` policy), 100 dstates of
@@ -79,16 +81,20 @@ def run_experiment(world: str | World, circuits: int | None = None, steps: int |
     another process holds a core, OpenMP's threads wait on each other: clustering and recognition ran
     about 17 times slower (5 circuits of the notched rectangle: 4.2 s against 0.45 s in all, views 1.78 s
     against 0.11 s, recognition 2.17 s against 0.12 s).
+
+    ``runs`` keeps the simulated run (:class:`~bootmap.experiments.runs.RunStore`): an experiment on the
+    same world, noise, policy, length and seed reads it back instead of simulating it again (a sweep's
+    cells that differ only in the learner, the levels, the action typing or the clusterer).
     """
     _check_choices(clusterer, learner)
     if blas_threads is None:
         return _run(world, circuits, steps, seed, out_dir, k_max, progress, time_limit, levels, quantum_deg,
-                    clusterer, learner, policy)
+                    clusterer, learner, policy, runs)
     from threadpoolctl import threadpool_limits
 
     with threadpool_limits(limits=blas_threads):
         return _run(world, circuits, steps, seed, out_dir, k_max, progress, time_limit, levels, quantum_deg,
-                    clusterer, learner, policy)
+                    clusterer, learner, policy, runs)
 
 
 def _check_choices(clusterer: str, learner: str) -> None:
@@ -102,7 +108,7 @@ def _check_choices(clusterer: str, learner: str) -> None:
 
 
 def _run(world, circuits, steps, seed, out_dir, k_max, progress, time_limit, levels, quantum_deg, view_method,
-         learner, policy=None) -> dict:
+         learner, policy=None, runs: RunStore | None = None) -> dict:
     world = world if isinstance(world, World) else load_world(world)
     policy = policy or world.policy or "circuits"
     if policy not in POLICIES:
@@ -114,8 +120,13 @@ def _run(world, circuits, steps, seed, out_dir, k_max, progress, time_limit, lev
         steps = PAPER_EXPLORE_STEPS
     lap = Laps()
     timings = lap.timings
-    tableau = simulate(world, policy=make_policy(policy, world, steps), circuits=circuits or PAPER_CIRCUITS,
-                       steps=steps, seed=seed, progress=progress)
+    circuits = circuits or PAPER_CIRCUITS
+
+    def simulated():
+        return simulate(world, policy=make_policy(policy, world, steps), circuits=circuits, steps=steps, seed=seed,
+                        progress=progress)
+
+    tableau = simulated() if runs is None else runs.simulated(world, policy, circuits, steps, seed, simulated)
     lap("simulate_s")
     images = np.array([s.image for s in tableau.steps], dtype=float)
     truth = [str(s.truth) for s in tableau.steps]

@@ -4,14 +4,16 @@ A sweep file (:mod:`.spec`) names a grid - worlds, seeds, noise levels, view clu
 resolver options; each cell is one run of :func:`bootmap.experiments.world.run_experiment` (:mod:`.cells`). The
 cells run on a local process pool or a Dask distributed cluster (:mod:`.engines`); each row is written to
 ``DIR/results.jsonl`` as its cell finishes (:mod:`.store`), so ``resume=True`` picks up an interrupted
-sweep; at the end come ``results.csv``, ``summary.md`` and figures (:mod:`.report`).
+sweep; at the end come ``results.csv``, ``summary.md`` and figures (:mod:`.report`). Cells that differ
+only in what they do with a run (clusterer, learner, levels, action typing) share its simulation, kept in
+``DIR/simulations`` (:mod:`bootmap.experiments.runs`).
 """
 
 from __future__ import annotations
 
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from .cells import COLUMNS, TIMING_COLUMNS, run_cell
@@ -54,7 +56,8 @@ def run_sweep(spec: SweepSpec | str | Path, out_dir: str | Path, workers: int | 
     store = ResultStore(out_dir)
     runner = engine(workers, scheduler)
     done = store.open(spec, resume, retry_failed)
-    todo = [c for c in spec.cells if c.id not in done]
+    runs = str(store.dir / RUNS_DIR)
+    todo = first_of_each_run([replace(c, runs_dir=runs) for c in spec.cells if c.id not in done])
     rows = dict(done)
     start = time.perf_counter()
     bar = _bar(len(todo), progress)
@@ -76,6 +79,22 @@ def run_sweep(spec: SweepSpec | str | Path, out_dir: str | Path, workers: int | 
     if table:
         write_figures(table, store.dir)
     return SweepResult(table, len(todo), len(done), seconds, store.dir)
+
+
+#: Where a sweep's output directory keeps the simulated runs its cells share.
+RUNS_DIR = "simulations"
+
+
+def first_of_each_run(cells: list[Cell]) -> list[Cell]:
+    """The cells in the order they are started: the first cell of each simulated run before any second
+    one, and so on, so that a cell starts once the cell that simulates its run has had a head start (in
+    grid order, the learners of one run sit side by side: on two workers both would simulate it)."""
+    seen: dict[tuple, int] = {}
+    rank = []
+    for c in cells:
+        rank.append(seen.get(c.run, 0))
+        seen[c.run] = rank[-1] + 1
+    return [c for _, _, c in sorted(zip(rank, range(len(cells)), cells), key=lambda x: x[:2])]
 
 
 def _bar(total: int, progress: bool):

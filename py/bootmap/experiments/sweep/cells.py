@@ -68,6 +68,7 @@ def _axes(cell: Cell) -> dict:
 def _experiment_row(cell: Cell) -> dict:
     """The experiment itself (in the child) and its row; the learning curves ride along for the figures."""
     from ...errors import BootmapError
+    from ..runs import RunStore
     from ..world import run_experiment
     from ...sim.world import loads_world
 
@@ -77,7 +78,8 @@ def _experiment_row(cell: Cell) -> dict:
         world = loads_world(cell.world_text, cell.world_path, dict(cell.noise.settings))
         r = run_experiment(world, circuits=cell.circuits, steps=cell.steps, seed=cell.seed, k_max=cell.k_max,
                            time_limit=cell.time_limit, levels=None if cell.levels is None else list(cell.levels),
-                           quantum_deg=cell.quantum_deg, clusterer=cell.clusterer, learner=cell.learner)
+                           quantum_deg=cell.quantum_deg, clusterer=cell.clusterer, learner=cell.learner,
+                           runs=None if cell.runs_dir is None else RunStore(cell.runs_dir))
     except BootmapError as e:  # e.g. the robot got stuck: the cell's result, not a crash
         return failed_row(cell, "failed", f"{type(e).__name__}: {e}")
     return experiment_row(cell, r)

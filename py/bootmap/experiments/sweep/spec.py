@@ -77,16 +77,24 @@ class Cell:
     time_limit: float = 60.0
     cell_timeout: float = 600.0
     log: str | None = None                  # a robot's log instead of a world (``world`` is its name)
+    runs_dir: str | None = None             # where the sweep keeps simulated runs its cells share (no parameter)
 
     @property
     def id(self) -> str:
         """Stable across runs and machines: readable axes, then a hash of every parameter (so a cell whose
         run options changed is not taken for a finished one on ``--resume``)."""
         # Where a world lies is no parameter; a world's cell has no log (ids as before logs came in).
-        params = {k: v for k, v in asdict(self).items() if k != "world_path" and not (k == "log" and v is None)}
+        params = {k: v for k, v in asdict(self).items()
+                  if k not in ("world_path", "runs_dir") and not (k == "log" and v is None)}
         digest = hashlib.sha1(json.dumps(params, sort_keys=True, default=str).encode()).hexdigest()[:10]
         return f"{self.world}/seed{self.seed}/{self.noise.name}/{self.clusterer}/{self.learner}/" \
                f"{self.levels_text}/{self.quantum_text}/{digest}"
+
+    @property
+    def run(self) -> tuple:
+        """What decides the simulated run the cell's experiment makes: cells that agree on it share the run
+        (:class:`bootmap.experiments.runs.RunStore`)."""
+        return self.world_text, self.noise.settings, self.seed, self.circuits, self.steps, self.log
 
     @property
     def levels_text(self) -> str:
