@@ -50,6 +50,17 @@ def test_map_json_is_machine_readable(paper_file):
     assert data["steps"][4]["dstate"] == "S4"
 
 
+def test_a_tableau_read_from_standard_input_as_dash(paper_file):
+    # `bootmap simulate WORLD | bootmap map -`: "-" names standard input, and bad input there is named too.
+    run = subprocess.run([sys.executable, "-m", "bootmap.cli", "map", "-", "--levels", "causal,topological"],
+                         input=paper_file.read_text(), capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.startswith("8 dstates, 4 places, 4 paths")
+    bad = subprocess.run([sys.executable, "-m", "bootmap.cli", "why", "-", "t0", "t4"], input="{}",
+                         capture_output=True, text=True, timeout=120)
+    assert bad.returncode == 2 and "stdin: (top level): 'format' is a required property" in bad.stderr
+
+
 def test_bad_tableau_exits_2_with_the_place_named(tmp_path):
     bad = tmp_path / "bad.json"
     bad.write_text('{"format": "bootmap.tableau/1", "steps": [{"view": "a", "action": {"type": "fly"}}, {"view": "b"}]}')

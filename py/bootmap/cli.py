@@ -311,7 +311,7 @@ def build_parser() -> argparse.ArgumentParser:
                        description="Resolve a tableau (JSON, format bootmap.tableau/1) into dstates, places and "
                                    "paths with the ASP axioms, and print the map: text shows the tableau annotated "
                                    "like the paper's table (t, view, dstate, place, path, dir, action).")
-    p.add_argument("tableau", help="tableau JSON file")
+    p.add_argument("tableau", help="tableau JSON file (-: standard input)")
     _add_output_options(p, GRAPH_FORMATS)
     p.add_argument("--all", action="store_true", help="also print every other minimal map found")
     p.add_argument("--time-limit", type=arguments.seconds, default=60.0, metavar="S", help="seconds for the search (default 60); it ends within 2 s more whatever the tableau")
@@ -349,7 +349,7 @@ def build_parser() -> argparse.ArgumentParser:
                                    "apart, the axioms the contradiction needs, and the chain of rule instances (named "
                                    "by their '%! name' label, with file and line) from those steps to the axiom that "
                                    "fails. If they are the same: why (minimality) and what experience would test it.")
-    p.add_argument("tableau", help="tableau JSON file")
+    p.add_argument("tableau", help="tableau JSON file (-: standard input)")
     p.add_argument("a", help="a time point (t0 or 0) or a dstate name (S0)")
     p.add_argument("b", nargs="?", help="a time point or a dstate name; without it, say whether the view seen "
                                         "at time point a is read as seen or as a misread, and why")
@@ -367,7 +367,7 @@ def build_parser() -> argparse.ArgumentParser:
                                    "from where the robot is whose outcome the maps predict differently (the paper's "
                                    "rehearsal procedure), and print what each map predicts along them. 'Nothing to "
                                    "rehearse' when the map is unique.")
-    p.add_argument("tableau", help="tableau JSON file")
+    p.add_argument("tableau", help="tableau JSON file (-: standard input)")
     _add_output_options(p)
     p.add_argument("--max-length", type=arguments.count("actions"), default=10, metavar="N",
                    help="longest plan searched for (default 10)")

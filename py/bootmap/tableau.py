@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from importlib import resources
@@ -216,9 +217,15 @@ class Tableau:
 LOG_SUFFIXES = (".bag", ".db3", ".mcap", ".g2o", ".log", ".gz", ".zip", ".clf", ".carmen")
 
 
+#: The name that stands for standard input where a tableau file is named (``bootmap simulate W | bootmap map -``).
+STDIN = "-"
+
+
 def load(path: str | Path) -> Tableau:
-    """Read and validate a tableau file; errors name the file (and, for a robot's log, the command that
-    reads one)."""
+    """Read and validate a tableau file (``-``: standard input); errors name the file (and, for a robot's
+    log, the command that reads one)."""
+    if str(path) == STDIN:
+        return Tableau.loads(sys.stdin.buffer.read(), "stdin")
     path = Path(path)
     try:
         text = path.read_bytes()

@@ -265,12 +265,14 @@ def _number_dstates(is_atoms, n: int) -> tuple[dict[Symbol, int], list[int]]:
 
 def build_map(tableau: Tableau, models: list[list[Symbol]], exhausted: bool, levels, stats: SolveStats,
               minimal: bool = True, action_types: list[ActionType] | None = None,
-              misread_costs: dict[int, int] | None = None, retyped_steps: list[dict] | None = None) -> CognitiveMap:
+              misread_costs: dict[int, int] | None = None, retyped_steps: list[dict] | None = None,
+              length_types: list | None = None) -> CognitiveMap:
     """The map of the first model in :func:`canonical_order`, named as the paper names it; the other models
     are alternatives.
     ``exhausted``: clingo enumerated every minimal model (so one model means a unique map);
     ``misread_costs``: what taking each suspect view as a misread cost; ``retyped_steps``: the actions
-    taken as mistyped."""
+    taken as mistyped; ``length_types``: the travels' length types, when already learned
+    (:func:`~bootmap.mapping.facts.length_types_of`)."""
     n = len(tableau)
     read = [Atoms(m) for m in models]
     order = _canonical(models, read, n)
@@ -330,7 +332,7 @@ def build_map(tableau: Tableau, models: list[list[Symbol]], exhausted: bool, lev
         n_models=len(models) if minimal else 0, unique=minimal and len(models) == 1 and exhausted,
         models_capped=minimal and not exhausted, alternatives=alternatives, levels=list(levels),
         stats=stats, minimal=minimal, action_types=list(action_types or []),
-        length_types=length_types_of(tableau),
+        length_types=length_types_of(tableau) if length_types is None else list(length_types),
         confidence=Confidence.of([[S[i] for i in seq]] + alternatives,
                                  [[place_of.get(S[i]) for i in seq]] + alternative_places,
                                  capped=not exhausted) if minimal else None)

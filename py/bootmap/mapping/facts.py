@@ -157,9 +157,10 @@ def action_symbols(tableau: Tableau, angles: Sequence[int]) -> list[Symbol | Non
 
 
 def tableau_facts(tableau: Tableau, quantum_deg: float | None = None,
-                  angles: Sequence[int] | None = None) -> list[Symbol]:
+                  angles: Sequence[int] | None = None, lengths: dict[int, int] | None = None) -> list[Symbol]:
     """The tableau as ground facts (symbols). Requires every step to have a view label. ``angles`` are
-    the actions' angles when already known (:func:`read_actions`)."""
+    the actions' angles when already known (:func:`read_actions`), ``lengths`` the travels' length types
+    (:func:`travel_lengths`)."""
     tableau.require_views()
     if angles is None:
         angles, _ = read_actions(tableau, quantum_deg)
@@ -169,7 +170,7 @@ def tableau_facts(tableau: Tableau, quantum_deg: float | None = None,
     out: list[Symbol] = []
     # The vocabulary's names, with clingo's constructors called directly: this loop runs per step.
     view_name, turn_name, travel_name, length_name = VIEW.name, TURN.name, TRAVEL.name, LENGTH.name
-    lengths = travel_lengths(tableau)
+    lengths = travel_lengths(tableau) if lengths is None else lengths
     for t, step in enumerate(tableau.steps):
         time = Number(t)
         view = strings.get(step.view) or strings.setdefault(step.view, String(step.view))  # type: ignore[arg-type]

@@ -21,7 +21,7 @@ from ...tableau import Tableau, Travel, Turn
 from ..assertions import Assertion, Conflict, assertion_facts, hard
 from ..cogmap import CognitiveMap, SolveStats, Try, build_map
 from ..explain import time_points
-from ..facts import action_symbols, passes_through, tableau_facts, travel_lengths, typed_actions
+from ..facts import action_symbols, passes_through, tableau_facts, travel_length_types, typed_actions
 from ..grounding import Deadline, check_fixed
 from ..motion import measured_angle
 from ..resolver import Resolver
@@ -172,7 +172,7 @@ class Closing:
         self.n = n = len(tableau)
         self.angles, self.action_types, _ = typed_actions(tableau, self.resolver.quantum_deg)
         actions = action_symbols(tableau, self.angles)
-        lengths = travel_lengths(tableau)
+        lengths, self.length_types = travel_length_types(tableau)
         # what the causal level folds on (its action names), and what a retraced context compares
         self.fold_key: list[Symbol | None] = actions + [None] * (n - len(actions))
         self.context_key = [(a, lengths.get(t)) for t, a in enumerate(actions)]
@@ -182,7 +182,8 @@ class Closing:
         self.xy, self.along = dead_reckoning(tableau, self.angles)
         self.views = tableau.views
         # What every check of a partition shares: the actions as the axioms see them (not the views)
-        self.action_facts = [f for f in tableau_facts(tableau, angles=self.angles) if not VIEW.matches(f)]
+        self.action_facts = [f for f in tableau_facts(tableau, angles=self.angles, lengths=lengths)
+                             if not VIEW.matches(f)]
         # A person's word: joins to make first, joins to refuse (.assertions); the axioms check it too
         self.asserted_same = [x.pair for x in assertions if x.kind == "same" and not x.soft]
         self.preferred_same = [x.pair for x in assertions if x.kind == "same" and x.soft]
@@ -448,7 +449,7 @@ class Closing:
         if not models:
             return None
         cmap = build_map(self.tableau, models, True, resolver.theory.levels, self._stats(), minimal=False,
-                         action_types=self.action_types)
+                         action_types=self.action_types, length_types=self.length_types)
         misreads = [{"t": t, "observed": views[t], "expected": cmap.views[cmap.dstate_of[t]], "cost": None}
                     for t in range(self.n) if views[t] != shown[dstate_of[t]]]
         return replace(cmap, suspect_steps=misreads, found_by="loop closing")

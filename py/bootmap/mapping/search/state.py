@@ -19,7 +19,7 @@ from ...errors import SolveTimeout
 from ...tableau import Tableau
 from ..assertions import Assertion, assertion_facts
 from ..cogmap import CognitiveMap, SolveStats, Try, build_map
-from ..facts import tableau_facts, typing_of
+from ..facts import tableau_facts, travel_length_types, typing_of
 from ..grounding import Classes, Grounding, PartialFeatures
 from ..misreads import Suspect
 from ..motion import TypeSuspect
@@ -41,6 +41,8 @@ class SearchState:
         # the actions' angles and types, and the learned types' grid (None with a fixed quantum)
         self.typing = typing_of(tableau, resolver.quantum_deg)
         self.angles, self.action_types, self.grid = self.typing.angles, self.typing.types, self.typing.grid
+        # the travels' length types, learned once (the facts and every map built read them)
+        self.lengths, self.length_types = travel_length_types(tableau)
         self.facts = self.experience_facts(self.angles)
         self.retyped: list[TypeSuspect] = []  # actions taken as mistyped
         self.first: Grounding | None = None  # the first try's grounding
@@ -64,13 +66,14 @@ class SearchState:
 
     def experience_facts(self, angles: Sequence[int]) -> list[Symbol]:
         """The tableau as facts with these action angles, and the person's assertions."""
-        return tableau_facts(self.tableau, angles=angles) + assertion_facts(self.assertions)
+        return tableau_facts(self.tableau, angles=angles, lengths=self.lengths) + assertion_facts(self.assertions)
 
     def build(self, models: list[list[Symbol]], exhausted: bool, minimal: bool = True) -> CognitiveMap:
         """The map of these models, with the misreads and retyped actions allowed, and the figures so far."""
         return build_map(self.tableau, models, exhausted, self.resolver.theory.levels, self.stats(),
                          minimal=minimal, action_types=self.action_types,
-                         misread_costs=self.misread_costs(), retyped_steps=self.retyped_steps())
+                         misread_costs=self.misread_costs(), retyped_steps=self.retyped_steps(),
+                         length_types=self.length_types)
 
     def retyped_steps(self) -> list[dict]:
         return [s.to_dict(MISTYPE_COST) for s in self.retyped]
