@@ -23,6 +23,9 @@ def test_a_stored_run_reads_back_as_the_same_tableau(tmp_path):
     assert json.loads(gzip.open(stored, "rt").read())["steps"][3]["image"] == list(made.steps[3].image)
     back = store.simulated(world, "explore", 50, 12, 4, lambda: 1 / 0)  # read back: never simulated again
     assert back == made and back is not made
+    stored.write_bytes(stored.read_bytes()[:1000])  # a file cut short (a full disk, a killed writer) ...
+    assert store.simulated(world, "explore", 50, 12, 4, lambda: made) is made  # ... is simulated again
+    assert store.simulated(world, "explore", 50, 12, 4, lambda: 1 / 0) == made  # and stored whole
 
 
 def test_runs_differ_by_world_noise_policy_length_and_seed_but_not_by_where_the_world_lies():

@@ -27,6 +27,7 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Callable
 
+from ..errors import BootmapError
 from ..sim.world import World
 from ..tableau import Tableau
 
@@ -55,8 +56,11 @@ class RunStore:
         and stored."""
         path = self.directory / f"{run_key(world, policy, circuits, steps, seed)}.json.gz"
         if path.exists():
-            with gzip.open(path, "rt", encoding="utf-8") as f:
-                return Tableau.from_dict(json.load(f), source=str(path))
+            try:
+                with gzip.open(path, "rt", encoding="utf-8") as f:
+                    return Tableau.from_dict(json.load(f), source=str(path))
+            except (OSError, EOFError, ValueError, BootmapError):  # cut short or damaged: simulated again
+                pass
         tableau = simulate()
         self.directory.mkdir(parents=True, exist_ok=True)
         fd, temporary = tempfile.mkstemp(dir=self.directory, suffix=".tmp")
