@@ -3,6 +3,10 @@ experiments (a sweep's cells) that share it, and never read back for another wor
 
 import gzip
 import json
+from types import SimpleNamespace
+
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import bootmap.experiments.world as experiment
 from bootmap.experiments.runs import RunStore, run_key
@@ -55,6 +59,20 @@ def test_cells_that_differ_only_in_the_learner_simulate_their_run_once(tmp_path,
     assert len(made) == 1 and len(list((tmp_path / "runs").glob("*.json.gz"))) == 1
     assert deterministic(shared) == deterministic(alone)  # the run read back gives the same experiment
     assert cells[0].id == replace(cells[0], runs_dir="anywhere").id  # where runs are kept is no parameter
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.integers(0, 4), max_size=30))
+def test_the_start_order_is_a_permutation_that_keeps_each_runs_cells_in_grid_order(runs):
+    # Cells stand in by their run (anything with .run and an identity): every cell once; within a run, grid
+    # order; and the k-th cell of any run starts before the (k+1)-th cell of any run.
+    cells = [SimpleNamespace(run=r, index=i) for i, r in enumerate(runs)]
+    order = first_of_each_run(cells)
+    assert sorted(c.index for c in order) == list(range(len(cells)))
+    rank = {c.index: sum(d.run == c.run for d in cells[:c.index]) for c in cells}
+    assert [rank[c.index] for c in order] == sorted(rank[c.index] for c in order)
+    for r in set(runs):
+        assert [c.index for c in order if c.run == r] == [c.index for c in cells if c.run == r]
 
 
 def test_the_first_cell_of_each_run_starts_before_any_second_one():
