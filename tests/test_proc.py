@@ -5,6 +5,7 @@ import multiprocessing
 import os
 import subprocess
 import sys
+import time
 
 from bootmap.proc import parent_gone, preloaded_context
 
@@ -38,3 +39,33 @@ def test_the_owner_is_gone_when_the_parent_changed_or_the_owner_no_longer_runs()
     dead.wait()
     assert parent_gone(dead.pid, parent)  # ...or the owner no longer runs
     assert preloaded_context(["bootmap.tableau"]).get_start_method() in multiprocessing.get_all_start_methods()
+
+
+def test_nothing_raised_in_a_forked_child_before_its_work_escapes_into_the_parents_code(monkeypatch, tmp_path):
+    # A Ctrl-C (or anything) raised in the child between the fork and the work would otherwise unwind into
+    # the caller's frames in the child: a second copy of the caller (a sweep's worker loop) going on.
+    import bootmap.proc as proc
+
+    def interrupted(*_):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(proc, "_die_with_parent", interrupted)
+    me, escaped = os.getpid(), tmp_path / "escaped"
+    try:
+        outcome = proc.in_child(lambda: "done", 30)
+    except BaseException:
+        if os.getpid() != me:  # the child came back here: say so, and leave
+            escaped.write_text("the child unwound into the caller")
+            os._exit(0)
+        raise
+    assert not escaped.exists()
+    assert outcome[0] == "failed" and "died without a result" in outcome[1]
+
+
+def test_a_ctrl_c_in_the_child_during_its_work_is_the_works_outcome():
+    import signal as sig
+
+    from bootmap.proc import in_child
+
+    outcome = in_child(lambda: os.kill(os.getpid(), sig.SIGINT) or time.sleep(5), 30)
+    assert outcome[0] == "failed" and outcome[1].startswith("KeyboardInterrupt")

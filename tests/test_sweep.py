@@ -264,6 +264,18 @@ def _session(sid: int) -> list[int]:
     return pids
 
 
+def _described(pids: list[int]) -> list[str]:
+    """Each process with its command line."""
+    out = []
+    for pid in pids:
+        try:
+            line = Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode()
+        except OSError:
+            continue
+        out.append(f"{pid}: {line[:160]}")
+    return out
+
+
 def _until(condition, seconds: float) -> bool:
     deadline = time.monotonic() + seconds
     while time.monotonic() < deadline:
@@ -281,12 +293,16 @@ def test_ctrl_c_stops_a_sweep_and_its_workers_and_says_how_to_resume(tmp_path):
                              "--workers", "2", "--no-progress"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             start_new_session=True, preexec_fn=ctrl_c_default)
     try:
-        # At work: the command, its two workers and a forked child for each cell they run.
-        assert _until(lambda: len(_session(proc.pid)) >= 5, 120), _session(proc.pid)
+        # At work: the command, multiprocessing's resource tracker and forkserver, the two workers the
+        # forkserver forked, and a child each worker forked for the cell it runs.
+        assert _until(lambda: len(_session(proc.pid)) >= 7, 120), _described(_session(proc.pid))
         os.killpg(proc.pid, signal.SIGINT)  # as a terminal sends Ctrl-C: to every process of the command
-        _, err = proc.communicate(timeout=60)
+        try:
+            _, err = proc.communicate(timeout=60)
+        except subprocess.TimeoutExpired:  # something still holds the command's output: say what
+            raise AssertionError(f"exit code {proc.poll()}; still running: {_described(_session(proc.pid))}")
     finally:
-        if proc.poll() is None:
+        if _session(proc.pid):
             os.killpg(proc.pid, signal.SIGKILL)
     err = err.decode(errors="replace")
     assert proc.returncode == EXIT_INTERRUPTED, err[-3000:]

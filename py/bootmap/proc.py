@@ -32,11 +32,21 @@ def in_child(work: Callable[[], object], timeout: float) -> tuple:
         except Exception as e:
             return "failed", f"{type(e).__name__}: {e}"
     read_fd, write_fd = os.pipe()
+    # Ctrl-C is held back over the fork: arriving in the child before it is inside _child, its
+    # KeyboardInterrupt would unwind into the parent's code in the child (a sweep's worker loop, say),
+    # which would go on as a second copy of the parent, holding its pipes.
+    held = _hold_interrupts()
+    parent = os.getpid()
     pid = os.fork()
     if pid == 0:  # the child: do the work, send the outcome, leave without running the parent's exit code
-        os.close(read_fd)
-        _die_with_parent()
-        _child(work, write_fd)
+        try:
+            os.close(read_fd)
+            _die_with_parent(parent)
+            _release_interrupts(held)  # from here a Ctrl-C is the work's outcome (_child catches it)
+            _child(work, write_fd)
+        finally:
+            os._exit(1)
+    _release_interrupts(held)
     os.close(write_fd)
     finished = False
     try:
@@ -54,9 +64,10 @@ def in_child(work: Callable[[], object], timeout: float) -> tuple:
     return pickle.loads(data)
 
 
-def _die_with_parent() -> None:
-    """Where Linux allows it, have the kernel kill this process when the one that forked it dies (a sweep's
-    worker terminated at Ctrl-C, or killed): no orphan goes on grounding for nobody."""
+def _die_with_parent(parent: int) -> None:
+    """Where Linux allows it, have the kernel kill this process when the one that forked it (``parent``)
+    dies (a sweep's worker terminated at Ctrl-C, or killed): no orphan goes on grounding for nobody. A
+    parent that died before the kernel was asked has already handed this process on: it ends at once."""
     try:
         import ctypes
 
@@ -65,6 +76,21 @@ def _die_with_parent() -> None:
         libc.prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
     except (OSError, AttributeError):  # not Linux, or no prctl: the deadline still ends the child
         pass
+    if os.getppid() != parent:
+        os._exit(1)
+
+
+def _hold_interrupts():
+    """Block SIGINT in this thread (where signals can be blocked): the mask to restore, or None."""
+    if not hasattr(signal, "pthread_sigmask"):
+        return None
+    return signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+
+
+def _release_interrupts(held) -> None:
+    """Restore the signal mask :func:`_hold_interrupts` changed (a SIGINT held back is delivered now)."""
+    if held is not None:
+        signal.pthread_sigmask(signal.SIG_SETMASK, held)
 
 
 def _child(work: Callable[[], object], write_fd: int) -> None:
