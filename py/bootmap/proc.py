@@ -46,10 +46,10 @@ def in_child(work: Callable[[], object], timeout: float) -> tuple:
             _child(work, write_fd)
         finally:
             os._exit(1)
-    _release_interrupts(held)
     os.close(write_fd)
     finished = False
     try:
+        _release_interrupts(held)  # (inside the try: a Ctrl-C held back until now still stops the child)
         data, finished = _read_until(read_fd, time.monotonic() + timeout)
     finally:
         os.close(read_fd)
