@@ -194,10 +194,10 @@ def test_time_out_hands_back_a_valid_map_found_on_the_way(paper_tableau, monkeyp
 
     real_solve = ExactSearch.solve
 
-    def run_out_of_time_when_optimising(self, layout, what, models=None, optimise=False, keep=False):
+    def run_out_of_time_when_optimising(self, layout, what, models=None, optimise=False, keep=False, defer=True):
         if optimise:  # pretend the optimiser's proof runs out of time before its first model
             raise self.budget.timed_out(what, [])
-        return real_solve(self, layout, what, models, optimise, keep)
+        return real_solve(self, layout, what, models, optimise, keep, defer)
 
     monkeypatch.setattr(ExactSearch, "solve", run_out_of_time_when_optimising)
     with pytest.raises(SolveTimeout) as e:

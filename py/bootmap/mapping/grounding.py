@@ -20,10 +20,11 @@ import clingo
 from clingo import Symbol
 
 from .facts import add_facts
+from .mapcheck import SHOW_MAP
 from .theory import Theory
 from .trace import Instrumented, load_instrumented
-from .vocabulary import (AFTER, CLASS_KEY, CLASS_KEY_TERM, DSTATE_BOUND, FEATURE, FUTURE_DEPTH_CONST, PREPASS_PART,
-                         PREV_IN_CLASS, SEQUENCE, SHOWN_BY_ALL, SLOTS, TELLING, VIEW_FEATURE)
+from .vocabulary import (AFTER, CLASS_KEY, CLASS_KEY_TERM, DSTATE_BOUND, FEATURE, FUTURE_DEPTH_CONST,
+                         PREPASS_PART, PREV_IN_CLASS, SEQUENCE, SHOWN_BY_ALL, SLOTS, TELLING, VIEW_FEATURE)
 
 
 @dataclass(frozen=True)
@@ -80,14 +81,19 @@ class Grounding:
     instrumented : bool
         Load the theory with its recording twins (:mod:`.trace`): each model then says which rule
         instances hold, and the levels' constraints can be switched off (``rules.switchable``).
+    leave_out : sequence of str
+        Levels that judge the map alone (:attr:`Theory.map_levels`) not to load: each model then shows
+        its transitions and dstates, for :class:`~.mapcheck.MapCheck` to ask those levels of.
     """
 
     def __init__(self, theory: Theory, facts: Sequence[Symbol], future_depth: int, options: Sequence[str] = (),
-                 instrumented: bool = False):
+                 instrumented: bool = False, leave_out: Sequence[str] = ()):
         self.control = clingo.Control(["--warn=none", "-c", f"{FUTURE_DEPTH_CONST}={int(future_depth)}", *options])
         self.rules: Instrumented | None = load_instrumented(theory, self.control) if instrumented else None
         if self.rules is None:
-            theory.load_into(self.control)
+            theory.load_into(self.control, leave_out)
+            if leave_out:  # each model shows the map the levels left out are asked of (.mapcheck)
+                self.control.add("base", [], SHOW_MAP)
         add_facts(self.control, facts)
         self.ground_s = 0.0
         self.ground_cpu_s = 0.0  # the process's CPU time grounding: what another process's load leaves alone

@@ -93,6 +93,10 @@ class Resolver:
         explain the experience and some views are suspect: the map then has the fewest dstates plus
         the cost of its misreads, and lists them (``suspect_steps``). With no misread in the best
         map, that map is the exact minimal map.
+    defer_map_levels : bool
+        Leave the levels that judge the map alone (the topological one: :attr:`Theory.map_levels`) out of
+        the search and ask them of each map it finds (:mod:`.mapcheck`); the same maps, found sooner.
+        False grounds them with every search, as a check of that.
 
     Attributes
     ----------
@@ -109,6 +113,7 @@ class Resolver:
     diagnose: bool = True
     misreads: bool = True
     retype: bool = True
+    defer_map_levels: bool = True
     theory: Theory = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:

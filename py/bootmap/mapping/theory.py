@@ -15,6 +15,7 @@ from __future__ import annotations
 import os
 import re
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 from typing import Iterable, Sequence
 
@@ -61,9 +62,31 @@ class Theory:
     def files(self) -> list[Path]:
         return list(self.core) + list(self.levels.values())
 
-    def load_into(self, ctl: clingo.Control) -> None:
+    def load_into(self, ctl: clingo.Control, leave_out: Iterable[str] = ()) -> None:
+        """Load the files into ``ctl``; the levels named in ``leave_out`` are not loaded."""
+        skip = {self.levels[name] for name in leave_out}
         for f in self.files:
-            ctl.load(str(f))
+            if f not in skip:
+                ctl.load(str(f))
+
+    @cached_property
+    def map_levels(self) -> tuple[str, ...]:
+        """The levels that judge the map alone: every rule reads only the map's transitions and dstates
+        (``next/3``, ``dstate/1``) and what the level itself derives from them, no choice, optimisation or
+        external is in it, and no other file reads or defines what it derives. Such a level (the
+        topological one) says the same of every labelling of one partition, so the search may leave it
+        out and ask it of each map it finds (:mod:`.mapcheck`). A level a user adds qualifies by the same
+        test; one that reads the time points does not."""
+        parsed = {name: _program_of(path) for name, path in self.levels.items()}
+        others = {path: _program_of(path) for path in self.core}
+        found = []
+        for name, program in parsed.items():
+            if not program.judges_map:
+                continue
+            rest = [p for n, p in parsed.items() if n != name] + list(others.values())
+            if not any(program.defines & (p.reads | p.defines) for p in rest):
+                found.append(name)
+        return tuple(found)
 
     def rules(self) -> list[Rule]:
         """Every ``%! name`` labelled rule, in file order."""
@@ -120,6 +143,91 @@ def check_syntax(files: Iterable[Path]) -> None:
         except RuntimeError as e:  # some errors (e.g. #script without Python support) reach only the exception
             said = [m for m in messages if m] or [str(e).strip() or "clingo gave no reason"]
             raise AxiomError(f"{f} does not parse:\n" + "\n".join(said)) from None
+
+
+#: What a level that judges the map may read from the others: the map's transitions and its dstates.
+MAP_INPUTS = frozenset({("next", 3), ("dstate", 1)})
+
+
+@dataclass(frozen=True)
+class _Program:
+    """What a file's rules derive (``defines``) and read (``reads``, ``#show`` included), as (name, arity);
+    and whether its statements are all of the kinds a level that judges the map may have (plain rules and
+    constraints, ``#show``, ``#const``, comments, the base part)."""
+
+    defines: frozenset
+    reads: frozenset
+    shows: frozenset
+    plain: bool
+
+    @property
+    def judges_map(self) -> bool:
+        return (self.plain and bool(self.defines) and self.reads - self.defines <= MAP_INPUTS
+                and not self.shows & MAP_INPUTS)
+
+
+def _program_of(path: Path) -> _Program:
+    """Parse a file's rules (clingo's own parser) into what they derive and read."""
+    from clingo import ast
+
+    defines: set[tuple[str, int]] = set()
+    reads: set[tuple[str, int]] = set()
+    shows: set[tuple[str, int]] = set()
+    plain = True
+    allowed = {ast.ASTType.Rule, ast.ASTType.ShowSignature, ast.ASTType.ShowTerm, ast.ASTType.Definition,
+               ast.ASTType.Comment, ast.ASTType.Program}
+
+    def visit(stmt) -> None:
+        nonlocal plain
+        kind = stmt.ast_type
+        if kind not in allowed or (kind == ast.ASTType.Program and stmt.name != "base"):
+            plain = False
+            return
+        if kind == ast.ASTType.Rule:
+            head = stmt.head
+            if head.ast_type != ast.ASTType.Literal or head.sign != ast.Sign.NoSign:
+                plain = False  # a choice, a disjunction, an aggregate or a negated head: not a plain rule
+            else:
+                defines.update(_atoms(head))
+            for literal in stmt.body:
+                reads.update(_atoms(literal))
+        elif kind == ast.ASTType.ShowSignature:
+            shows.add((stmt.name, stmt.arity))
+        elif kind == ast.ASTType.ShowTerm:
+            plain = False  # shows terms of its own making: not only the level's atoms
+            for literal in stmt.body:
+                reads.update(_atoms(literal))
+
+    ast.parse_files([str(path)], visit)
+    return _Program(frozenset(defines), frozenset(reads | shows), frozenset(shows), plain)
+
+
+def _atoms(node) -> set[tuple[str, int]]:
+    """The predicates (name, arity) of the symbolic atoms anywhere in an AST node."""
+    from clingo import ast
+
+    out: set[tuple[str, int]] = set()
+    stack = [node]
+    while stack:
+        n = stack.pop()
+        if n.ast_type == ast.ASTType.SymbolicAtom:
+            term = n.symbol
+            if term.ast_type == ast.ASTType.UnaryOperation:  # classical negation: -p(X)
+                term = term.argument
+            if term.ast_type == ast.ASTType.Function:
+                out.add((term.name, len(term.arguments)))
+            elif term.ast_type == ast.ASTType.SymbolicTerm:  # a constant atom: p
+                out.add((str(term.symbol), 0))
+            continue
+        for key in n.child_keys:
+            child = getattr(n, key)
+            if child is None:
+                continue
+            if isinstance(child, ast.AST):
+                stack.append(child)
+            else:
+                stack.extend(c for c in child if isinstance(c, ast.AST))
+    return out
 
 
 def _labelled_rules(path: Path, level: str) -> list[Rule]:

@@ -63,7 +63,8 @@ class ExactSearch:
     def one_per_class(self) -> CognitiveMap | None:
         """The first try, in one grounding: one dstate per class. If it fails, learn the classes from it."""
         state = self.state
-        outcome = self.solve([ONE_PER_CLASS()], "one dstate per class", keep=True)
+        # (one candidate dstate per time point: one map, which the levels judging maps check as cheaply)
+        outcome = self.solve([ONE_PER_CLASS()], "one dstate per class", keep=True, defer=False)
         state.first = outcome.grounding  # its classes are read only when needed (a Python loop over atoms)
         if outcome.models:  # every class holds its one dstate: as many classes as dstates
             cmap = self._map(outcome)
@@ -171,18 +172,36 @@ class ExactSearch:
         return self.state.build(models, minimal and outcome.exhausted, minimal=minimal)
 
     def solve(self, layout: list[Symbol], what: str, models: int | None = None, optimise: bool = False,
-              keep: bool = False) -> Outcome:
-        """Ground and solve; on time-out raise SolveTimeout with the best map known."""
+              keep: bool = False, defer: bool = True) -> Outcome:
+        """Ground and solve; on time-out raise SolveTimeout with the best map known. With ``defer``, the
+        levels that judge the map alone are left out of the search and asked of each map it finds
+        (:mod:`..mapcheck`); where their verdicts settle nothing, the same solve is made with them, and so
+        is every later one of this resolution (where they reject the maps found once, they tend to again)."""
+        deferred = self.state.deferred_levels if defer else ()
+        if deferred:
+            outcome = self._solve(layout, what, models, optimise, keep, deferred)
+            if outcome is not None:
+                return outcome
+            what = f"{what}, with the {' and '.join(deferred)} level in the search"
+        return self._solve(layout, what, models, optimise, keep, ())
+
+    def _solve(self, layout: list[Symbol], what: str, models: int | None, optimise: bool, keep: bool,
+               deferred: tuple[str, ...]) -> Outcome | None:
+        """One grounding and its solve, without the ``deferred`` levels (then None where the maps they
+        accept do not settle the question: see :func:`_settled`)."""
         state, budget = self.state, self.budget
         size = None
         if state.classes is not None:  # the first try always runs: its classes bound the answer
             budget.check_clock(what)
             size = grounding_size(layout, state.classes, state.facts)
             budget.check_grounding(what, size)
-        options = [str(state.resolver.max_models + 1 if models is None else models)]
+        wanted = state.resolver.max_models + 1 if models is None else models
+        # Any one map asked for: without the levels that judge the map, a few, for them to accept one of.
+        options = [str(ANY_MAP_TRIES if deferred and wanted == 1 and not optimise else wanted)]
         if optimise:
             options += ["--opt-mode=optN", "--opt-strategy=usc"]
-        grounding = Grounding(state.resolver.theory, state.facts + layout, state.depth, options).ground()
+        grounding = Grounding(state.resolver.theory, state.facts + layout, state.depth, options,
+                              leave_out=deferred).ground()
         if size is None:
             budget.first_try_grounded(min(grounding.ground_s, grounding.ground_cpu_s), len(state.tableau))
         else:
@@ -199,9 +218,21 @@ class ExactSearch:
             (optimal if not optimise or m.optimality_proven else improving).append(m.symbols(shown=True))
 
         result = grounding.solve(budget.deadline, on_model)
+        if deferred and result is not None:
+            # The levels left out judge each map found (their verdicts settle the question, or not).
+            accepted = [c for c in map(state.map_check, optimal) if c is not None]
+            if not _settled(result, optimal, accepted, wanted, optimise):
+                state.ground_s += grounding.ground_s
+                state.solve_s += grounding.solve_s
+                state.tries.append(Try(what, "rejected", grounding.ground_s + grounding.solve_s))
+                state.deferred_levels = ()  # it will again: the rest of this resolution searches with them
+                return None
+            optimal = accepted[:wanted] if wanted == 1 and not optimise else accepted
         state.ground_s += grounding.ground_s
         state.solve_s += grounding.solve_s
-        verdict = "timeout" if result is None else ("sat" if result.satisfiable else "unsat")
+        if deferred:
+            improving = [c for c in map(state.map_check, improving[-1:]) if c is not None]
+        verdict = "timeout" if result is None else ("sat" if result.satisfiable and optimal else "unsat")
         state.tries.append(Try(what, verdict, grounding.ground_s + grounding.solve_s))
         if result is None:
             if state.classes is None:  # timed out in the first try: the classes still bound the answer
@@ -209,3 +240,28 @@ class ExactSearch:
                 state.proved = state.classes.count
             raise budget.timed_out(what, improving)
         return Outcome(optimal, bool(result.exhausted), grounding if keep else None)
+
+
+#: Where any one map is asked for, how many a search without the levels that judge the map alone finds
+#: for them to accept one of.
+ANY_MAP_TRIES = 10
+
+
+def _settled(result: clingo.SolveResult, found: list, accepted: list, wanted: int, optimise: bool) -> bool:
+    """Whether the maps a search found without the levels that judge the map alone (``found``), and those
+    the levels accepted (``accepted``), answer the search's question as a search with the levels would:
+
+    - no map at all: neither has the whole theory;
+    - every map enumerated (``exhausted``): the accepted ones are all the maps of the whole theory within
+      the bound; optimising, they are all its optimal maps if any optimal map found is accepted (none
+      accepted: the whole theory's optimum may be higher);
+    - one map asked for (``wanted`` 1, not optimising) and one of those found accepted: a map of the whole
+      theory.
+
+    Else (every map found rejected; an enumeration capped before it ended) it does not.
+    """
+    if not result.satisfiable:
+        return True
+    if result.exhausted:
+        return bool(accepted) or not optimise
+    return wanted == 1 and not optimise and bool(accepted)

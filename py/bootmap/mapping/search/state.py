@@ -21,6 +21,7 @@ from ..assertions import Assertion, assertion_facts
 from ..cogmap import CognitiveMap, SolveStats, Try, build_map
 from ..facts import tableau_facts, travel_length_types, typing_of
 from ..grounding import Classes, Grounding, PartialFeatures
+from ..mapcheck import MapCheck
 from ..misreads import Suspect
 from ..motion import TypeSuspect
 from .retyping import MISTYPE_COST
@@ -55,6 +56,9 @@ class SearchState:
         self.best: CognitiveMap | None = None
         self.ground_s = self.solve_s = 0.0
         self.tries: list[Try] = []
+        # the levels that judge the map alone, asked of each map found rather than searched with (.exact)
+        self.deferred_levels = resolver.theory.map_levels if resolver.defer_map_levels else ()
+        self.map_check = MapCheck(resolver.theory, self.deferred_levels) if self.deferred_levels else None
 
     def learn_classes(self) -> Classes:
         """The classes of time points, read from the first try's grounding once needed; that grounding (a
