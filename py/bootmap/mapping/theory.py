@@ -167,7 +167,21 @@ class _Program:
 
 
 def _program_of(path: Path) -> _Program:
-    """Parse a file's rules (clingo's own parser) into what they derive and read."""
+    """Parse a file's rules (clingo's own parser) into what they derive and read; a file unchanged since
+    (same size and modification time) is not parsed again."""
+    stat = Path(path).stat()
+    key = (str(path), stat.st_mtime_ns, stat.st_size)
+    found = _PARSED.get(key)
+    if found is None:
+        found = _PARSED[key] = _parse_program(path)
+    return found
+
+
+#: Files already parsed by :func:`_program_of`, by path, modification time and size.
+_PARSED: dict[tuple[str, int, int], _Program] = {}
+
+
+def _parse_program(path: Path) -> _Program:
     from clingo import ast
 
     defines: set[tuple[str, int]] = set()
