@@ -3,8 +3,8 @@
 A level whose rules read only the map's transitions and dstates (the topological one, or a user's level of
 the same kind) is left out of the search and asked of every map the search finds (bootmap.mapping.mapcheck).
 These tests pin which levels qualify, and that a resolver doing so gives exactly the maps of one that
-searches with every level, where the level accepts the first maps found, where it rejects them, and where it
-rejects every map.
+searches with every level: where the level accepts every map found, where it rejects some, where it rejects
+all of them, where the search is made again with it, and where it rejects every map there is.
 """
 
 import numpy as np
@@ -19,7 +19,6 @@ from bootmap.mapping.theory import load_theory
 from support.gridworld import random_world, walk
 from support.noise import with_misreads, with_odometry_noise
 
-from test_resolver import place_on_both_sides
 
 
 def said(cmap) -> dict:
@@ -83,14 +82,38 @@ def test_the_papers_tableau_is_found_without_the_topological_level_in_the_search
     assert "rejected" not in results(deferred)
 
 
-@pytest.mark.parametrize("levels", [["causal", "topological"], None], ids=["causal+topological", "all"])
-def test_where_only_the_topological_level_refutes_the_first_map_its_verdict_is_kept(levels):
-    # One dstate per view satisfies every rule but one_side (test_resolver): found without the topological
-    # level, it is rejected, and the search is made again with it: the two minimal maps of 9 dstates.
-    deferred, searched = both(place_on_both_sides(), levels=levels)
+def grid(seed: int):
+    """A short walk of a small grid world (sizes, landmarks, loops and policy vary with the seed)."""
+    rng = np.random.default_rng(seed)
+    world = random_world(rng, *[(3, 3), (4, 3), (4, 4), (5, 4)][seed % 4], extra_edges=seed % 3,
+                         landmarks=[0.0, 0.4][seed % 2])
+    return walk(world, 40 + 5 * seed, rng, policy="explore" if seed % 2 else "random")
+
+
+@pytest.mark.parametrize("seed, levels, verdicts", [
+    (1, None, "some rejected"),                        # the maps the topological level accepts are the answer
+    (0, ["causal", "topological"], "none accepted"),   # none accepted, all enumerated: the bound is proved
+    (2, ["causal", "topological"], "searched again"),  # capped before all were enumerated: searched with it
+], ids=["some-rejected", "none-accepted", "searched-again"])
+def test_where_the_topological_level_rejects_maps_found_without_it_its_verdict_is_kept(seed, levels, verdicts,
+                                                                                     monkeypatch):
+    from bootmap.mapping.mapcheck import MapCheck
+
+    asked = []
+    real = MapCheck.__call__
+
+    def recorded(self, model):
+        out = real(self, model)
+        asked.append(out is not None)
+        return out
+
+    monkeypatch.setattr(MapCheck, "__call__", recorded)
+    deferred, searched = both(grid(seed), levels=levels)
     assert said(deferred) == said(searched)
-    assert deferred.n_dstates == 9 and deferred.n_models == 2
-    assert "rejected" in results(deferred) and "rejected" not in results(searched)
+    assert asked and not all(asked)  # the level was asked, and rejected some map found without it
+    assert (verdicts == "searched again") == ("rejected" in results(deferred))
+    if verdicts == "some rejected":
+        assert any(asked)
 
 
 def test_a_map_level_that_rejects_every_map_gives_the_same_inconsistency(axioms_copy, paper_tableau):

@@ -63,8 +63,7 @@ class ExactSearch:
     def one_per_class(self) -> CognitiveMap | None:
         """The first try, in one grounding: one dstate per class. If it fails, learn the classes from it."""
         state = self.state
-        # (one candidate dstate per time point: one map, which the levels judging maps check as cheaply)
-        outcome = self.solve([ONE_PER_CLASS()], "one dstate per class", keep=True, defer=False)
+        outcome = self.solve([ONE_PER_CLASS()], "one dstate per class", keep=True)
         state.first = outcome.grounding  # its classes are read only when needed (a Python loop over atoms)
         if outcome.models:  # every class holds its one dstate: as many classes as dstates
             cmap = self._map(outcome)
@@ -95,7 +94,11 @@ class ExactSearch:
         steps with a person's apart, 104 dstates over a bound of 103: 4.5 s against 14.8 s)."""
         spare = bound > self.state.classes.lower_bound
         layout = self.state.classes.layout(bound) + ([MINIMISE_DSTATES()] if spare else [])
-        outcome = self.solve(layout, f"at most {bound} dstates", optimise=spare)
+        # Without spare slots the search only assigns time points to the dstates the classes need, and a
+        # map of the rest of the theory is most often a map of the whole: ask the levels that judge the map
+        # of each map found. With spares, the rest's fewest dstates tend to undercut what those levels
+        # allow (views alone join what places and paths keep apart): search with them.
+        outcome = self.solve(layout, f"at most {bound} dstates", optimise=spare, defer=not spare)
         if outcome.models:
             return self._map(outcome)
         self.state.proved = max(self.state.proved, bound + 1)
@@ -120,7 +123,7 @@ class ExactSearch:
         spare = 1
         while True:
             layout = state.classes.layout(len(state.tableau), spare=spare)
-            outcome = self.solve(layout, f"any map with {spare} spare dstate(s) per class", models=1)
+            outcome = self.solve(layout, f"any map with {spare} spare dstate(s) per class", models=1, defer=False)
             if outcome.models:
                 state.best = self._map(outcome, minimal=False)
                 return state.best
@@ -137,7 +140,7 @@ class ExactSearch:
         bound = upper.n_dstates if bound is None else bound  # type: ignore[union-attr]
         layout = self.state.classes.layout(bound) + [MINIMISE_DSTATES()]
         what = f"the fewest dstates{' and misreads' if self.state.suspects else ''}, at most {bound} dstates"
-        outcome = self.solve(layout, what, optimise=True)
+        outcome = self.solve(layout, what, optimise=True, defer=False)
         if not outcome.models:  # only when a bound below the upper map's was asked for
             return None
         cmap = self._map(outcome)
@@ -172,7 +175,7 @@ class ExactSearch:
         return self.state.build(models, minimal and outcome.exhausted, minimal=minimal)
 
     def solve(self, layout: list[Symbol], what: str, models: int | None = None, optimise: bool = False,
-              keep: bool = False, defer: bool = True) -> Outcome:
+              keep: bool = False, defer: bool = False) -> Outcome:
         """Ground and solve; on time-out raise SolveTimeout with the best map known. With ``defer``, the
         levels that judge the map alone are left out of the search and asked of each map it finds
         (:mod:`..mapcheck`); where their verdicts settle nothing, the same solve is made with them, and so
@@ -196,8 +199,7 @@ class ExactSearch:
             size = grounding_size(layout, state.classes, state.facts)
             budget.check_grounding(what, size)
         wanted = state.resolver.max_models + 1 if models is None else models
-        # Any one map asked for: without the levels that judge the map, a few, for them to accept one of.
-        options = [str(ANY_MAP_TRIES if deferred and wanted == 1 and not optimise else wanted)]
+        options = [str(wanted)]
         if optimise:
             options += ["--opt-mode=optN", "--opt-strategy=usc"]
         grounding = Grounding(state.resolver.theory, state.facts + layout, state.depth, options,
@@ -221,13 +223,13 @@ class ExactSearch:
         if deferred and result is not None:
             # The levels left out judge each map found (their verdicts settle the question, or not).
             accepted = [c for c in map(state.map_check, optimal) if c is not None]
-            if not _settled(result, optimal, accepted, wanted, optimise):
+            if not _settled(result, accepted, optimise):
                 state.ground_s += grounding.ground_s
                 state.solve_s += grounding.solve_s
                 state.tries.append(Try(what, "rejected", grounding.ground_s + grounding.solve_s))
                 state.deferred_levels = ()  # it will again: the rest of this resolution searches with them
                 return None
-            optimal = accepted[:wanted] if wanted == 1 and not optimise else accepted
+            optimal = accepted
         state.ground_s += grounding.ground_s
         state.solve_s += grounding.solve_s
         if deferred:
@@ -242,26 +244,18 @@ class ExactSearch:
         return Outcome(optimal, bool(result.exhausted), grounding if keep else None)
 
 
-#: Where any one map is asked for, how many a search without the levels that judge the map alone finds
-#: for them to accept one of.
-ANY_MAP_TRIES = 10
-
-
-def _settled(result: clingo.SolveResult, found: list, accepted: list, wanted: int, optimise: bool) -> bool:
-    """Whether the maps a search found without the levels that judge the map alone (``found``), and those
-    the levels accepted (``accepted``), answer the search's question as a search with the levels would:
+def _settled(result: clingo.SolveResult, accepted: list, optimise: bool) -> bool:
+    """Whether the maps a search found without the levels that judge the map alone, and those the levels
+    accepted (``accepted``), answer the search's question as a search with the levels would:
 
     - no map at all: neither has the whole theory;
     - every map enumerated (``exhausted``): the accepted ones are all the maps of the whole theory within
       the bound; optimising, they are all its optimal maps if any optimal map found is accepted (none
-      accepted: the whole theory's optimum may be higher);
-    - one map asked for (``wanted`` 1, not optimising) and one of those found accepted: a map of the whole
-      theory.
+      accepted: the whole theory's optimum may be higher).
 
-    Else (every map found rejected; an enumeration capped before it ended) it does not.
+    Else (an enumeration capped before it ended) it does not: which maps a search with the levels would
+    list is not known.
     """
     if not result.satisfiable:
         return True
-    if result.exhausted:
-        return bool(accepted) or not optimise
-    return wanted == 1 and not optimise and bool(accepted)
+    return bool(result.exhausted) and (bool(accepted) or not optimise)
