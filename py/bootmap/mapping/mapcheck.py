@@ -40,7 +40,6 @@ from .theory import MAP_INPUTS, Theory
 #: What a search without the map's levels shows beside its own atoms: the map the levels judge.
 SHOW_MAP = "".join(f"#show {name}/{arity}. " for name, arity in sorted(MAP_INPUTS))
 
-
 _INPUT_NAMES = frozenset(name for name, _ in MAP_INPUTS)
 
 #: The check shows one of the map's inputs, so that (as beside the other files, which show atoms) only
@@ -59,21 +58,17 @@ class MapCheck:
     Calling it with the shown symbols of a model found without those levels (its ``next/3`` and
     ``dstate/1`` among them) gives the model's symbols as the whole theory would show them (the map's
     transitions and dstates left out, the levels' own shown atoms added: places, paths, order and
-    sides), or None when the levels reject the map. ``checks`` counts the maps asked about.
+    sides), or None when the levels reject the map.
     """
 
-    def __init__(self, theory: Theory, levels: Sequence[str], options: Sequence[str] = ()):
+    def __init__(self, theory: Theory, levels: Sequence[str]):
         self.files = [str(theory.levels[name]) for name in levels]
-        self.options = ["--warn=none", *options]
-        self.checks = 0
 
     def __call__(self, model: Sequence[Symbol]) -> list[Symbol] | None:
-        self.checks += 1
         own, inputs = [], []
-        names = _INPUT_NAMES
         for s in model:  # one call into clingo per symbol: a model lists every time point's dstate
-            (inputs if s.name in names and is_map_input(s) else own).append(s)
-        control = clingo.Control(self.options)
+            (inputs if s.name in _INPUT_NAMES and is_map_input(s) else own).append(s)
+        control = clingo.Control(["--warn=none"])
         for f in self.files:
             control.load(f)
         control.add("base", [], SHOW_INPUT)  # only what the levels #show, as beside the other files
