@@ -21,9 +21,9 @@ from .vocabulary import AHEAD, HEADING_OF, IS, LEFT, MISREAD, PATH_OF, PLACE_OF,
 @dataclass(frozen=True)
 class Try:
     """One grounding the resolver tried: what it asked (e.g. "at most 8 dstates") and clingo's verdict
-    ("sat", "unsat" or "timeout"; "rejected" where the maps found without the levels that judge the map
-    alone were rejected by them, so that the same try was made again with them: :mod:`.mapcheck`), and the
-    seconds its grounding and solving took."""
+    ("sat", "unsat" or "timeout"; "unsettled" where a search without the levels that judge the map alone
+    settled nothing, its enumeration capped or no optimal map of it accepted by them, so that the same try
+    was made again with them: :mod:`.mapcheck`), and the seconds its grounding and solving took."""
 
     dstates: str
     result: str

@@ -221,15 +221,18 @@ class ExactSearch:
 
         result = grounding.solve(budget.deadline, on_model)
         if deferred and result is not None:
-            # The levels left out judge each map found (their verdicts settle the question, or not).
-            accepted = [c for c in map(state.map_check, optimal) if c is not None]
+            # The levels left out judge each map found, where their verdicts can settle the question: every
+            # map within the bound was enumerated (a capped enumeration settles nothing, whatever they say).
+            accepted = None
+            if result.satisfiable and result.exhausted:
+                accepted = [c for c in map(state.map_check, optimal) if c is not None]
             if not _settled(result, accepted, optimise):
                 state.ground_s += grounding.ground_s
                 state.solve_s += grounding.solve_s
-                state.tries.append(Try(what, "rejected", grounding.ground_s + grounding.solve_s))
+                state.tries.append(Try(what, "unsettled", grounding.ground_s + grounding.solve_s))
                 state.deferred_levels = ()  # it will again: the rest of this resolution searches with them
                 return None
-            optimal = accepted
+            optimal = accepted if accepted is not None else optimal
         state.ground_s += grounding.ground_s
         state.solve_s += grounding.solve_s
         if deferred:
@@ -244,9 +247,10 @@ class ExactSearch:
         return Outcome(optimal, bool(result.exhausted), grounding if keep else None)
 
 
-def _settled(result: clingo.SolveResult, accepted: list, optimise: bool) -> bool:
+def _settled(result: clingo.SolveResult, accepted: list | None, optimise: bool) -> bool:
     """Whether the maps a search found without the levels that judge the map alone, and those the levels
-    accepted (``accepted``), answer the search's question as a search with the levels would:
+    accepted (``accepted``; None where they were not asked), answer the search's question as a search with
+    the levels would:
 
     - no map at all: neither has the whole theory;
     - every map enumerated (``exhausted``): the accepted ones are all the maps of the whole theory within
@@ -258,4 +262,6 @@ def _settled(result: clingo.SolveResult, accepted: list, optimise: bool) -> bool
     """
     if not result.satisfiable:
         return True
-    return bool(result.exhausted) and (bool(accepted) or not optimise)
+    if not result.exhausted or accepted is None:
+        return False
+    return bool(accepted) or not optimise
