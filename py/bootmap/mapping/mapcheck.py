@@ -42,9 +42,9 @@ SHOW_MAP = "".join(f"#show {name}/{arity}. " for name, arity in sorted(MAP_INPUT
 
 _INPUT_NAMES = frozenset(name for name, _ in MAP_INPUTS)
 
-#: The check shows one of the map's inputs, so that (as beside the other files, which show atoms) only
-#: what the levels ``#show`` is shown; it is left out of the result.
-SHOW_INPUT = "#show dstate/1."
+#: The check shows only what the levels ``#show`` (as beside the other files, which show atoms), not every
+#: atom, as a program without any ``#show`` would.
+SHOW_ONLY_SHOWN = "#show."
 
 
 def is_map_input(symbol: Symbol) -> bool:
@@ -71,11 +71,11 @@ class MapCheck:
         control = clingo.Control(["--warn=none"])
         for f in self.files:
             control.load(f)
-        control.add("base", [], SHOW_INPUT)  # only what the levels #show, as beside the other files
+        control.add("base", [], SHOW_ONLY_SHOWN)
         add_facts(control, inputs)
         control.ground([("base", [])])
         shown: list[list[Symbol]] = []
         result = control.solve(on_model=lambda m: shown.append(m.symbols(shown=True)))
         if not result.satisfiable:
             return None
-        return own + [s for s in shown[0] if not (s.name in _INPUT_NAMES and is_map_input(s))]
+        return own + list(shown[0])
