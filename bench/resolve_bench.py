@@ -13,8 +13,9 @@ Every family is also read by a robot: turns with noise of sd 3 degrees, travels'
 their length 3% off (support.noise), unrounded and recorded as a log records them (centimetres, tenths
 of a degree): the same targets of accuracy hold for both.
 
-Run: make bench   (or .venv/bin/python bench/resolve_bench.py [--quick] [--huge]; --huge adds a
-100,000-step walk: under 20 s and 1 GiB is its target)
+Run: make bench   (or .venv/bin/python bench/resolve_bench.py [--quick] [--huge] [--search-map-levels]; --huge adds a
+100,000-step walk: under 20 s and 1 GiB is its target; --search-map-levels grounds the topological level
+with every search, as the resolver did before it was asked of each map found, for comparison)
 """
 
 from __future__ import annotations
@@ -113,8 +114,8 @@ def aliased_walks(count: int):
         yield walk(world, 30, rng, policy="random" if seed % 3 else "explore")
 
 
-def aliasing_sweep(count: int, targets: Targets) -> None:
-    resolver = Resolver(levels=NO_METRICAL, time_limit=ALIASED_TIME_LIMIT_S)
+def aliasing_sweep(count: int, targets: Targets, defer: bool = True) -> None:
+    resolver = Resolver(levels=NO_METRICAL, time_limit=ALIASED_TIME_LIMIT_S, defer_map_levels=defer)
     times, timeouts = [], 0
     for tableau in aliased_walks(count):
         t0 = time.perf_counter()
@@ -187,6 +188,9 @@ def main(argv=None) -> int:
     ap.add_argument("--repeat", type=int, default=3, help="resolves per tableau; the median is printed")
     ap.add_argument("--huge", action="store_true", help=f"also a {HUGE_STEPS:,}-step walk (a minute or more, "
                     "over a GiB of memory)")
+    ap.add_argument("--search-map-levels", action="store_true",
+                    help="search with the levels that judge the map alone (the topological one) instead of "
+                         "asking them of each map found: Resolver(defer_map_levels=False), for comparison")
     ap.add_argument("--huge-child", type=int, help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.huge_child:
@@ -199,7 +203,8 @@ def main(argv=None) -> int:
     print("-" * len(head))
     targets, rows = Targets(), []
     for name, tableau, *levels in cases(args.quick):
-        resolver = Resolver(levels=levels[0] if levels else None, time_limit=120)
+        resolver = Resolver(levels=levels[0] if levels else None, time_limit=120,
+                            defer_map_levels=not args.search_map_levels)
         truth = [s.truth for s in tableau.steps]
         runs = []
         for _ in range(args.repeat):
@@ -226,7 +231,7 @@ def main(argv=None) -> int:
             targets.check(f"ours, {name}: time", total, "<", PAPER_MAX_S, fmt="{:.3f}", unit=" s")
         if steps == LARGE_STEPS:
             targets.check(f"ours, {name}: time", total, "<", LARGE_MAX_S, fmt="{:.1f}", unit=" s")
-    aliasing_sweep(10 if args.quick else 40, targets)
+    aliasing_sweep(10 if args.quick else 40, targets, defer=not args.search_map_levels)
     ratio_where_both_are_right(targets, (50,) if args.quick else (50, 250, 625))
     if args.huge:
         huge_row(targets)
