@@ -47,8 +47,9 @@ def test_the_topological_level_judges_the_map_alone_and_the_causal_and_metrical_
 
 
 def test_a_users_level_qualifies_by_what_its_rules_read(axioms_copy):
-    # Reads only the map: deferred. Reads a time point's view: searched with. Derives what another file
-    # reads: searched with. Chooses: searched with. Shows a transition: searched with.
+    # Reads only the map: deferred. Reads a time point's view, or an atom classically negated: searched
+    # with. Derives what another file reads: searched with. Chooses: searched with. Shows a transition: searched
+    # with.
     (axioms_copy / "nocycle.lp").write_text(
         "% No dstate is reached from itself by one travel.\n"
         "self_travel(D) :- next(D, travel, D).\n"
@@ -59,6 +60,7 @@ def test_a_users_level_qualifies_by_what_its_rules_read(axioms_copy):
     (axioms_copy / "uses.lp").write_text(":- hub(D), time(D).\n")
     (axioms_copy / "chooses.lp").write_text("{ marked(D) } :- dstate(D).\n")
     (axioms_copy / "shows.lp").write_text("loop(D) :- next(D, _, D).\n#show next/3.\n")
+    (axioms_copy / "negates.lp").write_text("lit(D) :- dstate(D), -lamp(D).\n")  # reads lamp/1, classically negated
     assert load_theory(axioms_copy).map_levels == ("nocycle", "topological")
 
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 import os
 import re
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, lru_cache
 from pathlib import Path
 from typing import Iterable, Sequence
 
@@ -167,81 +167,37 @@ class _Program:
 
 
 def _program_of(path: Path) -> _Program:
-    """Parse a file's rules (clingo's own parser) into what they derive and read; a file unchanged since
-    (same size and modification time) is not parsed again."""
+    """What a file's rules derive and read (:func:`.vocabulary.signatures`, clingo's own parser), and whether
+    its statements are plain; parsed again only when the file changed (its size or modification time)."""
     stat = Path(path).stat()
-    key = (str(path), stat.st_mtime_ns, stat.st_size)
-    found = _PARSED.get(key)
-    if found is None:
-        found = _PARSED[key] = _parse_program(path)
-    return found
+    return _parsed(str(path), stat.st_mtime_ns, stat.st_size)
 
 
-#: Files already parsed by :func:`_program_of`, by path, modification time and size.
-_PARSED: dict[tuple[str, int, int], _Program] = {}
-
-
-def _parse_program(path: Path) -> _Program:
+@lru_cache(maxsize=64)
+def _parsed(path: str, _mtime_ns: int, _size: int) -> _Program:
     from clingo import ast
 
-    defines: set[tuple[str, int]] = set()
-    reads: set[tuple[str, int]] = set()
+    from .vocabulary import signatures
+
+    defines, used, _ = signatures([path])
     shows: set[tuple[str, int]] = set()
     plain = True
-    allowed = {ast.ASTType.Rule, ast.ASTType.ShowSignature, ast.ASTType.ShowTerm, ast.ASTType.Definition,
-               ast.ASTType.Comment, ast.ASTType.Program}
+    allowed = {ast.ASTType.Rule, ast.ASTType.ShowSignature, ast.ASTType.Definition, ast.ASTType.Comment,
+               ast.ASTType.Program}
 
     def visit(stmt) -> None:
         nonlocal plain
         kind = stmt.ast_type
         if kind not in allowed or (kind == ast.ASTType.Program and stmt.name != "base"):
-            plain = False
-            return
-        if kind == ast.ASTType.Rule:
-            head = stmt.head
-            if head.ast_type != ast.ASTType.Literal or head.sign != ast.Sign.NoSign:
-                plain = False  # a choice, a disjunction, an aggregate or a negated head: not a plain rule
-            else:
-                defines.update(_atoms(head))
-            for literal in stmt.body:
-                reads.update(_atoms(literal))
+            plain = False  # a minimize, an external, a show-term, a script, another program part ...
+        elif kind == ast.ASTType.Rule and (stmt.head.ast_type != ast.ASTType.Literal
+                                           or stmt.head.sign != ast.Sign.NoSign):
+            plain = False  # a choice, a disjunction, an aggregate or a negated head: not a plain rule
         elif kind == ast.ASTType.ShowSignature:
             shows.add((stmt.name, stmt.arity))
-        elif kind == ast.ASTType.ShowTerm:
-            plain = False  # shows terms of its own making: not only the level's atoms
-            for literal in stmt.body:
-                reads.update(_atoms(literal))
 
-    ast.parse_files([str(path)], visit)
-    return _Program(frozenset(defines), frozenset(reads | shows), frozenset(shows), plain)
-
-
-def _atoms(node) -> set[tuple[str, int]]:
-    """The predicates (name, arity) of the symbolic atoms anywhere in an AST node."""
-    from clingo import ast
-
-    out: set[tuple[str, int]] = set()
-    stack = [node]
-    while stack:
-        n = stack.pop()
-        if n.ast_type == ast.ASTType.SymbolicAtom:
-            term = n.symbol
-            if term.ast_type == ast.ASTType.UnaryOperation:  # classical negation: -p(X)
-                term = term.argument
-            if term.ast_type == ast.ASTType.Function:
-                out.add((term.name, len(term.arguments)))
-            elif term.ast_type == ast.ASTType.SymbolicTerm:  # a constant atom: p
-                out.add((str(term.symbol), 0))
-            continue
-        for key in n.child_keys:
-            child = getattr(n, key)
-            if child is None:
-                continue
-            if isinstance(child, ast.AST):
-                stack.append(child)
-            else:
-                stack.extend(c for c in child if isinstance(c, ast.AST))
-    return out
+    ast.parse_files([path], visit)
+    return _Program(frozenset(defines), frozenset(used | shows), frozenset(shows), plain)
 
 
 def _labelled_rules(path: Path, level: str) -> list[Rule]:

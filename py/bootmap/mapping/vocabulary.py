@@ -290,6 +290,8 @@ def signatures(files: Iterable[str | Path]) -> tuple[set[tuple[str, int]], set[t
         class Collect(ast.Transformer):
             def visit_SymbolicAtom(self, atom):
                 term = atom.symbol
+                if term.ast_type == ast.ASTType.UnaryOperation:  # classical negation: -p(X) is of p/1
+                    term = term.argument
                 if term.ast_type == ast.ASTType.Function:
                     into.add((term.name, len(term.arguments)))
                 elif term.ast_type == ast.ASTType.SymbolicTerm and term.symbol.type == clingo.SymbolType.Function:
