@@ -198,8 +198,7 @@ class ExactSearch:
             budget.check_clock(what)
             size = grounding_size(layout, state.classes, state.facts)
             budget.check_grounding(what, size)
-        wanted = state.resolver.max_models + 1 if models is None else models
-        options = [str(wanted)]
+        options = [str(state.resolver.max_models + 1 if models is None else models)]
         if optimise:
             options += ["--opt-mode=optN", "--opt-strategy=usc"]
         grounding = Grounding(state.resolver.theory, state.facts + layout, state.depth, options,
@@ -220,6 +219,9 @@ class ExactSearch:
             (optimal if not optimise or m.optimality_proven else improving).append(m.symbols(shown=True))
 
         result = grounding.solve(budget.deadline, on_model)
+        state.ground_s += grounding.ground_s
+        state.solve_s += grounding.solve_s
+        seconds = grounding.ground_s + grounding.solve_s
         if deferred and result is not None:
             # The levels left out judge each map found, where their verdicts can settle the question: every
             # map within the bound was enumerated (a capped enumeration settles nothing, whatever they say).
@@ -227,22 +229,18 @@ class ExactSearch:
             if result.satisfiable and result.exhausted:
                 accepted = [c for c in map(state.map_check, optimal) if c is not None]
             if not _settled(result, accepted, optimise):
-                state.ground_s += grounding.ground_s
-                state.solve_s += grounding.solve_s
-                state.tries.append(Try(what, "unsettled", grounding.ground_s + grounding.solve_s))
+                state.tries.append(Try(what, "unsettled", seconds))
                 state.deferred_levels = ()  # it will again: the rest of this resolution searches with them
                 return None
             optimal = accepted if accepted is not None else optimal
-        state.ground_s += grounding.ground_s
-        state.solve_s += grounding.solve_s
-        if deferred:
-            improving = [c for c in map(state.map_check, improving[-1:]) if c is not None]
         verdict = "timeout" if result is None else ("sat" if result.satisfiable and optimal else "unsat")
-        state.tries.append(Try(what, verdict, grounding.ground_s + grounding.solve_s))
+        state.tries.append(Try(what, verdict, seconds))
         if result is None:
             if state.classes is None:  # timed out in the first try: the classes still bound the answer
                 state.classes = grounding.classes(range(len(state.tableau)))
                 state.proved = state.classes.count
+            if deferred:  # the best map so far must be one the levels left out accept
+                improving = [c for c in map(state.map_check, improving[-1:]) if c is not None]
             raise budget.timed_out(what, improving)
         return Outcome(optimal, bool(result.exhausted), grounding if keep else None)
 
