@@ -179,7 +179,6 @@ def _parsed(path: str, _mtime_ns: int, _size: int) -> _Program:
 
     from .vocabulary import signatures
 
-    defines, used, _ = signatures([path])
     shows: set[tuple[str, int]] = set()
     plain = True
     allowed = {ast.ASTType.Rule, ast.ASTType.ShowSignature, ast.ASTType.Definition, ast.ASTType.Comment,
@@ -196,7 +195,7 @@ def _parsed(path: str, _mtime_ns: int, _size: int) -> _Program:
         elif kind == ast.ASTType.ShowSignature:
             shows.add((stmt.name, stmt.arity))
 
-    ast.parse_files([path], visit)
+    defines, used, _ = signatures([path], also=visit)
     return _Program(frozenset(defines), frozenset(used | shows), frozenset(shows), plain)
 
 
