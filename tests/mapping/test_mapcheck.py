@@ -7,14 +7,21 @@ searches with every level: where the level accepts every map found, where it rej
 all of them, where the search is made again with it, and where it rejects every map there is.
 """
 
+from contextlib import contextmanager
+from unittest import mock
+
+import clingo
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from clingo import Function, Number
 
 from bootmap import examples
 from bootmap.errors import InconsistentTableau
+from bootmap.mapping.facts import add_facts
 from bootmap.mapping.resolver import Resolver
+from bootmap.mapping.search import exact
 from bootmap.mapping.theory import load_theory
 from support.gridworld import random_world, walk
 from support.noise import with_misreads, with_odometry_noise
@@ -92,14 +99,25 @@ def grid(seed: int):
     return walk(world, 40 + 5 * seed, rng, policy="explore" if seed % 2 else "random")
 
 
+def not_monotone(axioms_copy):
+    """The axiom copy with the topological level's word that it is monotone taken out: a level that judges
+    the map alone but may accept a map with more transitions than one it rejects, never learned from."""
+    path = axioms_copy / "topological.lp"
+    path.write_text("\n".join(line for line in path.read_text().splitlines() if not line.startswith("% Monotone:")))
+    assert Resolver(axioms=axioms_copy).theory.monotone_levels == ()
+    return axioms_copy
+
+
 @pytest.mark.parametrize("seed, levels, verdicts", [
     (1, None, "some rejected"),                        # the maps the topological level accepts are the answer
     (0, ["causal", "topological"], "none accepted"),   # none accepted, all enumerated: the bound is proved
     (2, ["causal", "topological"], "searched again"),  # capped before all were enumerated: searched with it
 ], ids=["some-rejected", "none-accepted", "searched-again"])
-def test_where_the_topological_level_rejects_maps_found_without_it_its_verdict_is_kept(seed, levels, verdicts,
-                                                                                     monkeypatch):
+def test_where_a_level_not_known_monotone_rejects_maps_found_without_it_its_verdict_is_kept(
+        seed, levels, verdicts, monkeypatch, axioms_copy):
     from bootmap.mapping.mapcheck import MapCheck
+
+    axioms = not_monotone(axioms_copy)
 
     asked = []
     real = MapCheck.__call__
@@ -110,7 +128,7 @@ def test_where_the_topological_level_rejects_maps_found_without_it_its_verdict_i
         return out
 
     monkeypatch.setattr(MapCheck, "__call__", recorded)
-    deferred, searched = both(grid(seed), levels=levels)
+    deferred, searched = both(grid(seed), levels=levels, axioms=axioms)
     assert said(deferred) == said(searched)
     assert ("unsettled" in results(deferred)) == (verdicts == "searched again")
     if verdicts == "some rejected":
@@ -149,3 +167,140 @@ def test_misread_views_give_the_same_maps_either_way(seed):
     tableau, _ = with_misreads(examples.notched_rectangle(6), 0.02, np.random.default_rng(seed))
     deferred, searched = both(tableau)
     assert said(deferred) == said(searched)
+
+
+# --- learning from a rejected map: the level's word that it is monotone, and the reasons it gives -----------
+
+def test_the_stock_topological_level_says_it_is_monotone_and_a_users_level_only_if_it_says_so(axioms_copy):
+    assert load_theory().monotone_levels == ("topological",)
+    (axioms_copy / "nocycle.lp").write_text("self_travel(D) :- next(D, travel, D).\n:- self_travel(D), dstate(D).\n")
+    (axioms_copy / "hubs.lp").write_text("% Monotone: more transitions only make more hubs.\n"
+                                         "hub(D) :- next(D, A, _), next(D, B, _), A != B.\n#show hub/1.\n")
+    theory = load_theory(axioms_copy)
+    assert theory.map_levels == ("hubs", "nocycle", "topological")
+    assert theory.monotone_levels == ("hubs", "topological")
+
+
+#: turns, a turn-around, a travel; and a log's travels (a length type, one that bent round a corner)
+ACTIONS = ([Function("turn", [Number(a)]) for a in (90, -90, 180)] + [Function("travel")]
+           + [Function("travel", [Number(20)])] + [Function("travel", [Number(20), Number(c)]) for c in (90, -90)])
+
+
+def a_map(draw_edges, n: int) -> list:
+    """A map's shown symbols: dstates 0..n-1 and the transitions ``(from, action index, to)``."""
+    return ([Function("dstate", [Number(d)]) for d in range(n)]
+            + [Function("next", [Number(a), ACTIONS[k], Number(b)]) for a, k, b in draw_edges])
+
+
+edges = st.lists(st.tuples(st.integers(0, 5), st.integers(0, len(ACTIONS) - 1), st.integers(0, 5)), min_size=1, max_size=14,
+                 unique=True)
+
+
+@settings(max_examples=150, deadline=None)
+@given(whole=edges, keep=st.lists(st.booleans(), min_size=14, max_size=14))
+def test_the_stock_topological_level_is_monotone_as_it_says(whole, keep):
+    # A map it rejects stays rejected with more transitions (and dstates): what the search's learning rests on.
+    from bootmap.mapping.mapcheck import MapCheck
+
+    check = MapCheck(load_theory(), ["topological"])
+    part = [e for e, k in zip(whole, keep) if k]
+    used = 1 + max([max(a, b) for a, _, b in part], default=0)
+    if check(a_map(part, used)) is None:
+        assert check(a_map(whole, 6)) is None
+
+
+@settings(max_examples=150, deadline=None)
+@given(whole=edges, names=st.permutations(range(6)))
+def test_the_stock_topological_level_judges_a_map_by_its_shape_not_by_its_dstates_names(whole, names):
+    # Renamed, a map is accepted or rejected as it was (the names order the places' and paths' names only):
+    # what lets the search rule out a rejected map's reasons under every renaming of their dstates.
+    from bootmap.mapping.mapcheck import MapCheck
+
+    check = MapCheck(load_theory(), ["topological"])
+    renamed = [(names[a], k, names[b]) for a, k, b in whole]
+    assert (check(a_map(whole, 6)) is None) == (check(a_map(renamed, 6)) is None)
+
+
+@settings(max_examples=60, deadline=None)
+@given(whole=edges)
+def test_the_reasons_for_a_rejection_are_rejected_alone_and_none_can_be_spared(whole):
+    from bootmap.mapping.mapcheck import MapCheck
+
+    check = MapCheck(load_theory(), ["topological"])
+    model = a_map(whole, 6)
+    reasons = check.reasons(model)
+    dstates = [s for s in model if s.match("dstate", 1)]
+    if check(model) is not None:
+        assert reasons == []
+        return
+    assert reasons and set(reasons) <= set(model)
+    assert check(dstates + reasons) is None
+    for left_out in reasons:
+        assert check(dstates + [r for r in reasons if r != left_out]) is not None
+
+
+@contextmanager
+def learning(share: float = 1e9):
+    """Every search learns from the maps the level rejects (however small: the resolver learns only in large
+    ones), for at most ``share`` times its grounding's seconds."""
+    with mock.patch.object(exact, "LEARN_MIN_SIZE", 0), mock.patch.object(exact, "LEARN_SHARE", share):
+        yield
+
+
+def test_maps_the_level_rejects_are_learned_from_and_the_maps_are_the_same():
+    # The 40-step walk of grid seed 1: maps the topological level rejects are found without it; the search
+    # rules each out with the maps that share its reasons and ends at the maps of a search with the level.
+    with learning():
+        deferred, searched = both(grid(1))
+    assert said(deferred) == said(searched)
+    assert any(t.rejected for t in deferred.stats.bounds) and "unsettled" not in results(deferred)
+    told = deferred.stats.to_dict()["bounds"]
+    assert sum(b["rejected"] for b in told) == sum(t.rejected for t in deferred.stats.bounds)
+
+
+def test_where_learning_would_take_longer_than_grounding_the_level_the_search_grounds_it():
+    with learning(share=0.0):  # no time to learn: the first map rejected ends it
+        deferred, searched = both(grid(1))
+    assert said(deferred) == said(searched)
+    assert "unsettled" in results(deferred)
+
+
+@settings(max_examples=10, deadline=None)
+@given(seed=st.integers(0, 10_000), steps=st.integers(20, 140), size=st.sampled_from([(3, 3), (4, 3), (4, 4)]),
+       noisy=st.booleans(), misreads=st.booleans())
+def test_learning_from_rejected_maps_gives_the_maps_of_a_search_with_the_level(seed, steps, size, noisy, misreads):
+    rng = np.random.default_rng(seed)
+    tableau = walk(random_world(rng, *size, extra_edges=seed % 3, landmarks=0.4 * (seed % 2)), steps, rng,
+                   policy="explore" if seed % 2 else "random")
+    if noisy:
+        tableau = with_odometry_noise(tableau, 3.0, 1.2, rng, distance_sd=0.03)
+    if misreads:
+        tableau, _ = with_misreads(tableau, 0.03, rng)
+    with learning():
+        deferred, searched = both(tableau)
+    assert said(deferred) == said(searched)
+
+
+def test_a_renamed_reason_keeps_each_dstate_in_its_class_and_different_dstates_apart():
+    # Rejected transitions, renamed: each dstate to a slot of its own class the grounding has, two dstates
+    # of one class to two slots, every renamed transition one the grounding has.
+    from bootmap.mapping.search.exact import Renamings
+    from bootmap.mapping.vocabulary import CANDIDATE_DSTATE, NEXT
+
+    a, b = Function("k", [Number(1)]), Function("k", [Number(2)])
+    turn = Function("turn", [Number(180)])
+    ctl = clingo.Control(["--warn=none"])
+    ctl.add("base", [], "{ next(d(K, I), A, d(K2, J)) : edge(K, I, A, K2, J) }.")
+    edges = [(a, i, turn, b, j) for i in range(3) for j in range(2)] + [(b, j, turn, a, i) for i in range(3)
+                                                                         for j in range(2)]
+    add_facts(ctl, [Function("edge", [k, Number(i), act, k2, Number(j)]) for k, i, act, k2, j in edges])
+    ctl.ground([("base", [])])
+    # a turn-around from a dstate of class a to one of class b, and back to another dstate of class a
+    x, y, z = CANDIDATE_DSTATE(a, 0), CANDIDATE_DSTATE(b, 0), CANDIDATE_DSTATE(a, 1)
+    renamings = Renamings(ctl.symbolic_atoms)([NEXT(x, turn, y), NEXT(y, turn, z)])
+    names = {tuple(str(s) for s, _ in r) for r in renamings}
+    assert len(names) == len(renamings) == 3 * 2 * 2  # x: 3 slots, y: 2, z: a slot of a other than x's
+    for r in renamings:
+        (first, lit1), (second, lit2) = r
+        assert first.arguments[2] == second.arguments[0] and first.arguments[0] != second.arguments[2]
+        assert ctl.symbolic_atoms[first].literal == lit1 and ctl.symbolic_atoms[second].literal == lit2

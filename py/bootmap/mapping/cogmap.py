@@ -28,6 +28,9 @@ class Try:
     dstates: str
     result: str
     seconds: float = 0.0
+    #: maps the search found and the levels that judge the map alone rejected, each ruled out with every map
+    #: that shares the transitions they reject it for (:meth:`.mapcheck.MapCheck.reasons`)
+    rejected: int = 0
 
 
 @dataclass(frozen=True)
@@ -47,8 +50,8 @@ class SolveStats:
         return {"classes": self.classes, "lower_bound": self.lower_bound,
                 "as_seen_lower_bound": self.as_seen_lower_bound, "ground_s": self.ground_s,
                 "solve_s": self.solve_s, "total_s": self.total_s,
-                "bounds": [{"dstates": b.dstates, "result": b.result, "seconds": round(b.seconds, 3)}
-                           for b in self.bounds]}
+                "bounds": [{"dstates": b.dstates, "result": b.result, "seconds": round(b.seconds, 3),
+                            "rejected": b.rejected} for b in self.bounds]}
 
 
 @dataclass

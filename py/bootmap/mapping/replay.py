@@ -48,7 +48,7 @@ from .theory import Theory
 STOCK_DIGESTS = {
     "causal.lp": "c53ada773c9738d3654228e1c660ac260badc953658d8500509d83f0c2c4f473",
     "metrical.lp": "4628513194f19408c98f56c8d15750bd6f1cb69f46904f76d5521ada01d6dbb5",
-    "topological.lp": "b4f0c61157346150b0009e9d4c892e37555713729af5fcc7935c08d7cbc6fa87",
+    "topological.lp": "729a309a6a1c99d71f9769994c8d83671d5bdf02b740bfac88e3f71b7759cb71",
     "core/ask.lp": "2e8adf403568adf1bc5e166b19bde32ba2fdaac7f873adef0930bb9071c939ca",
     "core/partition.lp": "5a5041dcda4ff90134c77b13f5c751ef32325af467a675c6f5272a5a5f7f41c0",
     "core/assert.lp": "2c01befdceb28aa69c8a639e07b55dc2b96f6280fd2d7f052fe55fa211a76c17",

@@ -88,6 +88,16 @@ class Theory:
                 found.append(name)
         return tuple(found)
 
+    @cached_property
+    def monotone_levels(self) -> tuple[str, ...]:
+        """The levels of :attr:`map_levels` whose file says ``% Monotone:`` in a comment line: a map they
+        reject stays rejected when dstates and transitions are added to it, and whatever its dstates are
+        called. The search then learns, from a map they reject, that every map with the same few
+        transitions, or a renaming of them, is rejected (:mod:`.mapcheck`, :mod:`.search.exact`). A level's
+        own word, as its rules' meaning is (the stock topological level's is tested on random maps); a
+        user level that does not say it is asked of each map as it is, never generalised from."""
+        return tuple(name for name in self.map_levels if _says_monotone(self.levels[name]))
+
     def rules(self) -> list[Rule]:
         """Every ``%! name`` labelled rule, in file order."""
         out = []
@@ -197,6 +207,14 @@ def _parsed(path: str, _mtime_ns: int, _size: int) -> _Program:
 
     defines, used, _ = signatures([path], also=visit)
     return _Program(frozenset(defines), frozenset(used | shows), frozenset(shows), plain)
+
+
+_MONOTONE = re.compile(r"^%\s*Monotone:")
+
+
+def _says_monotone(path: Path) -> bool:
+    """Whether a level file declares itself monotone (a comment line starting ``% Monotone:``)."""
+    return any(_MONOTONE.match(line) for line in Path(path).read_text().splitlines())
 
 
 def _labelled_rules(path: Path, level: str) -> list[Rule]:
