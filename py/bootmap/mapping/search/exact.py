@@ -43,6 +43,10 @@ LEARN_MIN_SIZE, LEARN_SHARE = 5000, 5.0
 #: At most so many renamings of one rejected map's reasons are learned.
 MAX_RENAMINGS = 5000
 
+#: So many maps a search that seeks no optimum rejects are set aside before it learns from them (its
+#: enumeration never finds a map twice; where few are rejected, the reasons cost more than they save).
+LAZY_REJECTIONS = 1
+
 
 @dataclass
 class Outcome:
@@ -300,21 +304,34 @@ class ExactSearch:
             optimal: list[list[Symbol]] = []
             improving: list[list[Symbol]] = []
 
+            def learn(shown: list[Symbol], context: clingo.SolveControl | None) -> None:
+                """Rule out the maps that share a rejected map's reasons, renamed: now (``context``: in this
+                solve) and, kept in ``learned``, in any solve made again."""
+                reasons = check.reasons(shown)
+                learned.append(reasons)
+                if context is None:
+                    return
+                context.add_nogood([(s, True) for s in reasons])
+                if not renamings:
+                    renamings.append(Renamings(context.symbolic_atoms))
+                for renaming in renamings[0](reasons):
+                    if [s for s, _ in renaming] != reasons:
+                        context.add_nogood([lit for _, lit in renaming])
+                        learned.append([s for s, _ in renaming])
+
             def on_model(m: clingo.Model) -> bool:
                 t0 = time.perf_counter()
                 shown = m.symbols(shown=True)
                 accepted = check(shown)
                 if accepted is None:
-                    reasons = check.reasons(shown)
-                    if not renamings:
-                        renamings.append(Renamings(m.context.symbolic_atoms))
-                    m.context.add_nogood([(s, True) for s in reasons])
-                    learned.append(reasons)
-                    for renaming in renamings[0](reasons):
-                        if [s for s, _ in renaming] != reasons:
-                            m.context.add_nogood([lit for _, lit in renaming])
-                            learned.append([s for s, _ in renaming])
+                    # An enumeration never finds a map twice: where no optimum is sought, the first rejected
+                    # maps are only set aside, and their reasons asked for once more are rejected.
                     rejected[0] += 1
+                    pending.append(shown)
+                    if optimise or len(pending) > LAZY_REJECTIONS:
+                        for each in pending:
+                            learn(each, m.context)
+                        pending.clear()
                     spent[0] += time.perf_counter() - t0
                     return spent[0] < allowed
                 spent[0] += time.perf_counter() - t0
@@ -322,13 +339,17 @@ class ExactSearch:
                 return len(optimal) < cap
 
             done = len(learned)
+            pending: list[list[Symbol]] = []  # maps rejected in this solve, not learned from yet
             renamings.clear()  # (a solve may drop atoms it proved false: indexed again in each)
             result = grounding.solve(deadline, on_model)
             if result is not None and spent[0] >= allowed:
                 return None
-            if result is None or optimal or not optimise or len(learned) == done:
+            if result is None or optimal or not optimise or rejected[0] == 0:
                 return result, optimal, improving, rejected[0]
-            # every optimal map found was rejected: what was learned is kept for the search made again
+            for each in pending:  # every optimal map found was rejected: the search is made again
+                learn(each, None)
+            if len(learned) == done:
+                return result, optimal, improving, rejected[0]
             atoms = control.symbolic_atoms
             # (clingo drops atoms its solve proved false from the grounding: a nogood with one holds anyway)
             nogoods = [[atoms[s].literal for s in reasons] for reasons in learned[done:]
