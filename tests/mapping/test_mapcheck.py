@@ -304,3 +304,38 @@ def test_a_renamed_reason_keeps_each_dstate_in_its_class_and_different_dstates_a
         (first, lit1), (second, lit2) = r
         assert first.arguments[2] == second.arguments[0] and first.arguments[0] != second.arguments[2]
         assert ctl.symbolic_atoms[first].literal == lit1 and ctl.symbolic_atoms[second].literal == lit2
+
+
+def crowded(axioms_copy, most: int):
+    """A user's monotone level that rejects a map of more than ``most`` dstates."""
+    (axioms_copy / "crowded.lp").write_text(
+        "% Monotone: more dstates and transitions never make fewer dstates.\n"
+        f"crowded :- #count {{ D : dstate(D) }} > {most}.\n:- crowded.\n")
+    theory = load_theory(axioms_copy)
+    assert "crowded" in theory.monotone_levels
+    return theory
+
+
+def test_a_reason_is_the_transitions_of_a_map_the_level_rejects_with_no_other_dstate(axioms_copy):
+    # Rejected for its dstates, a map's reasons are transitions that reach too many; where its transitions
+    # reach few (the other dstates reached by none), there is no reason: a map with those transitions
+    # and nothing else is accepted, and nothing may be ruled out beside this map.
+    from bootmap.mapping.mapcheck import MapCheck
+
+    check = MapCheck(crowded(axioms_copy, 2), ["crowded"])
+    travel = ACTIONS.index(Function("travel"))
+    isolated = a_map([(0, travel, 1)], 6)
+    assert check(isolated) is None and check.reasons(isolated) == []
+    chain = a_map([(0, travel, 1), (1, travel, 2), (2, travel, 3)], 4)
+    reasons = check.reasons(chain)
+    assert len(reasons) == 2 and check(a_map([(0, travel, 1)], 2)) is not None
+    reached = {d for s in reasons for d in (s.arguments[0], s.arguments[2])}
+    assert check([Function("dstate", [d]) for d in reached] + reasons) is None
+
+
+def test_learning_from_a_level_that_counts_dstates_gives_the_maps_of_a_search_with_it(axioms_copy):
+    searched = Resolver(time_limit=120, defer_map_levels=False).resolve(grid(1))
+    crowded(axioms_copy, searched.n_dstates)
+    with learning():
+        deferred, searched = both(grid(1), axioms=axioms_copy)
+    assert said(deferred) == said(searched)

@@ -42,6 +42,7 @@ from clingo import Symbol
 
 from .facts import add_facts
 from .theory import MAP_INPUTS, Theory
+from .vocabulary import NEXT
 
 #: What a search without the map's levels shows beside its own atoms: the map the levels judge.
 SHOW_MAP = "".join(f"#show {name}/{arity}. " for name, arity in sorted(MAP_INPUTS))
@@ -59,10 +60,12 @@ def is_map_input(symbol: Symbol) -> bool:
 
 
 #: How the search's reason for a rejection is asked: each transition of the map is an external atom the
-#: levels read, true only where assumed, so that a solve under some of them asks the levels of the map
-#: made of those transitions alone.
+#: levels read, true only where assumed, and its dstates are dstates, so that a solve under some of them
+#: asks the levels of the map made of those transitions alone (no other dstate: a reason holds of every
+#: map with those transitions, whatever else it has, only where the map it names is just them).
 _TRANSITION = "bootmap_map_transition"
-ASK_TRANSITIONS = f"#external next(D, A, D2) : {_TRANSITION}(D, A, D2)."
+ASK_TRANSITIONS = (f"#external next(D, A, D2) : {_TRANSITION}(D, A, D2)."
+                   " dstate(D) :- next(D, _, _). dstate(D) :- next(_, _, D).")
 
 
 class MapCheck:
@@ -80,16 +83,22 @@ class MapCheck:
         #: of a rejected map holds of every map that has them
         self.monotone = all(name in theory.monotone_levels for name in levels)
 
+    def _grounded(self, facts: Sequence[Symbol], program: str = "") -> clingo.Control:
+        """The levels grounded on these facts (and ``program``, the project's own rules), showing only what
+        they show."""
+        control = clingo.Control(["--warn=none"])
+        for f in self.files:
+            control.load(f)
+        control.add("base", [], SHOW_ONLY_SHOWN + program)
+        add_facts(control, facts)
+        control.ground([("base", [])])
+        return control
+
     def __call__(self, model: Sequence[Symbol]) -> list[Symbol] | None:
         own, inputs = [], []
         for s in model:  # one call into clingo per symbol: a model lists every time point's dstate
             (inputs if s.name in _INPUT_NAMES and is_map_input(s) else own).append(s)
-        control = clingo.Control(["--warn=none"])
-        for f in self.files:
-            control.load(f)
-        control.add("base", [], SHOW_ONLY_SHOWN)
-        add_facts(control, inputs)
-        control.ground([("base", [])])
+        control = self._grounded(inputs)
         shown: list[list[Symbol]] = []
         result = control.solve(on_model=lambda m: shown.append(m.symbols(shown=True)))
         if not result.satisfiable:
@@ -101,15 +110,10 @@ class MapCheck:
         (``next/3``) that they reject alone: no transition of the set can be left out. Where the levels are
         monotone (:attr:`monotone`), every map with these transitions is rejected, so a search may rule
         them out together. Found by QuickXplain (Junker, AAAI 2004) over the map's transitions, each an
-        assumption of one small grounding: a few dozen solves. Empty if the levels accept the map."""
-        transitions = [s for s in model if s.match("next", 3)]
-        control = clingo.Control(["--warn=none"])
-        for f in self.files:
-            control.load(f)
-        control.add("base", [], SHOW_ONLY_SHOWN + ASK_TRANSITIONS)
-        add_facts(control, [s for s in model if s.match("dstate", 1)]
-                  + [clingo.Function(_TRANSITION, s.arguments) for s in transitions])
-        control.ground([("base", [])])
+        assumption of one small grounding: a few dozen solves. Empty if the levels accept the map made of
+        its transitions alone (as they do any map they reject only for a dstate no transition reaches)."""
+        transitions = [s for s in model if NEXT.matches(s)]
+        control = self._grounded([clingo.Function(_TRANSITION, s.arguments) for s in transitions], ASK_TRANSITIONS)
         literal = [control.symbolic_atoms[s].literal for s in transitions]
         for lit in literal:  # an external is false unless assigned, by an assumption of its own: let it free,
             control.assign_external(lit, None)  # so that each solve's assumptions say which hold

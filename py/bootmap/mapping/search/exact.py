@@ -240,17 +240,12 @@ class ExactSearch:
         def on_model(m: clingo.Model) -> None:
             (optimal if not optimise or m.optimality_proven else improving).append(m.symbols(shown=True))
 
+        unsettled, rejected = False, 0
         if learning:
             learned = self._learn(grounding, cap, optimise)
-            if learned is None:  # rejected too often to learn in time: search with the levels instead
-                state.ground_s += grounding.ground_s
-                state.solve_s += grounding.solve_s
-                state.tries.append(Try(what, "unsettled", grounding.ground_s + grounding.solve_s))
-                state.deferred_levels = ()  # it will again: the rest of this resolution searches with them
-                return None
-            result, optimal, improving, rejected = learned
+            unsettled = learned is None  # not learned in time: search with the levels instead
+            result, optimal, improving, rejected = learned or (None, [], [], 0)
         else:
-            rejected = 0
             result = grounding.solve(budget.deadline, on_model)
         state.ground_s += grounding.ground_s
         state.solve_s += grounding.solve_s
@@ -261,11 +256,12 @@ class ExactSearch:
             accepted = None
             if result.satisfiable and result.exhausted:
                 accepted = [c for c in map(state.map_check, optimal) if c is not None]
-            if not _settled(result, accepted, optimise):
-                state.tries.append(Try(what, "unsettled", seconds))
-                state.deferred_levels = ()  # it will again: the rest of this resolution searches with them
-                return None
+            unsettled = not _settled(result, accepted, optimise)
             optimal = accepted if accepted is not None else optimal
+        if unsettled:
+            state.tries.append(Try(what, "unsettled", seconds))
+            state.deferred_levels = ()  # it will again: the rest of this resolution searches with them
+            return None
         verdict = "timeout" if result is None else ("sat" if result.satisfiable and optimal else "unsat")
         state.tries.append(Try(what, verdict, seconds, rejected))
         if result is None:
@@ -290,24 +286,29 @@ class ExactSearch:
         of a small grounding) and their renamings. Where the levels reject map after map, grounding them
         with the search costs less: learning stops once it has taken ``LEARN_SHARE`` times as long as the
         grounding it learns for (a search with the levels grounds several times as much), and None is
-        returned.
+        returned; so it is where the levels give no reason (a map rejected for a dstate no transition
+        reaches), as nothing could be ruled out beside that map.
 
         Returns clingo's result (None on time-out), the accepted maps (the optimal ones, optimising; at most
         ``cap``), the accepted improving ones, and how many maps were rejected."""
         check, control, deadline = self.state.map_check, grounding.control, self.budget.deadline
         learned: list[list[Symbol]] = []
-        rejected = [0]
-        spent = [0.0]  # seconds checking maps and learning from the rejected ones
+        rejected, spent = 0, 0.0  # maps rejected; seconds checking maps and learning from the rejected ones
         allowed = LEARN_SHARE * grounding.ground_s
         renamings: list[Renamings] = []  # indexed at the first map rejected (most searches reject none)
         while True:
             optimal: list[list[Symbol]] = []
             improving: list[list[Symbol]] = []
+            reasonless = False  # a rejected map the levels gave no reason for
 
             def learn(shown: list[Symbol], context: clingo.SolveControl | None) -> None:
                 """Rule out the maps that share a rejected map's reasons, renamed: now (``context``: in this
                 solve) and, kept in ``learned``, in any solve made again."""
+                nonlocal reasonless
                 reasons = check.reasons(shown)
+                if not reasons:
+                    reasonless = True
+                    return
                 learned.append(reasons)
                 if context is None:
                     return
@@ -320,21 +321,22 @@ class ExactSearch:
                         learned.append([s for s, _ in renaming])
 
             def on_model(m: clingo.Model) -> bool:
+                nonlocal rejected, spent
                 t0 = time.perf_counter()
                 shown = m.symbols(shown=True)
                 accepted = check(shown)
                 if accepted is None:
                     # An enumeration never finds a map twice: where no optimum is sought, the first rejected
-                    # maps are only set aside, and their reasons asked for once more are rejected.
-                    rejected[0] += 1
+                    # maps (LAZY_REJECTIONS) are only set aside, and learned from once more are rejected.
+                    rejected += 1
                     pending.append(shown)
                     if optimise or len(pending) > LAZY_REJECTIONS:
                         for each in pending:
                             learn(each, m.context)
                         pending.clear()
-                    spent[0] += time.perf_counter() - t0
-                    return spent[0] < allowed
-                spent[0] += time.perf_counter() - t0
+                    spent += time.perf_counter() - t0
+                    return spent < allowed and not reasonless
+                spent += time.perf_counter() - t0
                 (optimal if not optimise or m.optimality_proven else improving).append(accepted)
                 return len(optimal) < cap
 
@@ -342,14 +344,16 @@ class ExactSearch:
             pending: list[list[Symbol]] = []  # maps rejected in this solve, not learned from yet
             renamings.clear()  # (a solve may drop atoms it proved false: indexed again in each)
             result = grounding.solve(deadline, on_model)
-            if result is not None and spent[0] >= allowed:
+            if result is not None and (spent >= allowed or reasonless):
                 return None
-            if result is None or optimal or not optimise or rejected[0] == 0:
-                return result, optimal, improving, rejected[0]
+            if result is None or optimal or not optimise or rejected == 0:
+                return result, optimal, improving, rejected
             for each in pending:  # every optimal map found was rejected: the search is made again
                 learn(each, None)
+            if reasonless:
+                return None
             if len(learned) == done:
-                return result, optimal, improving, rejected[0]
+                return result, optimal, improving, rejected
             atoms = control.symbolic_atoms
             # (clingo drops atoms its solve proved false from the grounding: a nogood with one holds anyway)
             nogoods = [[atoms[s].literal for s in reasons] for reasons in learned[done:]
