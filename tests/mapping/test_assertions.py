@@ -9,9 +9,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from bootmap.cli import main
-from bootmap.errors import AssertionsError, InconsistentTableau
+from bootmap.errors import AssertionConflict, AssertionsError, InconsistentTableau
 from bootmap.examples import notched_rectangle
-from bootmap.mapping.api import Mapper
+from bootmap.mapping.api import Mapper, proved
 from bootmap.mapping.assertions import load_assertions, parse_assertions
 from bootmap.mapping.diff import MapDiff
 from bootmap.mapping.grounding import Deadline
@@ -163,6 +163,29 @@ def test_assertions_the_map_already_honours_need_no_search_to_be_cleared(paper, 
     assert grounded  # a clash is still searched for and proved
 
 
+def test_an_apart_the_axioms_refute_is_a_clash_with_its_proof():
+    """There and back again: a robot that turns around twice on the spot faces the way it faced before, at
+    the same place on the same path; the topological level makes those two one dstate (two dstates of one
+    place facing one way along one path are one), so a person's apart of them clashes, and the proof names
+    the assertion, the axiom (file:line) and the three steps."""
+    from bootmap.tableau import Turn
+    tableau = Tableau(tuple(Step(v, a) for v, a in
+                            [("A", Turn(180.0)), ("B", Turn(180.0)), ("A", Travel(1.0)), ("C", None)]))
+    result = Mapper(time_limit=60).honour(tableau, said([{"apart": [0, 2]}], tableau))
+    c = result.conflict
+    assert result.after is None and c is not None and [str(x) for x in c.assertions] == ["apart(t0, t2)"]
+    e = c.explanation
+    assert e.verdict == "same" and e.supposed == "apart" and e.evidence == [0, 1, 2]
+    cited = {r.name: r.cite() for r in e.axioms}
+    assert cited["one_dstate_per_place_and_direction"].startswith("one_dstate_per_place_and_direction (topological.lp:")
+    text = c.to_text()
+    assert "cannot be different dstates" in text and "Suppose t0 and t2 are different dstates" in text
+    assert "t1 view 'B'" in text or "t1 view B" in text
+    # without the topological level the two may differ: no clash
+    assert Mapper(time_limit=60, levels=["causal", "metrical"]).honour(
+        tableau, said([{"apart": [0, 2]}], tableau)).conflict is None
+
+
 def test_an_assertion_the_experience_alone_refutes_is_the_whole_clash(paper):
     result = Mapper().honour(paper, said([{"same": ["t0", "t4"]}, {"apart": ["t2", "t10"]}], paper))
     assert [str(a) for a in result.conflict.assertions] == ["same(t0, t4)"]  # the other is not part of it
@@ -232,12 +255,74 @@ def test_every_answer_honours_the_assertions_or_is_a_minimal_clash(seed, kind, p
         assert check_map(tableau, after.dstate_of, levels=TOPO) == []  # the independent checker agrees
         assert after.n_dstates >= result.before.n_dstates  # minimal without them: never fewer with them
     else:
-        assert kind == "same"  # apart alone never clashes: every time point its own dstate is a map
         e = result.conflict.explanation
-        assert e.verdict == "different" and {a, b} <= set(e.evidence)
+        assert {a, b} <= set(e.evidence) and e.supposed == kind
         assert check_map(tableau, result.before.dstate_of, levels=TOPO) == []
-        # no map of the evidence alone joins them
-        assert not mapper.explainer.can_be_same(tableau, a, b, e.evidence)
+        if kind == "same":  # no map of the evidence alone joins them
+            assert e.verdict == "different" and not mapper.explainer.can_be_same(tableau, a, b, e.evidence)
+        else:  # an apart clashes where the topological level makes them one dstate: no map keeps them apart
+            assert e.verdict == "same" and not mapper.explainer.can_be_apart(tableau, a, b, e.evidence)
+            assert "one_dstate_per_place_and_direction" in [r.name for r in e.axioms]
+
+
+@settings(max_examples=20, deadline=None, suppress_health_check=list(HealthCheck))
+@given(seed=st.integers(0, 10 ** 6), kind=st.sampled_from(["same", "apart"]), pick=st.integers(0, 10 ** 6),
+       keep=st.booleans())
+def test_a_search_from_what_the_map_before_proves_gives_the_fresh_resolves_maps(seed, kind, pick, keep):
+    """The map before an assertion proves how many dstates every map with it needs (a map that honours
+    more assertions honours fewer), and the search may start there; its maps are a fresh resolve's. With an
+    assertion of the map before dropped (``keep`` false), it proves nothing."""
+    rng = np.random.default_rng(seed)
+    world = random_world(rng, 4, 3, extra_edges=int(rng.integers(0, 3)), landmarks=0.3)
+    tableau = walk(world, int(rng.integers(30, 80)), rng, policy="explore")
+    views = tableau.views
+    pairs = [(a, b) for a in range(len(tableau)) for b in range(a + 1, len(tableau)) if views[a] == views[b]]
+    if len(pairs) < 2:
+        return
+    first, second = pairs[pick % len(pairs)], pairs[(pick // len(pairs) + 1) % len(pairs)]
+    resolver = Resolver(time_limit=60)
+    baseline = said([{"apart": list(first)}], tableau)
+    try:
+        before = resolver.resolve(tableau, assertions=baseline)
+    except InconsistentTableau:  # the axioms make them one dstate (test_an_apart_the_axioms_refute_...)
+        return
+    now = said(([{"apart": list(first)}] if keep else []) + [{kind: list(second)}], tableau)
+    bound = proved(before, baseline, now)
+    if keep and before.minimal and not before.suspect_steps:
+        broken = before.unique and not all(x.holds_in(before) for x in now)
+        assert bound == before.n_dstates + broken
+    else:
+        assert bound == 0
+    try:
+        fresh = resolver.resolve(tableau, assertions=now)
+    except InconsistentTableau:
+        with pytest.raises(InconsistentTableau):
+            resolver.resolve(tableau, assertions=now, at_least=bound)
+        return
+    told = resolver.resolve(tableau, assertions=now, at_least=bound)
+    if fresh.models_capped:  # which of more minimal maps than are listed depends on the search's path
+        assert told.n_dstates == fresh.n_dstates
+        return
+    a, b = told.to_dict(), fresh.to_dict()
+    a.pop("stats"), b.pop("stats")
+    assert a == b
+
+
+def test_an_apart_starts_from_the_dstates_the_map_before_it_proves(paper_tableau):
+    """A person's apart on the paper's room, the map before it given (as the service keeps it): that map,
+    the only minimal one, has 8 dstates (one per class) and breaks the apart, so every map with it needs 9;
+    the search starts there, without the one-dstate-per-class try, and finds the fresh resolve's map."""
+    mapper = Mapper(time_limit=60)
+    before = mapper.map(paper_tableau)
+    apart = said([{"apart": [200, 208]}], paper_tableau)
+    result = mapper.honour(paper_tableau, apart, before=before)
+    fresh = Resolver(time_limit=60).resolve(paper_tableau, assertions=apart)
+    assert proved(before, [], apart) == 9 == before.n_dstates + 1
+    assert result.after.n_dstates == fresh.n_dstates == 16 and result.after.dstate_of == fresh.dstate_of
+    assert "one dstate per class" not in [t.dstates for t in result.after.stats.bounds]
+    assert "one dstate per class" in [t.dstates for t in fresh.stats.bounds]
+    # a map before that honoured an assertion the new ones drop proves nothing
+    assert proved(before, said([{"apart": [1, 9]}], paper_tableau), apart) == 0
 
 
 # --- The command line -----------------------------------------------------------------------------------

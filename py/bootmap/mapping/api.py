@@ -106,24 +106,27 @@ class Mapper:
         return self.resolver.resolve(tableau, deadline)
 
     def honour(self, tableau: Tableau, assertions: Sequence[Assertion], deadline: Deadline | None = None,
-               before: CognitiveMap | None = None, source: str | None = None) -> AssertedMap:
+               before: CognitiveMap | None = None, source: str | None = None,
+               baseline: Sequence[Assertion] = ()) -> AssertedMap:
         """The map of ``tableau`` that honours a person's ``assertions`` (:mod:`.assertions`), beside the
         map ``before`` them (resolved here without them unless given) and what changed; or, where no map
         honours the hard ones, the conflict: which assertions clash, with the steps and axioms. Dstate
-        names are those of ``before`` (an error names the file, ``source``, they were read from)."""
+        names are those of ``before`` (an error names the file, ``source``, they were read from).
+        ``baseline``: the assertions a given ``before`` honours (none: the map of the experience alone)."""
         deadline = deadline or Deadline.after(self.time_limit)
         before = before or self.map(tableau, deadline)
         assertions = resolve_names(assertions, before, source)
         try:
-            after = self._honoured(tableau, assertions, deadline, before)
+            after = self._honoured(tableau, assertions, deadline, before, proved(before, baseline, assertions))
         except AssertionConflict as e:
             return AssertedMap(before, assertions, conflict=e.conflict)
         return AssertedMap(before, assertions, after, MapDiff.between(before, after))
 
     def _honoured(self, tableau: Tableau, assertions: Sequence[Assertion], deadline: Deadline,
-                  before: CognitiveMap | None = None) -> CognitiveMap:
+                  before: CognitiveMap | None = None, at_least: int = 0) -> CognitiveMap:
         """The map that honours ``assertions`` (time points), or AssertionConflict with the clash (``before``,
-        the map without them, is resolved for it when needed and not given)."""
+        the map without them, is resolved for it when needed and not given; ``at_least``, the dstates it
+        proves every map with them needs: :func:`proved`)."""
         levels = tuple(self.resolver.theory.levels)
         if self.closes_loops(tableau):
             try:
@@ -142,7 +145,7 @@ class Mapper:
             if conflict is not None:
                 raise AssertionConflict(conflict.sentence, conflict, levels)
         try:
-            return self.resolver.resolve(tableau, deadline, assertions)
+            return self.resolver.resolve(tableau, deadline, assertions, at_least=at_least)
         except InconsistentTableau:
             conflict = self.explainer.conflict(tableau, assertions, deadline, before) if hard(assertions) else None
             if conflict is None:
@@ -180,3 +183,22 @@ class Mapper:
                  deadline: Deadline | None = None) -> Plan:
         """What to do next when the minimal maps of ``tableau`` disagree (the paper's rehearsal)."""
         return Rehearsal(self.resolver, max_length).plan(tableau, cmap=cmap, deadline=deadline)
+
+
+def proved(before: CognitiveMap, baseline: Sequence[Assertion], assertions: Sequence[Assertion]) -> int:
+    """The dstates every map that honours ``assertions`` needs reading every view as seen, as the map
+    ``before`` them proves it (0 where it proves nothing): as many as ``before`` has, where it is proved
+    minimal, reads every view as seen and every action as typed, honours only hard assertions
+    (``baseline``, by time points) and those are all among the new ones. A map that honours the new ones
+    then honours the old, so has at least as many dstates as the fewest that do (a minimal map with no
+    misread has no fewer dstates than any map reading every view as seen). One more where ``before`` is
+    the only minimal map and breaks a new one: every map with as few dstates is it."""
+    if not before.minimal or before.suspect_steps or before.retyped_steps:
+        return 0
+    if any(x.soft or not isinstance(x.a, int) or not isinstance(x.b, int) for x in baseline):
+        return 0
+    now = hard(assertions)
+    if not {(x.kind, x.a, x.b) for x in baseline} <= {(x.kind, x.a, x.b) for x in now}:
+        return 0
+    broken = before.unique and not all(x.holds_in(before) for x in now)
+    return before.n_dstates + broken

@@ -284,7 +284,8 @@ class Conflict:
             out += ["axioms the clash needs: " + ", ".join(r.cite() for r in e.axioms)]
         for f in getattr(e, "failures", ()):
             merged = "; ".join(" = ".join(f"t{t}" for t in group) for group in f.merged)
-            out += ["", f"Suppose t{e.a} and t{e.b} are one dstate (which makes {merged}).",
+            two = "one dstate" if getattr(e, "supposed", "same") == "same" else "different dstates"
+            out += ["", f"Suppose t{e.a} and t{e.b} are {two}{f' (which makes {merged})' if merged else ''}.",
                     f"Then {f.rule.cite()} fails, because:"]
             for p in f.premises:
                 out += p.lines(1)

@@ -72,6 +72,7 @@ class Explanation:
     alternatives: list[dict] = field(default_factory=list)  # undecided: the minimal maps and a/b in each
     levels: list[str] = field(default_factory=list)
     total_s: float = 0.0                # seconds to answer
+    supposed: str = "same"              # what the proof supposes and refutes: "same" (one dstate) or "apart"
 
     def rules_cited(self) -> list[str]:
         """Every rule the proof uses, each once, in order of first use."""
@@ -88,7 +89,7 @@ class Explanation:
                 "failures": [f.to_dict() for f in self.failures], "rules_cited": self.rules_cited(),
                 "agree_steps": self.agree_steps, "suggestion": self.suggestion,
                 "alternatives": self.alternatives, "levels": self.levels, "found_by": "fewest dstates", "joins": [],
-                "stats": {"total_s": self.total_s}}
+                "supposed": self.supposed, "stats": {"total_s": self.total_s}}
 
     def to_text(self) -> str:
         out = [f"t{self.a} ({self.names[0]}) vs t{self.b} ({self.names[1]}): {self.verdict}",
@@ -100,7 +101,7 @@ class Explanation:
             out += ["axioms the contradiction needs: " + ", ".join(r.cite() for r in self.axioms)]
         for f in self.failures:
             merged = "; ".join(" = ".join(f"t{t}" for t in group) for group in f.merged)
-            out += ["", f"Suppose t{self.a} and t{self.b} are one dstate (which makes {merged}).",
+            out += ["", f"{supposition(self)}{f' (which makes {merged})' if merged else ''}.",
                     f"Then {f.rule.cite()} fails, because:"]
             for p in f.premises:
                 out += p.lines(1)
@@ -230,7 +231,7 @@ class Explainer:
         apart = [m[a] != m[b] for m in maps]
         names = (cmap.dstate_of[a], cmap.dstate_of[b])
         if all(apart):
-            answer = q.prove_apart(cmap, a, b, names)
+            answer = q.prove(cmap, a, b, names)
         elif not any(apart):
             answer = _same(tableau, cmap, a, b, q.angles)
         else:
@@ -286,17 +287,17 @@ class Explainer:
             trial = [y for y in clash if y is not x]
             if clashes(trial):
                 clash = trial
-        same = next((x for x in clash if x.kind == "same" and q.clash_nearby(clash, x)), None) or \
-            next((x for x in clash if x.kind == "same"), None)
-        if same is None:  # apart alone never clashes: the experience itself has no map
-            raise InconsistentTableau("no map satisfies the axioms for this experience, assertions aside",
-                                      levels=tuple(self.resolver.theory.levels))
-        q.assume([x for x in clash if x is not same])
-        names = (cmap.dstate_of[same.a], cmap.dstate_of[same.b])
-        answer = q.prove_apart(cmap, same.a, same.b, names)
-        explanation = Explanation(same.a, same.b, names, levels=list(self.resolver.theory.levels),
-                                  total_s=round(time.perf_counter() - start, 4), **answer)
-        return Conflict([same] + [x for x in clash if x is not same], explanation,
+        # The proof is of a "same" where there is one; else of an "apart": the axioms can make two time
+        # points one dstate (two dstates of one place facing one way along one path are one), and a person
+        # who says they differ clashes with them.
+        proved = next((x for x in clash if x.kind == "same" and q.clash_nearby(clash, x)), None) or \
+            next((x for x in clash if x.kind == "same"), None) or clash[0]
+        q.assume([x for x in clash if x is not proved])
+        names = (cmap.dstate_of[proved.a], cmap.dstate_of[proved.b])
+        answer = q.prove(cmap, proved.a, proved.b, names, proved.kind)
+        explanation = Explanation(proved.a, proved.b, names, levels=list(self.resolver.theory.levels),
+                                  total_s=round(time.perf_counter() - start, 4), supposed=proved.kind, **answer)
+        return Conflict([proved] + [x for x in clash if x is not proved], explanation,
                         list(self.resolver.theory.levels))
 
     def can_be_same(self, tableau: Tableau, a: int, b: int, keep: Sequence[int] | None = None,
@@ -304,6 +305,12 @@ class Explainer:
         """Can time points a and b be one dstate in some map of these steps (default: all) that
         satisfies the axioms, however many dstates it needs?"""
         return _Question(self, tableau, deadline or Deadline.after(self.time_limit)).can_be_same(a, b, keep)
+
+    def can_be_apart(self, tableau: Tableau, a: int, b: int, keep: Sequence[int] | None = None,
+                     deadline: Deadline | None = None) -> bool:
+        """Can time points a and b be two dstates in some map of these steps (default: all) that satisfies
+        the axioms? (Not always: two dstates of one place facing one way along one path are one.)"""
+        return _Question(self, tableau, deadline or Deadline.after(self.time_limit)).can_be(a, b, keep, "apart")
 
     def minimal_evidence(self, tableau: Tableau, a: int, b: int, keep: Sequence[int],
                          deadline: Deadline | None = None) -> list[int]:
@@ -419,63 +426,83 @@ class _Question:
     # Different: evidence, the axioms it needs, and where each fails
     # ---------------------------------------------------------------------------------------------
 
-    def prove_apart(self, cmap: CognitiveMap, a: int, b: int, names: tuple[str, str]) -> dict:
-        """The fields of a "different" explanation: the minimal evidence, the axioms it needs, where each fails."""
-        window = self.window(a, b)
+    def prove(self, cmap: CognitiveMap, a: int, b: int, names: tuple[str, str], kind: str = "same") -> dict:
+        """The fields of an explanation that refutes a supposition: that a and b are one dstate (``same``:
+        a "different" verdict) or that they are two (``apart``: a "same" one); the minimal evidence, the
+        axioms it needs, where each fails."""
+        verdict = "different" if kind == "same" else "same"
+        window = self.window(a, b, kind)
         if window is None:
-            return {"verdict": "different", "sentence":
+            if kind != "same":
+                return {"verdict": verdict, "sentence":
+                        f"No map of the experience keeps t{a} ({names[0]}) and t{b} ({names[1]}) apart, but no "
+                        f"contradiction follows from the {2 * self.explainer.max_window} steps around them."}
+            return {"verdict": verdict, "sentence":
                     f"Every minimal map keeps t{a} ({names[0]}) and t{b} ({names[1]}) apart, but no contradiction "
                     f"follows from the {2 * self.explainer.max_window} steps around them: merging them would cost "
                     "more dstates elsewhere (minimality), not break an axiom."}
-        evidence = self.minimal_evidence(a, b, window)
-        axioms, failures = self.failures(cmap, a, b, evidence)
-        return {"verdict": "different", "evidence": evidence, "axioms": axioms, "failures": failures,
-                "sentence": _sentence(a, b, names, evidence, failures, self.tableau)}
+        evidence = self.minimal_evidence(a, b, window, kind)
+        axioms, failures = self.failures(cmap, a, b, evidence, kind)
+        return {"verdict": verdict, "evidence": evidence, "axioms": axioms, "failures": failures,
+                "sentence": _sentence(a, b, names, evidence, failures, self.tableau, kind)}
 
-    def window(self, a: int, b: int) -> list[int] | None:
-        """The fewest steps around a and b (doubling) in which a and b cannot be one dstate."""
+    def window(self, a: int, b: int, kind: str = "same") -> list[int] | None:
+        """The fewest steps around a and b (doubling) in which the supposition (``kind``: a and b one
+        dstate, or two) holds in no map."""
         n, w = len(self.tableau), 0
         while True:
             keep = sorted({t for c in (a, b) for t in range(max(0, c - w), min(n, c + w + 1))}
                           | (set(range(min(a, b), max(a, b) + 1)) if abs(a - b) <= 2 * w + 4 else set())
                           | self.pinned)
-            if not self.can_be_same(a, b, keep):
+            if not self.can_be(a, b, keep, kind):
                 return keep
             if w >= self.explainer.max_window or len(keep) == n:
                 return None
             w = max(1, 2 * w)
 
-    def minimal_evidence(self, a: int, b: int, keep: Sequence[int]) -> list[int]:
+    def minimal_evidence(self, a: int, b: int, keep: Sequence[int], kind: str = "same") -> list[int]:
         kept = list(keep)
         for t in sorted(kept, key=lambda t: -min(abs(t - a), abs(t - b))):
             if t in (a, b) or t in self.pinned:
                 continue
             trial = [s for s in kept if s != t]
-            if not self.can_be_same(a, b, trial):
+            if not self.can_be(a, b, trial, kind):
                 kept = trial
         return kept
 
     def can_be_same(self, a: int, b: int, keep: Sequence[int] | None = None) -> bool:
+        return self.can_be(a, b, keep, "same")
+
+    def can_be(self, a: int, b: int, keep: Sequence[int] | None = None, kind: str = "same") -> bool:
+        """Whether some map of the kept steps (default: all) that satisfies the axioms has a and b one
+        dstate (``kind`` ``same``) or two (``apart``), however many dstates it needs."""
         keep = list(range(len(self.tableau))) if keep is None else sorted(keep)
-        key = (a, b, tuple(keep), tuple(self._assumed_within(keep)))
+        key = (kind, a, b, tuple(keep), tuple(self._assumed_within(keep)))
         if key not in self.answers:
-            facts = self.asked(a, b, keep)
+            facts = self.asked(a, b, keep, kind)
             self.answers[key] = facts is not None and bool(
                 self._solve(Grounding(self.theory, facts, self.depth).ground()).satisfiable)
         return self.answers[key]
 
-    def asked(self, a: int, b: int, keep: list[int]) -> list[Symbol] | None:
-        """The kept steps' facts, supposing a and b are one dstate, with every partition of each class
-        allowed (as many dstates as time points), so "cannot be one dstate" means in no map at all.
-        None when a and b are not even in one class (they differ in a feature every time point shows,
-        e.g. the view)."""
-        facts, classes = self.with_misreads(self.excerpt(keep) + self.assumed_in(keep), keep)
-        if None in classes.keys or not classes.same_class(a, b):
+    def asked(self, a: int, b: int, keep: list[int], kind: str = "same") -> list[Symbol] | None:
+        """The kept steps' facts, supposing a and b are one dstate (``kind`` ``same``; None when they are not
+        even in one class: they differ in a feature every time point shows, e.g. the view) or two
+        (``apart``: a person's apart of them), with every partition of each class allowed (as many dstates
+        as time points), so that "cannot" means in no map at all."""
+        # (an apart is a feature of its two time points: the classes are those it makes)
+        supposed = [] if kind == "same" else assertion_facts([Assertion("apart", a, b)])
+        facts, classes = self.with_misreads(self.excerpt(keep) + self.assumed_in(keep) + supposed, keep)
+        if None in classes.keys:
+            return None
+        if kind != "same":
+            return facts + classes.layout(len(keep))
+        if not classes.same_class(a, b):
             return None
         return facts + classes.layout(len(keep)) + [SAME_ASKED(a, b)]
 
-    def failures(self, cmap: CognitiveMap, a: int, b: int, evidence: list[int]) -> tuple[list[RuleRef], list[Failure]]:
-        asked = self.asked(a, b, evidence)
+    def failures(self, cmap: CognitiveMap, a: int, b: int, evidence: list[int],
+                 kind: str = "same") -> tuple[list[RuleRef], list[Failure]]:
+        asked = self.asked(a, b, evidence, kind)
         if asked is None:
             return self.feature_failure(a, b, evidence)
         traced = Grounding(self.theory, asked + [FINEST_MAP()], self.depth, instrumented=True).ground()
@@ -558,10 +585,16 @@ def _rule_named(inst: Instrumented, name: str) -> RuleRef | None:
     return next((r for r in inst.rules if r.name == name), None)
 
 
+def supposition(e) -> str:
+    """What an explanation's proof supposes, as a sentence: that its two time points are one dstate, or two."""
+    return f"Suppose t{e.a} and t{e.b} are {'one dstate' if e.supposed == 'same' else 'different dstates'}"
+
+
 def _sentence(a: int, b: int, names: tuple[str, str], evidence: list[int], failures: list[Failure],
-              tableau: Tableau) -> str:
-    """One paragraph for a person: what breaks if a and b are one dstate, and on which steps."""
-    head = f"t{a} ({names[0]}) and t{b} ({names[1]}) cannot be one dstate"
+              tableau: Tableau, kind: str = "same") -> str:
+    """One paragraph for a person: what breaks if a and b are one dstate (or, ``kind`` ``apart``, two),
+    and on which steps."""
+    head = f"t{a} ({names[0]}) and t{b} ({names[1]}) cannot be {'one dstate' if kind == 'same' else 'different dstates'}"
     if not failures:
         return head + "."
     f = failures[0]

@@ -10,6 +10,8 @@ names them.
 
 from __future__ import annotations
 
+from collections import Counter
+
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -107,6 +109,10 @@ class Names:
     def of(cls, model: list[Symbol], cmap: CognitiveMap, asked: tuple[int, int]) -> "Names":
         at_dstate = members(model)
         dstates = {d: "=".join(dict.fromkeys(cmap.dstate_of[t] for t in ts)) for d, ts in at_dstate.items()}
+        # A supposition that splits one of the map's dstates (a person's apart) makes two of one name: each
+        # is named by its first time point as well.
+        twice = {n for n, k in Counter(dstates.values()).items() if k > 1}
+        dstates = {d: f"{n} (t{min(at_dstate[d])})" if n in twice else n for d, n in dstates.items()}
         at: dict[Symbol, list[int]] = {}
         for d, p in PLACE_OF.args(model):
             at.setdefault(p, []).extend(at_dstate.get(d, []))

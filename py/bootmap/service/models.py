@@ -477,6 +477,9 @@ class ExplanationOut(Out):
                                                         "or 'loop closing' (a log's tableau).")
     joins: list[str] = Field([], description="Loop closing, 'same': the joins that made them one dstate, each "
                                              "proposed by odometry or forced by determinism.")
+    supposed: Literal["same", "apart"] = Field("same", description="What the proof supposes and the axioms refute: "
+                                               "that a and b are one dstate ('same': a 'different' verdict) or two "
+                                               "('apart': a 'same' verdict, as a clash with a person's apart is).")
     stats: dict[str, Any]
     text: str = Field(description="The whole explanation as text.")
 

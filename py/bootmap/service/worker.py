@@ -272,8 +272,9 @@ def _asserted(job: SolveJob, mapper, tableau: Tableau, k: int | None, deadline, 
         if job.baseline is None:
             cmap, diff = mapper.map(tableau, deadline, assertions=said), None
         else:
-            before = mapper.map(tableau, deadline, assertions=parse_assertions(list(job.baseline), len(tableau)))
-            result = mapper.honour(tableau, said, deadline, before=before)
+            baseline = parse_assertions(list(job.baseline), len(tableau))
+            before = mapper.map(tableau, deadline, assertions=baseline)
+            result = mapper.honour(tableau, said, deadline, before=before, baseline=baseline)
             if result.conflict is not None:
                 raise AssertionConflict(result.conflict.sentence, result.conflict)
             cmap, diff = result.after, result.diff.to_dict()

@@ -52,7 +52,7 @@ class Search:
         resolver = self.state.resolver
         if resolver.retype and self.state.grid is not None:
             self.retyping.retype()
-        found = self.exact.one_per_class()
+        found = self.exact.first_try()
         suspects = self.abduction.suspects(found)
         if found and not suspects:
             return found

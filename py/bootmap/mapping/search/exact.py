@@ -77,6 +77,27 @@ class ExactSearch:
                 return found
         return self.optimise(self.some_map())
 
+    def first_try(self) -> CognitiveMap | None:
+        """The map with one dstate per class, if there is one (:meth:`one_per_class`). Where the caller
+        proved more than one dstate necessary (a stream, from its last map; a person's assertion, from the
+        map before it), the prepass is grounded first and its classes read: with fewer classes than the
+        dstates proved, one dstate per class cannot do and is not tried (a grounding fewer), and the lower
+        bounds later read the same prepass."""
+        state = self.state
+        if state.at_least <= 1:
+            return self.one_per_class()
+        self.budget.check_clock("the classes")
+        grounded = prepass(state.resolver.theory, state.facts, state.resolver.future_depth)
+        state.ground_s += grounded.ground_s
+        # (the costs every grounding of this tableau has, the futures' included: the first try's role)
+        self.budget.first_try_grounded(min(grounded.ground_s, grounded.ground_cpu_s), len(state.tableau))
+        state.prepassed = (state.facts, grounded)
+        state.classes = grounded.classes(range(len(state.tableau)))
+        if state.at_least <= state.classes.count:
+            return self.one_per_class()
+        state.proved = max(state.proved, state.classes.count + 1)
+        return None
+
     def one_per_class(self) -> CognitiveMap | None:
         """The first try, in one grounding: one dstate per class. If it fails, learn the classes from it."""
         state = self.state
@@ -95,8 +116,12 @@ class ExactSearch:
         state = self.state
         self.budget.check_clock("the lower bounds")
         state.depth = state.resolver.future_depth
-        grounded = prepass(state.resolver.theory, state.facts, state.depth)
-        state.ground_s += grounded.ground_s
+        if state.prepassed is not None and state.prepassed[0] is state.facts:
+            grounded = state.prepassed[1]  # grounded before the first try (.first_try), on these facts
+        else:
+            grounded = prepass(state.resolver.theory, state.facts, state.depth)
+            state.ground_s += grounded.ground_s
+        state.prepassed = None  # (a whole control: let go once read)
         features = grounded.partial_features(state.classes.times)
         state.classes.lower = features.lower_bounds(state.classes)
         state.features = features if keep_features else None

@@ -47,6 +47,9 @@ class SearchState:
         self.facts = self.experience_facts(self.angles)
         self.retyped: list[TypeSuspect] = []  # actions taken as mistyped
         self.first: Grounding | None = None  # the first try's grounding
+        # the prepass, grounded before the first try where the caller's bound may make that try needless
+        # (.exact.first_try), with the facts it was grounded on: the lower bounds read it then
+        self.prepassed: tuple[list[Symbol], Grounding] | None = None
         self.suspects: dict[int, Suspect] = {}  # views the search may take as misreads (robust only)
         self.as_seen: int | None = None  # dstates proved necessary reading every view as seen
         self.depth = 0  # futures only matter once one dstate per class has failed
