@@ -208,6 +208,8 @@ class PartialFeatures:
     of: dict[int, dict[int, set[int]]]
     seen_from: dict[int, dict[int, set[int]]]
     distance: dict[int, int] = field(default_factory=dict)  # feature -> actions on, for views seen later
+    # each class's bound with nothing left out, for the classes it was worked out for (lower_bounds)
+    _whole_bounds: tuple = field(default=(None, []), repr=False, compare=False)
 
     def without(self, views_at: Collection[int]) -> "dict[int, dict] | ChainMap":
         """The features, but for those shown by the views seen at ``views_at``."""
@@ -222,9 +224,26 @@ class PartialFeatures:
 
     def lower_bounds(self, classes: "Classes", leave_out: Collection[int] = ()) -> list[int]:
         """Per class, the size of a set of its time points (but those left out) that pairwise disagree:
-        a proved lower bound on its dstates. The views seen at ``leave_out`` are not relied on."""
+        a proved lower bound on its dstates. The views seen at ``leave_out`` are not relied on. A class
+        none of whose time points is left out or saw a view left out has the bound it has with nothing
+        left out, worked out once (the abduction asks again with each set of suspects)."""
         features = self.without(leave_out)
-        return [apart_clique(ts, features, exact=True) for ts in _members(classes, leave_out)]
+        touched = set(leave_out)
+        for u in leave_out:
+            touched.update(self.seen_from.get(u, {}))
+        kept, whole = self._whole_bounds
+        if kept is not classes:
+            kept, whole = classes, [None] * len(classes.sizes)
+            self._whole_bounds = (kept, whole)
+        out = []
+        for c, ts in enumerate(_members(classes, leave_out)):
+            if touched.isdisjoint(ts) and len(ts) == classes.sizes[c]:
+                if whole[c] is None:
+                    whole[c] = apart_clique(ts, self.of, exact=True)
+                out.append(whole[c])
+            else:
+                out.append(apart_clique(ts, features, exact=True))
+        return out
 
     def loners(self, classes: "Classes", leave_out: Collection[int] = ()) -> list[int]:
         """Time points that disagree with every other time point of their class."""

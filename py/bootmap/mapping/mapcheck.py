@@ -123,10 +123,16 @@ class MapCheck:
             return not control.solve(assumptions=[lit if i in keep else -lit
                                                   for i, lit in enumerate(literal)]).satisfiable
 
-        everything = list(range(len(transitions)))
-        if not rejected(everything):
+        # Every transition assumed: where the levels reject the map, clingo's unsatisfiable core names the
+        # assumptions its proof used, a set the levels reject alone (monotone: the transitions left out may
+        # as well be false); the fewest are looked for among those, not among all of the map's.
+        index = {lit: i for i, lit in enumerate(literal)}
+        core: list[int] = []
+        if control.solve(assumptions=literal, on_core=core.extend).satisfiable:
             return []
-        return [transitions[i] for i in _fewest(everything, rejected)]
+        candidates = sorted({index[lit] for lit in core if lit in index}) or list(range(len(transitions)))
+        candidates = _connected_order(transitions, candidates)
+        return [transitions[i] for i in _fewest(candidates, rejected)]
 
 
 def _fewest(candidates: list[int], rejected) -> list[int]:
@@ -144,3 +150,34 @@ def _fewest(candidates: list[int], rejected) -> list[int]:
         return need_first + need_second
 
     return explain([], False, candidates) if candidates else []
+
+
+def _connected_order(transitions: Sequence[Symbol], candidates: list[int]) -> list[int]:
+    """The candidates (indices of ``transitions``) in breadth-first order over the map they draw, each
+    transition after those of the dstates reached before it: the few a level rejects together lie close in
+    the map (a place, a path), and QuickXplain finds a set that lies together in its order in fewer solves."""
+    ends = {i: (transitions[i].arguments[0], transitions[i].arguments[2]) for i in candidates}
+    touching: dict[Symbol, list[int]] = {}
+    for i, (a, b) in ends.items():
+        touching.setdefault(a, []).append(i)
+        if b != a:
+            touching.setdefault(b, []).append(i)
+    order: list[int] = []
+    placed: set[int] = set()
+    seen: set[Symbol] = set()
+    for start in candidates:
+        if start in placed:
+            continue
+        queue = [ends[start][0]]
+        seen.add(queue[0])
+        while queue:
+            d = queue.pop(0)
+            for i in touching[d]:
+                if i not in placed:
+                    placed.add(i)
+                    order.append(i)
+                for e in ends[i]:
+                    if e not in seen:
+                        seen.add(e)
+                        queue.append(e)
+    return order

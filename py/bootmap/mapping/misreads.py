@@ -395,6 +395,9 @@ class _Contexts:
         self.views, self.actions = list(views), list(actions)
         self.view_names, self.action_names = view_names, action_names
         self.seen: dict = {}
+        # Each context's reading of a view (:meth:`_side`), kept until the context is seen again: many time
+        # points share a context and a view.
+        self._read: dict = {}
         # With an index, which time points each context was seen at (to look at them again on append).
         self.at: dict | None = {} if index else None
         for t in range(len(views)):
@@ -402,7 +405,11 @@ class _Contexts:
                 self._count(key, t)
 
     def _count(self, key, t: int) -> None:
-        self.seen.setdefault(key, Counter())[self.views[t]] += 1
+        seen = self.seen.get(key)
+        if seen is None:
+            seen = self.seen[key] = Counter()
+        seen[self.views[t]] += 1
+        self._read.pop(key, None)
         if self.at is not None:
             self.at.setdefault(key, {}).setdefault(self.views[t], []).append(t)
 
@@ -464,10 +471,17 @@ class _Contexts:
         share, the other views seen there, how often, and the context's key (:meth:`describe` words it:
         only suspects need the words, and they are most of the cost)."""
         found = []
+        view = self.views[t]
         for depth in self.DEPTHS:
             key = self._key(t, depth, ahead)
-            if key is not None and (depth == 1 or sum(self.seen[key].values()) >= self.MIN_SEEN):
-                found.append((*_surprise(self.seen[key], self.views[t]), key))
+            if key is None:
+                continue
+            read = self._read.setdefault(key, {})
+            if view not in read:
+                seen = self.seen[key]
+                read[view] = (*_surprise(seen, view), key) if depth == 1 or seen.total() >= self.MIN_SEEN else None
+            if read[view] is not None:
+                found.append(read[view])
         if not found:
             return None
         share, others, n, key = min(found, key=lambda f: (f[0], -f[2]))
