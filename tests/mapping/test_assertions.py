@@ -184,6 +184,11 @@ def test_an_apart_the_axioms_refute_is_a_clash_with_its_proof():
     # without the topological level the two may differ: no clash
     assert Mapper(time_limit=60, levels=["causal", "metrical"]).honour(
         tableau, said([{"apart": [0, 2]}], tableau)).conflict is None
+    # loop closing: the apart refuses the join, and the axioms reject the partition without it
+    looped = Mapper(time_limit=60, how="loops").honour(tableau, said([{"apart": [0, 2]}], tableau)).conflict
+    assert looped is not None and looped.explanation.verdict == "same"
+    assert [r.name for r in looped.explanation.axioms] == ["one_dstate_per_place_and_direction"]
+    assert "cannot be different dstates of a loop-closed map" in looped.to_text()
 
 
 def test_an_assertion_the_experience_alone_refutes_is_the_whole_clash(paper):

@@ -26,7 +26,7 @@ from ..grounding import Deadline, check_fixed
 from ..motion import measured_angle
 from ..resolver import Resolver
 from ..vocabulary import FIXED, VIEW, Predicate, action_word, fixed_dstate
-from .explain import Join, LoopExplanation, explain, why_apart
+from .explain import Join, LoopExplanation, explain, failing_rules as _failing_rules, why_apart
 
 #: How a map is found: ``auto`` (loop closing where the robot drove through dstates, as a log's tableau
 #: says, else the fewest dstates), ``loops`` or ``fewest`` (the paper's,
@@ -92,7 +92,9 @@ class LoopCloser:
             trial = [y for y in clash if y is not x]
             if trial and not self._holds(tableau, trial, deadline):
                 clash = trial
-        same = next(x for x in clash if x.kind == "same")  # apart alone refuses joins, never the map
+        same = next((x for x in clash if x.kind == "same"), None)
+        if same is None:  # an apart refuses joins the axioms need
+            return self._apart_conflict(tableau, clash, before, deadline, start)
         others = [x for x in clash if x is not same]
         closing = Closing(self, tableau, deadline, others)
         closing.asserted()
@@ -103,6 +105,26 @@ class LoopCloser:
         explanation = LoopExplanation(same.a, same.b, names, "different", sentence, axioms=axioms, levels=levels,
                                       total_s=time.perf_counter() - start)
         return Conflict([same] + others, explanation, levels)
+
+    def _apart_conflict(self, tableau: Tableau, clash: list[Assertion], before: CognitiveMap, deadline: Deadline,
+                        start: float) -> Conflict:
+        """Why loop closing finds no map with these assertions, all of them ``apart``: the first refuses the
+        joins that would make its two time points one, and the axioms reject the partition loop closing
+        starts from without them (every visit a dstate of its own, but the joins a person made), by name
+        and line: two dstates may be what the axioms make one (one place, one path, facing one way)."""
+        apart, others = clash[0], clash[1:]
+        closing = Closing(self, tableau, deadline, others)
+        closing.asserted()
+        failing = _failing_rules(closing, closing.partition())
+        names = (before.dstate_of[apart.a], before.dstate_of[apart.b])
+        breaks = f": it breaks {' and '.join(r.cite() for r in failing)}" if failing else ""
+        sentence = (f"t{apart.a} ({names[0]}) and t{apart.b} ({names[1]}) cannot be different dstates of a "
+                    f"loop-closed map: loop closing refuses every join that makes them one, and the axioms reject "
+                    f"the partition it starts from without them{breaks}.")
+        levels = list(self.resolver.theory.levels)
+        explanation = LoopExplanation(apart.a, apart.b, names, "same", sentence, axioms=failing, levels=levels,
+                                      total_s=time.perf_counter() - start)
+        return Conflict(list(clash), explanation, levels)
 
     def _holds(self, tableau: Tableau, assertions: Sequence[Assertion], deadline: Deadline) -> bool:
         """Whether loop closing finds a map with these assertions."""

@@ -87,6 +87,11 @@ def why_apart(closing: Closing, a: int, b: int) -> tuple[str, list[RuleRef]]:
     return _Explaining(closing)._kept_apart_why(a, b)
 
 
+def failing_rules(closing: Closing, dstate_of: list[int]) -> list[RuleRef]:
+    """The constraints a partition breaks (a subset-minimal set; empty if every axiom accepts it)."""
+    return _Explaining(closing)._failing_rules(dstate_of)
+
+
 class _Explaining:
     """One explanation, read off a finished loop closing: its joins, and what it refuses or the axioms
     reject when asked to join two time points (every join made for the question is undone)."""
