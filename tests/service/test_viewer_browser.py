@@ -481,6 +481,28 @@ def test_same_place_that_the_experience_refutes_shows_the_clash_with_its_proof(p
     assert page.locator("#assertions li code").all_inner_texts() == ["apart(t1, t9)"]  # nothing stored
 
 
+def test_not_the_same_that_the_axioms_refute_shows_the_clash_with_its_proof(page, viewer_server):
+    # There and back again: turned around twice on the spot, the robot is where it was, facing the same way.
+    from bootmap.tableau import Step, Tableau, Travel, Turn
+    there_and_back = Tableau(tuple(Step(v, a) for v, a in
+                                   [("A", Turn(180.0)), ("B", Turn(180.0)), ("A", Travel(1.0)), ("C", None)]))
+    with viewer_server.client() as c:
+        r = c.post("/tableaux", json=there_and_back.to_dict())
+        assert r.status_code == 201, r.text
+        tableau_id = r.json()["id"]
+    page.allowed_errors = ["409 (Conflict)"]
+    _open(page, viewer_server, tableau_id)
+    _pick_rows(page, 0, 2)
+    page.locator("#assert-apart").click()
+    page.wait_for_selector("body[data-asserted=conflict]", state="attached", timeout=60_000)
+    text = page.locator("#asserted").inner_text()
+    assert "No map honours that" in text and "apart(t0, t2)" in text and "cannot be different dstates" in text
+    assert "one_dstate_per_place_and_direction" in page.locator("#asserted .axioms .rule").all_inner_texts()
+    assert "topological.lp:" in page.locator("#asserted .axioms").inner_text()
+    assert "supposing t0 and t2 are different dstates" in text
+    assert page.locator("#tableau tr.evidence").evaluate_all("rs => rs.map(r => r.dataset.t)") == ["0", "1", "2"]
+
+
 def test_a_list_of_assertions_fetched_before_an_assertion_and_answered_after_it_does_not_hide_it(page, viewer_server,
                                                                                                  two_laps):
     # The page fetches the tableau's assertions once the map is drawn; hold that answer (the list as it was:

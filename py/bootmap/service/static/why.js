@@ -27,7 +27,10 @@ export function renderWhy(el, x, onStep) {
   if (x.axioms.length) html += `<h3>Axioms</h3><ul class="axioms">${x.axioms.map((r) => `<li>${rule(r)}</li>`).join("")}</ul>`;
   for (const f of x.failures) {
     const merged = f.merged.map((g) => g.map((t) => `t${t}`).join("=")).join(", ");
-    html += `<h3>Rule chain to ${rule(f.rule)}</h3><p class="merged">supposing ${escape(merged)}</p>` +
+    // the proof supposes a and b one dstate (what that merges), or, refuting a person's apart, two
+    const supposing = x.supposed === "apart"
+      ? `t${x.a} and t${x.b} are different dstates${merged ? ` (which makes ${merged})` : ""}` : merged;
+    html += `<h3>Rule chain to ${rule(f.rule)}</h3><p class="merged">supposing ${escape(supposing)}</p>` +
             `<ul class="proof">${f.premises.map(proofNode).join("")}</ul>`;
   }
   if (x.suggestion.length) html += `<h3>To test it</h3><ul>${x.suggestion.map((s) => `<li>${escape(s)}</li>`).join("")}</ul>`;
