@@ -20,7 +20,7 @@ from clingo import Symbol
 from ...errors import InconsistentTableau
 from ..cogmap import CognitiveMap, Try
 from ..grounding import Grounding, prepass
-from ..vocabulary import CANDIDATE_DSTATE, DSTATE_COST, MINIMISE_DSTATES, NEXT, ONE_PER_CLASS
+from ..vocabulary import CANDIDATE_DSTATE, DSTATE_COST, MINIMISE_DSTATES, NEXT, ONE_PER_CLASS, SLOTS
 from .budget import PREPARE_FACTOR, grounding_size
 
 if TYPE_CHECKING:
@@ -267,7 +267,7 @@ class ExactSearch:
 
         unsettled, rejected = False, 0
         if learning:
-            learned = self._learn(grounding, cap, optimise)
+            learned = self._learn(grounding, cap, optimise, {key: m.number for key, m in SLOTS.args(layout)})
             unsettled = learned is None  # not learned in time: search with the levels instead
             result, optimal, improving, rejected = learned or (None, [], [], 0)
         else:
@@ -298,7 +298,7 @@ class ExactSearch:
             raise budget.timed_out(what, improving)
         return Outcome(optimal, bool(result.exhausted), grounding if keep else None)
 
-    def _learn(self, grounding: Grounding, cap: int, optimise: bool):
+    def _learn(self, grounding: Grounding, cap: int, optimise: bool, slots: dict | None = None):
         """Solve without the monotone levels that judge the map alone, asking them of each map found. A map
         they reject is ruled out with every map that shares the few transitions they reject it for
         (:meth:`.mapcheck.MapCheck.reasons`: a nogood clingo keeps), under every name the grounding could give
@@ -315,7 +315,8 @@ class ExactSearch:
         reaches), as nothing could be ruled out beside that map.
 
         Returns clingo's result (None on time-out), the accepted maps (the optimal ones, optimising; at most
-        ``cap``), the accepted improving ones, and how many maps were rejected."""
+        ``cap``), the accepted improving ones, and how many maps were rejected. ``slots``: each class's
+        slots in the layout searched (the renamings then look up only the transitions they need)."""
         check, control, deadline = self.state.map_check, grounding.control, self.budget.deadline
         learned: list[list[Symbol]] = []
         rejected, spent = 0, 0.0  # maps rejected; seconds checking maps and learning from the rejected ones
@@ -339,7 +340,7 @@ class ExactSearch:
                     return
                 context.add_nogood([(s, True) for s in reasons])
                 if not renamings:
-                    renamings.append(Renamings(context.symbolic_atoms))
+                    renamings.append(Renamings(context.symbolic_atoms, slots))
                 for renaming in renamings[0](reasons):
                     if [s for s, _ in renaming] != reasons:
                         context.add_nogood([lit for _, lit in renaming])
@@ -395,14 +396,33 @@ class Renamings:
     stock topological level's verdicts are tested so), so where they reject some transitions they reject
     every renaming of them that keeps each dstate in its class and tells different dstates apart."""
 
-    def __init__(self, atoms: clingo.SymbolicAtoms):
+    def __init__(self, atoms: clingo.SymbolicAtoms, slots: dict[Symbol, int] | None = None):
+        self.symbolic, self.slots = atoms, slots
         self.atoms: dict[tuple, dict[tuple[int, int], tuple[Symbol, int]]] = {}
+        if slots is not None:
+            return  # each class's slots known: a table is looked up when a reason needs it (_table)
         for atom in atoms.by_signature(NEXT.name, NEXT.arity):
             source, action, target = atom.symbol.arguments
             if CANDIDATE_DSTATE.matches(source) and CANDIDATE_DSTATE.matches(target):
                 key = (source.arguments[0], action, target.arguments[0])
-                slots = (source.arguments[1].number, target.arguments[1].number)
-                self.atoms.setdefault(key, {})[slots] = (atom.symbol, atom.literal)
+                slots_ = (source.arguments[1].number, target.arguments[1].number)
+                self.atoms.setdefault(key, {})[slots_] = (atom.symbol, atom.literal)
+
+    def _table(self, key: tuple) -> dict[tuple[int, int], tuple[Symbol, int]]:
+        """The transitions of this (class, action, class) the grounding has, by their slots: every slot pair
+        of the two classes looked up (a few dozen lookups, where reading every transition of the grounding
+        reads a thousand)."""
+        if key not in self.atoms and self.slots is not None:
+            k1, action, k2 = key
+            table = {}
+            for i in range(self.slots.get(k1, 0)):
+                for j in range(self.slots.get(k2, 0)):
+                    symbol = NEXT(CANDIDATE_DSTATE(k1, i), action, CANDIDATE_DSTATE(k2, j))
+                    atom = self.symbolic[symbol]
+                    if atom is not None:
+                        table[i, j] = (symbol, atom.literal)
+            self.atoms[key] = table
+        return self.atoms.get(key, {})
 
     def __call__(self, reasons: list[Symbol]) -> list[list[tuple[Symbol, int]]]:
         """Every renaming of ``reasons`` whose transitions the grounding has, each transition with its
@@ -410,21 +430,27 @@ class Renamings:
         edges = [(s.arguments[0], s.arguments[1], s.arguments[2]) for s in reasons]
         if not all(CANDIDATE_DSTATE.matches(d) for a, _, b in edges for d in (a, b)):
             return []
-        tables = [self.atoms.get((a.arguments[0], action, b.arguments[0]), {}) for a, action, b in edges]
+        tables = [list(self._table((a.arguments[0], action, b.arguments[0])).items()) for a, action, b in edges]
+        # The dstates and their classes as small ints: comparing or hashing a clingo symbol is a call into
+        # clingo, and the search below does it for every renaming tried.
+        ids: dict[Symbol, int] = {}
+        classes: dict[Symbol, int] = {}
+        ends = [(ids.setdefault(a, len(ids)), ids.setdefault(b, len(ids))) for a, _, b in edges]
+        class_of = {i: classes.setdefault(d.arguments[0], len(classes)) for d, i in ids.items()}
         found: list[list[tuple[Symbol, int]]] = []
 
-        def extend(i: int, slot: dict[Symbol, int], taken: set[tuple[Symbol, int]], chosen: list) -> None:
+        def extend(i: int, slot: dict[int, int], taken: set[tuple[int, int]], chosen: list) -> None:
             if len(found) >= MAX_RENAMINGS:
                 return
             if i == len(edges):
                 found.append(list(chosen))
                 return
-            a, _, b = edges[i]
-            for (sa, sb), atom in tables[i].items():
+            a, b = ends[i]
+            for (sa, sb), atom in tables[i]:
                 if slot.get(a, sa) != sa or slot.get(b, sb) != sb or (a == b and sa != sb):
                     continue
                 fresh = dict((d, n) for d, n in ((a, sa), (b, sb)) if d not in slot)
-                claims = {(d.arguments[0], n) for d, n in fresh.items()}
+                claims = {(class_of[d], n) for d, n in fresh.items()}
                 if claims & taken or len(claims) < len(fresh):
                     continue  # two different dstates of one class given one slot
                 slot.update(fresh)
