@@ -330,6 +330,33 @@ def test_an_apart_starts_from_the_dstates_the_map_before_it_proves(paper_tableau
     assert proved(before, said([{"apart": [1, 9]}], paper_tableau), apart) == 0
 
 
+@settings(max_examples=12, deadline=None, suppress_health_check=list(HealthCheck))
+@given(seed=st.integers(0, 10 ** 6), kinds=st.lists(st.sampled_from(["same", "apart"]), min_size=1, max_size=3))
+def test_every_loop_closed_answer_honours_the_assertions_or_is_a_minimal_clash(seed, kinds):
+    """Loop closing with a person's assertions, any mix of them: the map honours every one, or the clash is
+    one loop closing cannot honour and every smaller set can (an apart alone may clash too)."""
+    rng = np.random.default_rng(seed)
+    world = random_world(rng, 3 + seed % 2, 3, extra_edges=int(rng.integers(0, 3)), landmarks=0.3)
+    tableau = walk(world, int(rng.integers(12, 30)), rng, policy="explore" if seed % 3 else "random")
+    views = tableau.views
+    pairs = [(a, b) for a in range(len(tableau)) for b in range(a + 1, len(tableau)) if views[a] == views[b]]
+    if len(pairs) < len(kinds):
+        return
+    picks = rng.choice(len(pairs), size=len(kinds), replace=False)
+    assertions = said([{kind: list(pairs[i])} for kind, i in zip(kinds, picks)], tableau)
+    mapper = Mapper(time_limit=60, how="loops")
+    result = mapper.honour(tableau, assertions)
+    if result.conflict is None:
+        assert all(x.holds_in(result.after) for x in assertions)
+        return
+    clash, deadline = result.conflict.assertions, Deadline.after(60)
+    assert {str(x) for x in clash} <= {str(x) for x in assertions}
+    assert not mapper.closer._holds(tableau, clash, deadline)
+    for x in clash:
+        rest = [y for y in clash if y is not x]
+        assert not rest or mapper.closer._holds(tableau, rest, deadline)
+
+
 # --- The command line -----------------------------------------------------------------------------------
 
 def test_bootmap_map_assert_prints_the_map_and_what_changed_or_the_clash(tmp_path, capsys, paper):
