@@ -258,6 +258,34 @@ def test_maps_the_level_rejects_are_learned_from_and_the_maps_are_the_same():
     assert sum(b["rejected"] for b in told) == sum(t.rejected for t in deferred.stats.bounds)
 
 
+def test_a_map_one_search_sets_aside_is_learned_from_before_the_next_one_solves():
+    """A person's apart on a 2,000-step exploration: the search at the bound (103 dstates, no spare)
+    finds one map the level rejects and sets it aside (an enumeration never finds a map twice); the search
+    a dstate above learns from it before it solves, so no map the level rejects is met twice, and the
+    answer is a fresh search's with the level."""
+    from bootmap.mapping import mapcheck
+    from bootmap.mapping.assertions import parse_assertions
+
+    rng = np.random.default_rng(3)
+    tableau = walk(random_world(rng, 6, 5, extra_edges=4, landmarks=0.4), 2000, rng, policy="explore")
+    apart = parse_assertions([{"apart": [1000, 1158]}], len(tableau))
+    checked = []
+    real = mapcheck.MapCheck.__call__
+
+    def check(self, model):
+        verdict = real(self, model)
+        if verdict is None:
+            checked.append(frozenset(str(x) for x in model if x.match("next", 3)))
+        return verdict
+
+    with mock.patch.object(mapcheck.MapCheck, "__call__", check):
+        cmap = Resolver(time_limit=120).resolve(tableau, assertions=apart)
+    tries = [(t.dstates, t.result, t.rejected) for t in cmap.stats.bounds]
+    assert tries[-2:] == [("at most 103 dstates", "unsat", 1), ("at most 104 dstates", "sat", 1)], tries
+    assert len(checked) == len(set(checked)) == 2  # the set-aside map is not met again
+    assert cmap.n_dstates == 104 and cmap.minimal
+
+
 def test_where_learning_would_take_longer_than_grounding_the_level_the_search_grounds_it():
     with learning(share=0.0):  # no time to learn: the first map rejected ends it
         deferred, searched = both(grid(1))

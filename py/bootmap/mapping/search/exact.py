@@ -322,6 +322,21 @@ class ExactSearch:
         rejected, spent = 0, 0.0  # maps rejected; seconds checking maps and learning from the rejected ones
         allowed = LEARN_SHARE * grounding.ground_s
         renamings: list[Renamings] = []  # indexed at the first map rejected (most searches reject none)
+        if self.state.set_aside:
+            # A search before this one (a bound below) set aside maps the levels reject: their reasons hold
+            # here too, renamed into this layout's slots, and are ruled out before the solve starts (it would
+            # find them first, learn the same, and restart).
+            t0 = time.perf_counter()
+            index = Renamings(control.symbolic_atoms, slots)
+            for shown in self.state.set_aside:
+                reasons = check.reasons(shown)
+                renamed = index(reasons) if reasons else []  # (the reasons themselves among them)
+                with control.backend() as backend:
+                    for renaming in renamed:
+                        backend.add_rule([], [lit for _, lit in renaming])
+                learned += [[s for s, _ in renaming] for renaming in renamed]
+            self.state.set_aside = []
+            spent += time.perf_counter() - t0
         while True:
             optimal: list[list[Symbol]] = []
             improving: list[list[Symbol]] = []
@@ -372,6 +387,8 @@ class ExactSearch:
             result = grounding.solve(deadline, on_model)
             if result is not None and (spent >= allowed or reasonless):
                 return None
+            if not optimise:
+                self.state.set_aside += pending  # rejected, never learned from: the next search will
             if result is None or optimal or not optimise or rejected == 0:
                 return result, optimal, improving, rejected
             for each in pending:  # every optimal map found was rejected: the search is made again

@@ -62,6 +62,9 @@ class SearchState:
         # the levels that judge the map alone, asked of each map found rather than searched with (.exact)
         self.deferred_levels = resolver.theory.map_levels if resolver.defer_map_levels else ()
         self.map_check = MapCheck(resolver.theory, self.deferred_levels) if self.deferred_levels else None
+        # maps a search set aside, rejected by those levels but not learned from (.exact): the next search
+        # that learns learns from them before it solves
+        self.set_aside: list[list[Symbol]] = []
 
     def learn_classes(self) -> Classes:
         """The classes of time points, read from the first try's grounding once needed; that grounding (a
