@@ -325,7 +325,7 @@ def test_a_renamed_reason_keeps_each_dstate_in_its_class_and_different_dstates_a
     ctl.ground([("base", [])])
     # a turn-around from a dstate of class a to one of class b, and back to another dstate of class a
     x, y, z = CANDIDATE_DSTATE(a, 0), CANDIDATE_DSTATE(b, 0), CANDIDATE_DSTATE(a, 1)
-    renamings = Renamings(ctl.symbolic_atoms)([NEXT(x, turn, y), NEXT(y, turn, z)])
+    renamings = Renamings(ctl.symbolic_atoms, {a: 3, b: 2})([NEXT(x, turn, y), NEXT(y, turn, z)])
     names = {tuple(str(s) for s, _ in r) for r in renamings}
     assert len(names) == len(renamings) == 3 * 2 * 2  # x: 3 slots, y: 2, z: a slot of a other than x's
     for r in renamings:

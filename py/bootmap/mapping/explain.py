@@ -100,11 +100,7 @@ class Explanation:
         if self.axioms:
             out += ["axioms the contradiction needs: " + ", ".join(r.cite() for r in self.axioms)]
         for f in self.failures:
-            merged = "; ".join(" = ".join(f"t{t}" for t in group) for group in f.merged)
-            out += ["", f"{supposition(self)}{f' (which makes {merged})' if merged else ''}.",
-                    f"Then {f.rule.cite()} fails, because:"]
-            for p in f.premises:
-                out += p.lines(1)
+            out += f.lines(self.a, self.b, self.supposed)
         if self.suggestion:
             out += ["", "experience that would test them:"] + [f"  {s}" for s in self.suggestion]
         for alt in self.alternatives:
@@ -583,11 +579,6 @@ def _switches(inst: Instrumented, on: Sequence[int]) -> list[tuple[Symbol, bool]
 
 def _rule_named(inst: Instrumented, name: str) -> RuleRef | None:
     return next((r for r in inst.rules if r.name == name), None)
-
-
-def supposition(e) -> str:
-    """What an explanation's proof supposes, as a sentence: that its two time points are one dstate, or two."""
-    return f"Suppose t{e.a} and t{e.b} are {'one dstate' if e.supposed == 'same' else 'different dstates'}"
 
 
 def _sentence(a: int, b: int, names: tuple[str, str], evidence: list[int], failures: list[Failure],

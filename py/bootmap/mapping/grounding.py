@@ -209,7 +209,7 @@ class PartialFeatures:
     seen_from: dict[int, dict[int, set[int]]]
     distance: dict[int, int] = field(default_factory=dict)  # feature -> actions on, for views seen later
     # each class's bound with nothing left out, for the classes it was worked out for (lower_bounds)
-    _whole_bounds: tuple = field(default=(None, []), repr=False, compare=False)
+    _whole_bounds: tuple = field(default=(None, ()), repr=False, compare=False)
 
     def without(self, views_at: Collection[int]) -> "dict[int, dict] | ChainMap":
         """The features, but for those shown by the views seen at ``views_at``."""

@@ -10,9 +10,8 @@ names them.
 
 from __future__ import annotations
 
-from collections import Counter
-
 import re
+from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Sequence
@@ -73,6 +72,17 @@ class Failure:
     def to_dict(self) -> dict:
         return {"rule": rule_dict(self.rule), "premises": [p.to_dict() for p in self.premises],
                 "merged": self.merged}
+
+    def lines(self, a: int, b: int, supposed: str = "same") -> list[str]:
+        """The failure as text: what is supposed of time points a and b (``same``: one dstate; ``apart``:
+        two), the axiom that then fails, and why its premises hold."""
+        groups = "; ".join(" = ".join(f"t{t}" for t in group) for group in self.merged)
+        two = "one dstate" if supposed == "same" else "different dstates"
+        out = ["", f"Suppose t{a} and t{b} are {two}{f' (which makes {groups})' if groups else ''}.",
+               f"Then {self.rule.cite()} fails, because:"]
+        for p in self.premises:
+            out += p.lines(1)
+        return out
 
 
 def rule_dict(r: RuleRef) -> dict:

@@ -298,7 +298,7 @@ class ExactSearch:
             raise budget.timed_out(what, improving)
         return Outcome(optimal, bool(result.exhausted), grounding if keep else None)
 
-    def _learn(self, grounding: Grounding, cap: int, optimise: bool, slots: dict | None = None):
+    def _learn(self, grounding: Grounding, cap: int, optimise: bool, slots: dict[Symbol, int]):
         """Solve without the monotone levels that judge the map alone, asking them of each map found. A map
         they reject is ruled out with every map that shares the few transitions they reject it for
         (:meth:`.mapcheck.MapCheck.reasons`: a nogood clingo keeps), under every name the grounding could give
@@ -328,13 +328,9 @@ class ExactSearch:
             # find them first, learn the same, and restart).
             t0 = time.perf_counter()
             index = Renamings(control.symbolic_atoms, slots)
-            for shown in self.state.set_aside:
-                reasons = check.reasons(shown)
-                renamed = index(reasons) if reasons else []  # (the reasons themselves among them)
-                with control.backend() as backend:
-                    for renaming in renamed:
-                        backend.add_rule([], [lit for _, lit in renaming])
-                learned += [[s for s, _ in renaming] for renaming in renamed]
+            for reasons in filter(None, map(check.reasons, self.state.set_aside)):
+                # (the reasons themselves among their renamings)
+                _rule_out(control, [[lit for _, lit in renaming] for renaming in index(reasons)])
             self.state.set_aside = []
             spent += time.perf_counter() - t0
         while True:
@@ -399,11 +395,8 @@ class ExactSearch:
                 return result, optimal, improving, rejected
             atoms = control.symbolic_atoms
             # (clingo drops atoms its solve proved false from the grounding: a nogood with one holds anyway)
-            nogoods = [[atoms[s].literal for s in reasons] for reasons in learned[done:]
-                       if all(s in atoms for s in reasons)]
-            with control.backend() as backend:
-                for nogood in nogoods:
-                    backend.add_rule([], nogood)
+            _rule_out(control, [[atoms[s].literal for s in reasons] for reasons in learned[done:]
+                                if all(s in atoms for s in reasons)])
 
 
 class Renamings:
@@ -413,23 +406,15 @@ class Renamings:
     stock topological level's verdicts are tested so), so where they reject some transitions they reject
     every renaming of them that keeps each dstate in its class and tells different dstates apart."""
 
-    def __init__(self, atoms: clingo.SymbolicAtoms, slots: dict[Symbol, int] | None = None):
-        self.symbolic, self.slots = atoms, slots
-        self.atoms: dict[tuple, dict[tuple[int, int], tuple[Symbol, int]]] = {}
-        if slots is not None:
-            return  # each class's slots known: a table is looked up when a reason needs it (_table)
-        for atom in atoms.by_signature(NEXT.name, NEXT.arity):
-            source, action, target = atom.symbol.arguments
-            if CANDIDATE_DSTATE.matches(source) and CANDIDATE_DSTATE.matches(target):
-                key = (source.arguments[0], action, target.arguments[0])
-                slots_ = (source.arguments[1].number, target.arguments[1].number)
-                self.atoms.setdefault(key, {})[slots_] = (atom.symbol, atom.literal)
+    def __init__(self, atoms: clingo.SymbolicAtoms, slots: dict[Symbol, int]):
+        self.symbolic, self.slots = atoms, slots  # the grounding's atoms; each class's slots in its layout
+        self.atoms: dict[tuple, dict[tuple[int, int], tuple[Symbol, int]]] = {}  # by (class, action, class)
 
     def _table(self, key: tuple) -> dict[tuple[int, int], tuple[Symbol, int]]:
         """The transitions of this (class, action, class) the grounding has, by their slots: every slot pair
         of the two classes looked up (a few dozen lookups, where reading every transition of the grounding
         reads a thousand)."""
-        if key not in self.atoms and self.slots is not None:
+        if key not in self.atoms:
             k1, action, k2 = key
             table = {}
             for i in range(self.slots.get(k1, 0)):
@@ -439,7 +424,7 @@ class Renamings:
                     if atom is not None:
                         table[i, j] = (symbol, atom.literal)
             self.atoms[key] = table
-        return self.atoms.get(key, {})
+        return self.atoms[key]
 
     def __call__(self, reasons: list[Symbol]) -> list[list[tuple[Symbol, int]]]:
         """Every renaming of ``reasons`` whose transitions the grounding has, each transition with its
@@ -481,6 +466,11 @@ class Renamings:
         return found
 
 
+def _rule_out(control: clingo.Control, nogoods: list[list[int]]) -> None:
+    """Add to a grounded program a constraint against each set of program literals (maps the levels reject)."""
+    with control.backend() as backend:
+        for nogood in nogoods:
+            backend.add_rule([], nogood)
 
 
 def _settled(result: clingo.SolveResult, accepted: list | None, optimise: bool) -> bool:
