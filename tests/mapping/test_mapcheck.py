@@ -13,13 +13,14 @@ from unittest import mock
 import clingo
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from clingo import Function, Number
 
 from bootmap import examples
 from bootmap.errors import InconsistentTableau
 from bootmap.mapping.facts import add_facts
+from bootmap.mapping.grounding import Grounding
 from bootmap.mapping.resolver import Resolver
 from bootmap.mapping.search import exact
 from bootmap.mapping.theory import load_theory
@@ -278,12 +279,54 @@ def test_a_map_one_search_sets_aside_is_learned_from_before_the_next_one_solves(
             checked.append(frozenset(str(x) for x in model if x.match("next", 3)))
         return verdict
 
-    with mock.patch.object(mapcheck.MapCheck, "__call__", check):
+    solved = []  # the groundings solved, in order
+    real_solve = Grounding.solve
+
+    def solve(self, *args, **kwargs):
+        solved.append(self)
+        return real_solve(self, *args, **kwargs)
+
+    with mock.patch.object(mapcheck.MapCheck, "__call__", check), mock.patch.object(Grounding, "solve", solve):
         cmap = Resolver(time_limit=120).resolve(tableau, assertions=apart)
     tries = [(t.dstates, t.result, t.rejected) for t in cmap.stats.bounds]
     assert tries[-2:] == [("at most 103 dstates", "unsat", 1), ("at most 104 dstates", "sat", 1)], tries
     assert len(checked) == len(set(checked)) == 2  # the set-aside map is not met again
     assert cmap.n_dstates == 104 and cmap.minimal
+    # Both bounds were searched on one grounding (104 dstates, the spares held empty for 103), not one each
+    # (the first try, one dstate per class, before them on its own).
+    assert len(solved) == 3 and solved[1] is solved[2] and solved[0] is not solved[1]
+
+
+@settings(max_examples=12, deadline=None)
+@given(seed=st.integers(0, 10_000), steps=st.integers(30, 120), size=st.sampled_from([(3, 3), (4, 3), (4, 4)]),
+       pair=st.tuples(st.floats(0, 1), st.floats(0, 1)))
+def test_a_bound_searched_with_its_spares_held_empty_gives_the_maps_of_a_search_with_the_level(seed, steps, size,
+                                                                                                pair):
+    """A person's hard apart of two time points of one class, every search learning (so the search at the
+    lower bound is grounded a dstate up, its spare slots held empty, and that grounding serves the search a
+    dstate up): the maps of a search with the level, which grounds each bound on its own."""
+    from bootmap.mapping.assertions import parse_assertions
+
+    rng = np.random.default_rng(seed)
+    tableau = walk(random_world(rng, *size, extra_edges=seed % 3, landmarks=0.4 * (seed % 2)), steps, rng,
+                   policy="explore" if seed % 2 else "random")
+    a, b = sorted(int(x * (len(tableau) - 1)) for x in pair)
+    same_view = [t for t in range(len(tableau)) if tableau.views[t] == tableau.views[a] and t != a]
+    b = min(same_view, key=lambda t: abs(t - b), default=None)
+    assume(b is not None)
+    apart = parse_assertions([{"apart": [a, b]}], len(tableau))
+    with learning():
+        try:
+            deferred = Resolver(time_limit=120).resolve(tableau, assertions=apart)
+        except InconsistentTableau:
+            deferred = None
+        try:
+            searched = Resolver(time_limit=120, defer_map_levels=False).resolve(tableau, assertions=apart)
+        except InconsistentTableau:
+            searched = None
+    assert (deferred is None) == (searched is None)
+    if deferred is not None:
+        assert said(deferred) == said(searched)
 
 
 def test_where_learning_would_take_longer_than_grounding_the_level_the_search_grounds_it():

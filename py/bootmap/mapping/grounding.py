@@ -95,6 +95,7 @@ class Grounding:
             if leave_out:  # each model shows the map the levels left out are asked of (.mapcheck)
                 self.control.add("base", [], SHOW_MAP)
         add_facts(self.control, facts)
+        self.grounded = False
         self.ground_s = 0.0
         self.ground_cpu_s = 0.0  # the process's CPU time grounding: what another process's load leaves alone
         self.solve_s = 0.0
@@ -109,6 +110,7 @@ class Grounding:
                 self.control.assign_external(self.rules.on(r), None)
         self.ground_s += time.perf_counter() - t0
         self.ground_cpu_s += time.process_time() - cpu0
+        self.grounded = True
         return self
 
     def solve(self, deadline: Deadline, on_model: Callable[[clingo.Model], None] | None = None,
@@ -208,8 +210,9 @@ class PartialFeatures:
     of: dict[int, dict[int, set[int]]]
     seen_from: dict[int, dict[int, set[int]]]
     distance: dict[int, int] = field(default_factory=dict)  # feature -> actions on, for views seen later
-    # each class's bound with nothing left out, for the classes it was worked out for (lower_bounds)
-    _whole_bounds: tuple = field(default=(None, ()), repr=False, compare=False)
+    # for the classes they were worked out for (lower_bounds): each class's bound with nothing left out,
+    # and the bounds of every set of time points left out asked so far
+    _whole_bounds: tuple = field(default=(None, (), {}), repr=False, compare=False)
 
     def without(self, views_at: Collection[int]) -> "dict[int, dict] | ChainMap":
         """The features, but for those shown by the views seen at ``views_at``."""
@@ -226,15 +229,19 @@ class PartialFeatures:
         """Per class, the size of a set of its time points (but those left out) that pairwise disagree:
         a proved lower bound on its dstates. The views seen at ``leave_out`` are not relied on. A class
         none of whose time points is left out or saw a view left out has the bound it has with nothing
-        left out, worked out once (the abduction asks again with each set of suspects)."""
+        left out, worked out once (the abduction asks again with each set of suspects, and at times with
+        the same set twice: answered from what it found the first time)."""
+        kept, whole, asked = self._whole_bounds
+        if kept is not classes:
+            kept, whole, asked = classes, [None] * len(classes.sizes), {}
+            self._whole_bounds = (kept, whole, asked)
+        key = frozenset(leave_out)
+        if key in asked:
+            return list(asked[key])
         features = self.without(leave_out)
         touched = set(leave_out)
         for u in leave_out:
             touched.update(self.seen_from.get(u, {}))
-        kept, whole = self._whole_bounds
-        if kept is not classes:
-            kept, whole = classes, [None] * len(classes.sizes)
-            self._whole_bounds = (kept, whole)
         out = []
         for c, ts in enumerate(_members(classes, leave_out)):
             if touched.isdisjoint(ts) and len(ts) == classes.sizes[c]:
@@ -243,6 +250,7 @@ class PartialFeatures:
                 out.append(whole[c])
             else:
                 out.append(apart_clique(ts, features, exact=True))
+        asked[key] = list(out)
         return out
 
     def loners(self, classes: "Classes", leave_out: Collection[int] = ()) -> list[int]:
@@ -324,8 +332,9 @@ def check_fixed(theory: Theory, facts: Sequence[Symbol], future_depth: int,
 def prepass(theory: Theory, facts: Sequence[Symbol], future_depth: int) -> Grounding:
     """The theory grounded with the facts alone: what it derives for certain, before any search; with
     the ``prepass`` part (core/prepass.lp), which picks the features :meth:`Grounding.partial_features`
-    reads."""
-    return Grounding(theory, facts, future_depth).ground(("base", PREPASS_PART))
+    reads. The levels that judge the map alone (:attr:`Theory.map_levels`) read only the map's transitions
+    and dstates, which no fact gives, so derive nothing here: left out (2,000 steps: 0.12 s against 0.15 s)."""
+    return Grounding(theory, facts, future_depth, leave_out=theory.map_levels).ground(("base", PREPASS_PART))
 
 
 @dataclass

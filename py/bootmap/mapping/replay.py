@@ -52,7 +52,7 @@ STOCK_DIGESTS = {
     "core/ask.lp": "2e8adf403568adf1bc5e166b19bde32ba2fdaac7f873adef0930bb9071c939ca",
     "core/partition.lp": "5a5041dcda4ff90134c77b13f5c751ef32325af467a675c6f5272a5a5f7f41c0",
     "core/assert.lp": "2c01befdceb28aa69c8a639e07b55dc2b96f6280fd2d7f052fe55fa211a76c17",
-    "core/prepass.lp": "9512eededc5220e050f04fb14b9cac6668b74e3d043d52c9ab4ecdd0c3a0ae49",
+    "core/prepass.lp": "7c0467733eb5c9806a227948479ee56cca2bf41d51a193d0f00b736594110478",
 }
 
 

@@ -109,11 +109,15 @@ class Budget:
             self.rate_size = size
 
 
-def grounding_size(layout: list[Symbol], classes: Classes, facts: Sequence[Symbol]) -> int:
+def layout_slots(layout: list[Symbol]) -> dict[Symbol, int]:
+    """Each class's slots in a layout (its ``slots/2`` facts), by class key."""
+    return {key: m.number for key, m in SLOTS.args(layout)}
+
+
+def grounding_size(slots: dict[Symbol, int], classes: Classes, facts: Sequence[Symbol]) -> int:
     """How large a search's grounding will be, before it is made: the candidate dstates of each
-    time point (its class's slots, and those of the classes a suspect may be misread from) times
-    those of the next (what experience/next and determinism are grounded over)."""
-    slots = {key: m.number for key, m in SLOTS.args(layout)}
+    time point (its class's ``slots`` in the layout, and those of the classes a suspect may be misread
+    from) times those of the next (what experience/next and determinism are grounded over)."""
     keys, of_time = classes.keys, classes.of_time
     cand = [slots.get(keys[c], 0) for c in of_time]
     for t, key in MAY_BE.args(facts):

@@ -20,8 +20,8 @@ from clingo import Symbol
 from ...errors import InconsistentTableau
 from ..cogmap import CognitiveMap, Try
 from ..grounding import Grounding, prepass
-from ..vocabulary import CANDIDATE_DSTATE, DSTATE_COST, MINIMISE_DSTATES, NEXT, ONE_PER_CLASS, SLOTS
-from .budget import PREPARE_FACTOR, grounding_size
+from ..vocabulary import CANDIDATE_DSTATE, DSTATE, DSTATE_COST, MINIMISE_DSTATES, NEXT, ONE_PER_CLASS
+from .budget import PREPARE_FACTOR, grounding_size, layout_slots
 
 if TYPE_CHECKING:
     from .budget import Budget
@@ -58,12 +58,28 @@ class Outcome:
     grounding: Grounding | None = None
 
 
+@dataclass
+class Held:
+    """A learning search's grounding one dstate above a bound, with every class's spare slot, first solved
+    with those slots held empty (the bound's own search) and kept for the search one dstate up: one
+    grounding for both (``ExactSearch.bounded``)."""
+
+    bound: int  # the dstates the grounding's layout allows, the spares' included
+    facts: list[Symbol]  # the facts it was grounded on (the search's own list object)
+    layout: list[Symbol]
+    slots: dict[Symbol, int]  # each class's slots in it
+    size: int
+    grounding: Grounding
+    empty_spares: list[tuple[Symbol, bool]]  # the assumptions that hold every spare slot empty
+
+
 class ExactSearch:
     """The groundings that find and prove minimal maps of ``state.facts``, each checked against the
     budget before it starts; every bound refuted is recorded as proved (``state.proved``)."""
 
     def __init__(self, state: SearchState, budget: Budget):
         self.state, self.budget = state, budget
+        self.held: Held | None = None  # kept for the search one dstate above a refuted bound (.bounded)
 
     def minimal_maps(self) -> CognitiveMap:
         """The minimal maps reading every view as seen, once the classes' lower bounds are known (from the
@@ -133,18 +149,70 @@ class ExactSearch:
         Above the classes' lower bound every class has spare slots. There clingo's core-guided
         optimisation looks for the maps: it takes every spare as unused and opens those its unsatisfiable
         cores ask for, where a search for any map within the bound tries every way of using them (2,000
-        steps with a person's apart, 104 dstates over a bound of 103: 4.5 s against 14.8 s)."""
+        steps with a person's apart, 104 dstates over a bound of 103: 4.5 s against 14.8 s).
+
+        Where a person's hard ``apart`` is among the facts, the lower bound most often falls short: the
+        classes' bounds count the split it makes where it is and a step ahead, not where determinism
+        carries it back. There a search large enough to learn (``LEARN_MIN_SIZE``) at the lower bound is
+        grounded one dstate up, with a spare slot per class, and solved with the spares held empty; where
+        the bound is refuted, the search one up (the next :meth:`climb` step) solves that grounding again
+        with the spares free: a grounding and its setup fewer (2,000 steps with an apart: 0.17 s of 1.2 s).
+        Where the bound holds, the larger grounding costs more than it saves (a fresh 5,000-step resolve
+        held so: 1.84 s against 1.58 s), so it is not done without an apart."""
+        held = self.held if self.held is not None and self.held.facts is self.state.facts else None
+        self.held = None
         spare = bound > self.state.classes.lower_bound
+        if held is not None and held.bound == bound and self.state.deferred_levels:
+            outcome = self._solve(held.layout, f"at most {bound} dstates", None, True, held.size,
+                                  self.state.deferred_levels, True, grounding=held.grounding, slots=held.slots)
+            if outcome is not None:
+                return self._answer(outcome, bound)
+        if not spare:
+            held = self._hold(bound)
+            if held is not None:
+                outcome = self._solve(held.layout, f"at most {bound} dstates", None, False, held.size,
+                                      self.state.deferred_levels, True, grounding=held.grounding,
+                                      assumptions=held.empty_spares, slots=held.slots)
+                if outcome is not None:
+                    if not outcome.models:
+                        self.held = held
+                    return self._answer(outcome, bound)
         layout = self.state.classes.layout(bound) + ([MINIMISE_DSTATES()] if spare else [])
         # Without spare slots the search only assigns time points to the dstates the classes need, and a
         # map of the rest of the theory is most often a map of the whole: ask the levels that judge the map
         # of each map found. With spares, the rest's fewest dstates tend to undercut what those levels
         # allow (views alone join what places and paths keep apart): search with them.
-        outcome = self.solve(layout, f"at most {bound} dstates", optimise=spare, defer=not spare)
+        return self._answer(self.solve(layout, f"at most {bound} dstates", optimise=spare, defer=not spare), bound)
+
+    def _answer(self, outcome: Outcome, bound: int) -> CognitiveMap | None:
+        """The minimal maps a bounded search found, or None with the bound refuted (proved one more)."""
         if outcome.models:
             return self._map(outcome)
         self.state.proved = max(self.state.proved, bound + 1)
         return None
+
+    def _hold(self, bound: int) -> Held | None:
+        """The grounding one dstate above ``bound`` with a spare slot per class (:class:`Held`), where the
+        search at the bound would learn (the levels that judge the map alone left out of it); else None."""
+        state = self.state
+        classes = state.classes
+        check = state.map_check
+        if not state.deferred_levels or check is None or not check.monotone \
+                or not any(x.kind == "apart" and not x.soft for x in state.assertions):
+            return None
+        spares = [(DSTATE(CANDIDATE_DSTATE(key, low)), False)
+                  for key, size, low in zip(classes.keys, classes.sizes, classes.lower) if size > low]
+        if not spares:
+            return None
+        layout = classes.layout(bound + 1) + [MINIMISE_DSTATES()]
+        slots = layout_slots(layout)
+        size = grounding_size(slots, classes, state.facts if state.suspects else ())
+        if size < LEARN_MIN_SIZE:
+            return None
+        # (grounded by its first solve, after the budget's checks: ._solve)
+        grounding = Grounding(state.resolver.theory, state.facts + layout, state.depth,
+                              ["0", "--opt-mode=optN", "--opt-strategy=usc"], leave_out=state.deferred_levels)
+        return Held(bound + 1, state.facts, layout, slots, size, grounding, spares)
 
     def climb(self) -> CognitiveMap | None:
         """The minimal maps a few dstates above the lower bound, one bound at a time. Where the greedy
@@ -225,40 +293,54 @@ class ExactSearch:
         A large search (``LEARN_MIN_SIZE``) leaves the levels that say they are monotone out whatever it
         asks, and learns from the maps they reject (:meth:`_learn`)."""
         state = self.state
-        size = None if state.classes is None else grounding_size(layout, state.classes, state.facts)
+        # (only a search that weighs misreads has may_be facts among its facts: .abduction)
+        slots = layout_slots(layout)
+        size = None if state.classes is None else grounding_size(slots, state.classes,
+                                                                 state.facts if state.suspects else ())
         learning = state.map_check is not None and state.map_check.monotone and (size or 0) >= LEARN_MIN_SIZE
         deferred = state.deferred_levels if defer or learning else ()
         if deferred:
-            outcome = self._solve(layout, what, models, optimise, size, deferred, learning and not keep, keep)
+            outcome = self._solve(layout, what, models, optimise, size, deferred, learning and not keep, keep,
+                                  slots=slots)
             if outcome is not None:
                 return outcome
             what = f"{what}, with the {' and '.join(deferred)} level in the search"
-        return self._solve(layout, what, models, optimise, size, (), False, keep)
+        return self._solve(layout, what, models, optimise, size, (), False, keep, slots=slots)
 
     def _solve(self, layout: list[Symbol], what: str, models: int | None, optimise: bool, size: int | None,
-               deferred: tuple[str, ...], learning: bool, keep: bool = False) -> Outcome | None:
+               deferred: tuple[str, ...], learning: bool, keep: bool = False, grounding: Grounding | None = None,
+               assumptions: list[tuple[Symbol, bool]] | None = None,
+               slots: dict[Symbol, int] | None = None) -> Outcome | None:
         """One grounding (of ``size``: None for the first try) and its solve, without the ``deferred`` levels:
         learning from the maps they reject (``learning``: :meth:`_learn`), or asking them of the maps found
-        (then None where their verdicts do not settle the question: see :func:`_settled`)."""
+        (then None where their verdicts do not settle the question: see :func:`_settled`). A ``grounding``
+        given (:class:`Held`, made with optimisation and unlimited models) is grounded if it is not yet and
+        solved under ``assumptions``, optimising or not as asked."""
         state, budget = self.state, self.budget
-        if size is not None:  # the first try always runs: its classes bound the answer
-            budget.check_clock(what)
-            budget.check_grounding(what, size)
         cap = state.resolver.max_models + 1 if models is None else models
-        options = ["0" if learning else str(cap)]  # learning, clingo's count would include rejected maps
-        if optimise:
-            options += ["--opt-mode=optN", "--opt-strategy=usc"]
-        grounding = Grounding(state.resolver.theory, state.facts + layout, state.depth, options,
-                              leave_out=deferred).ground()
-        if size is None:
-            budget.first_try_grounded(min(grounding.ground_s, grounding.ground_cpu_s), len(state.tableau))
+        if grounding is None:
+            options = ["0" if learning else str(cap)]  # learning, clingo's count would include rejected maps
+            if optimise:
+                options += ["--opt-mode=optN", "--opt-strategy=usc"]
+            grounding = Grounding(state.resolver.theory, state.facts + layout, state.depth, options,
+                                  leave_out=deferred)
         else:
-            budget.search_grounded(grounding.ground_s, size)
-            if not budget.prepares_in_time(grounding.ground_s):
-                state.ground_s += grounding.ground_s
-                state.tries.append(Try(what, "timeout", grounding.ground_s))
-                raise budget.timed_out(f"{what} (grounded, not solved: the solve would take about "
-                                       f"{(PREPARE_FACTOR - 1) * grounding.ground_s:.0f} s to start)", [])
+            grounding.control.configuration.solve.opt_mode = "optN" if optimise else "ignore"
+        ground_s0, solve_s0 = grounding.ground_s, grounding.solve_s
+        if not grounding.grounded:
+            if size is not None:  # the first try always runs: its classes bound the answer
+                budget.check_clock(what)
+                budget.check_grounding(what, size)
+            grounding.ground()
+            if size is None:
+                budget.first_try_grounded(min(grounding.ground_s, grounding.ground_cpu_s), len(state.tableau))
+            else:
+                budget.search_grounded(grounding.ground_s, size)
+                if not budget.prepares_in_time(grounding.ground_s):
+                    state.ground_s += grounding.ground_s
+                    state.tries.append(Try(what, "timeout", grounding.ground_s))
+                    raise budget.timed_out(f"{what} (grounded, not solved: the solve would take about "
+                                           f"{(PREPARE_FACTOR - 1) * grounding.ground_s:.0f} s to start)", [])
         optimal: list[list[Symbol]] = []
         improving: list[list[Symbol]] = []
 
@@ -267,14 +349,16 @@ class ExactSearch:
 
         unsettled, rejected = False, 0
         if learning:
-            learned = self._learn(grounding, cap, optimise, {key: m.number for key, m in SLOTS.args(layout)})
+            learned = self._learn(grounding, cap, optimise, layout_slots(layout) if slots is None else slots,
+                                  assumptions or [])
             unsettled = learned is None  # not learned in time: search with the levels instead
             result, optimal, improving, rejected = learned or (None, [], [], 0)
         else:
-            result = grounding.solve(budget.deadline, on_model)
-        state.ground_s += grounding.ground_s
-        state.solve_s += grounding.solve_s
-        seconds = grounding.ground_s + grounding.solve_s
+            result = grounding.solve(budget.deadline, on_model, assumptions or [])
+        ground_s, solve_s = grounding.ground_s - ground_s0, grounding.solve_s - solve_s0
+        state.ground_s += ground_s
+        state.solve_s += solve_s
+        seconds = ground_s + solve_s
         if deferred and not learning and result is not None:
             # The levels left out judge each map found, where their verdicts can settle the question: every
             # map within the bound was enumerated (a capped enumeration settles nothing, whatever they say).
@@ -298,7 +382,8 @@ class ExactSearch:
             raise budget.timed_out(what, improving)
         return Outcome(optimal, bool(result.exhausted), grounding if keep else None)
 
-    def _learn(self, grounding: Grounding, cap: int, optimise: bool, slots: dict[Symbol, int]):
+    def _learn(self, grounding: Grounding, cap: int, optimise: bool, slots: dict[Symbol, int],
+               assumptions: list[tuple[Symbol, bool]]):
         """Solve without the monotone levels that judge the map alone, asking them of each map found. A map
         they reject is ruled out with every map that shares the few transitions they reject it for
         (:meth:`.mapcheck.MapCheck.reasons`: a nogood clingo keeps), under every name the grounding could give
@@ -316,7 +401,8 @@ class ExactSearch:
 
         Returns clingo's result (None on time-out), the accepted maps (the optimal ones, optimising; at most
         ``cap``), the accepted improving ones, and how many maps were rejected. ``slots``: each class's
-        slots in the layout searched (the renamings then look up only the transitions they need)."""
+        slots in the layout searched (the renamings then look up only the transitions they need);
+        ``assumptions``: each solve's (a :class:`Held` grounding's spares held empty)."""
         check, control, deadline = self.state.map_check, grounding.control, self.budget.deadline
         learned: list[list[Symbol]] = []
         rejected, spent = 0, 0.0  # maps rejected; seconds checking maps and learning from the rejected ones
@@ -380,7 +466,7 @@ class ExactSearch:
             done = len(learned)
             pending: list[list[Symbol]] = []  # maps rejected in this solve, not learned from yet
             renamings.clear()  # (a solve may drop atoms it proved false: indexed again in each)
-            result = grounding.solve(deadline, on_model)
+            result = grounding.solve(deadline, on_model, assumptions)
             if result is not None and (spent >= allowed or reasonless):
                 return None
             if not optimise:
