@@ -5,7 +5,7 @@ import json
 
 import numpy as np
 import pytest
-from hypothesis import example, given, settings
+from hypothesis import assume, example, given, settings
 from hypothesis import strategies as st
 
 from bootmap.cli import main
@@ -265,12 +265,50 @@ def test_exact_lengths_are_each_their_own_type_at_any_resolution(units, repeat, 
     # Clean experience (hand-written, or a simulator without odometry error): every length read the same
     # way every time. Lengths at least two steps of the resolution apart are as many types as values,
     # however fine or coarse the resolution.
+    # Stated with the tableau, the resolution keeps every exact length its own type. Read from the readings
+    # alone, lengths that lie evenly on a coarser grid (2.0, 2.2 and 2.4 m) look like one travel read with
+    # noise at that grid, and are typed so (a tableau states its resolution where they are not).
     units = sorted(units)
     spaced = [u * 2 for u in units]  # no two neighbouring steps
     lengths = [round(u * step, 3) for u in spaced] * repeat
-    learned = LengthTypes().fit(lengths)
-    assert learned.exact_ and len(learned.types_) == len(units)
-    assert [t.count for t in learned.types_] == [repeat] * len(units)
+    for learned in (LengthTypes(resolution_m=step).fit(lengths), LengthTypes().fit(lengths)):
+        if learned.resolution_m_ > step * 2 * np.gcd.reduce(units) + 1e-9:
+            continue  # a coarser grid than any the lengths were written on: they read as noise on it
+        assert learned.exact_ and len(learned.types_) == len(units)
+        assert [t.count for t in learned.types_] == [repeat] * len(units)
+
+
+GRIDS_SEEN = [(0.05, 0.5), (0.2, 2.0), (0.25, 2.5), (0.02, 0.25), (0.0123, 0.7)]
+
+
+@settings(max_examples=60, deadline=None)
+@given(corridors=st.lists(st.sampled_from(CORRIDORS_M[1:]), min_size=1, max_size=4, unique=True),
+       reads=st.integers(20, 200), grid=st.sampled_from(GRIDS_SEEN), seed=st.integers(0, 2**31))
+def test_noisy_readings_recorded_on_any_grid_are_the_robots_few_actions(corridors, reads, grid, seed):
+    # An encoder or a log may record on a step that is no power of ten (5 cm, half a degree, 2.5 degrees,
+    # an encoder's tick): each corridor's readings, noisy by as much as a grid step, then fall on a few
+    # neighbouring grid values, which repeat. They are still one corridor each, and the robot's few turns;
+    # where the grid shows (readings on neighbouring grid steps, again and again), it is the resolution.
+    step_m, step_deg = grid
+    corridors = [c for c in corridors if step_m <= 0.06 * c]  # noise of 3% spans a step or more
+    assume(corridors)
+    rng = np.random.default_rng(seed)
+    truth = [c for c in corridors for _ in range(reads)]
+    turns = rng.choice([-90.0, 90.0, 180.0], size=len(truth))
+    steps = []
+    for c, a in zip(truth, turns):
+        steps += [Step("A", Travel(c * (1 + 0.03 * rng.standard_normal()), 1.0 * rng.standard_normal())),
+                  Step("A", Turn(a + max(3.0, step_deg) * rng.standard_normal()))]
+    tableau = rounded(Tableau(tuple(steps) + (Step("A"),)), Rounding(step_m, step_deg))
+    distances = [a.distance_m for a in tableau.actions if isinstance(a, Travel)]
+    learned = LengthTypes().fit(distances)
+    assert not learned.exact_
+    assert all(len({lab for lab, c in zip(learned.labels_, truth) if c == corridor}) == 1 for corridor in corridors)
+    assert len(set(learned.labels_)) == len(corridors)
+    m = MotionPrimitives().fit(tableau.actions)
+    assert not m.exact_["turn"] and m.angles_[1::2] == [int(a) for a in turns]
+    # (the resolution shown: the grid, or the decimal step it lies on where too few readings show it)
+    assert step_deg / m.resolution_["turn"] == pytest.approx(round(step_deg / m.resolution_["turn"]))
 
 
 @settings(max_examples=60, deadline=None)

@@ -14,7 +14,7 @@ from bootmap.mapping import Resolver
 from bootmap.metrics import dstate_accuracy
 from support.check import true_partition
 from support.gridworld import random_world, walk
-from support.noise import ROUNDINGS, with_misreads, with_odometry_noise
+from support.noise import ROUNDINGS, Rounding, with_misreads, with_odometry_noise
 
 
 def floor(steps: int, rng):
@@ -47,6 +47,26 @@ def test_each_family_is_exact_rounded_as_unrounded(family, rounding):
     cmap = Resolver(time_limit=120).resolve(tableau)
     assert cmap.minimal and cmap.n_dstates == len(set(truth)) and dstate_accuracy(truth, cmap.dstate_of) == 1.0
     assert all(not t.exact for t in cmap.action_types) and all(not t.exact for t in cmap.length_types)
+
+
+#: Steps that are no power of ten: a log at 5 cm and half a degree, one at 25 cm and 2.5 degrees (coarser
+#: than the noise: most readings of a corridor fall on one value), an encoder's tick.
+GRIDS = {"5 cm, 0.5 deg": Rounding(0.05, 0.5), "25 cm, 2.5 deg": Rounding(0.25, 2.5),
+         "a tick of 12.3 mm, 0.7 deg": Rounding(0.0123, 0.7)}
+
+
+@pytest.mark.parametrize("grid", sorted(GRIDS))
+@pytest.mark.parametrize("family", ["floor, 600 steps", "noisy rectangle"])
+def test_each_family_is_exact_recorded_on_any_grid(family, grid):
+    # Read as the coarsest decimal step the readings lie on (1 cm), a corridor read 3.95, 4.00 and 4.05 m
+    # looked like three exact lengths, and no map was found. The readings show their grid.
+    make, (turn_sd, drift_sd, distance_sd) = FAMILIES[family]
+    rng = np.random.default_rng(302)
+    tableau = with_odometry_noise(make(rng), turn_sd, drift_sd, rng, distance_sd=distance_sd,
+                                  rounding=GRIDS[grid])
+    truth = true_partition(tableau)
+    cmap = Resolver(time_limit=120).resolve(tableau)
+    assert cmap.minimal and cmap.n_dstates == len(set(truth)) and dstate_accuracy(truth, cmap.dstate_of) == 1.0
 
 
 @pytest.mark.parametrize("rounding", ROUNDINGS, ids=["logged", "unrounded"])

@@ -4,6 +4,7 @@ log's resolution (tests, benchmarks)."""
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from decimal import Decimal
 
 import numpy as np
 
@@ -46,8 +47,9 @@ def rounded(tableau: Tableau, rounding: Rounding | None = LOGGED) -> Tableau:
 
 
 def _on(value: float, step: float) -> float:
-    """The value as a log prints it at this step (3.956 at 0.01 is 3.96, not 3.9600000000000004)."""
-    decimals = max(0, -int(np.floor(np.log10(step) + 1e-9)))
+    """The value as a log prints it at this step (3.956 at 0.01 is 3.96, not 3.9600000000000004; 3.77 at
+    0.25 is 3.75)."""
+    decimals = max(0, -Decimal(repr(step)).as_tuple().exponent)
     return round(round(value / step) * step, decimals)
 
 

@@ -22,10 +22,13 @@ Clean experience, whose angles are exact multiples of the grid, gets exactly its
 Clean or noisy is decided at the readings' resolution, never by whether numbers repeat alone: a log
 records distances to the centimetre and angles to a tenth of a degree, so noisy readings of one corridor
 repeat (3.95 m, 3.96 m, ... 4.06 m, each several times). The resolution is a fact about the sensor: given
-(``meta.resolution`` of the tableau), or read from the readings as the coarsest decimal step they all lie
-on (:func:`reading_step`). Readings are exact when values repeat and no two distinct values are
-neighbouring steps of that resolution (:func:`exact_readings`): noise, at any resolution, spreads one
-primitive over neighbouring steps; exact experience reads each primitive as one value.
+(``meta.resolution`` of the tableau), or read from the readings (:func:`reading_step`): the coarsest
+decimal step they all lie on, or a multiple of it where the readings show one (an encoder or a log that
+records 5 cm or half degrees: every reading a multiple of it, and distinct readings one such step apart
+again and again, as noise spreads a primitive over neighbouring steps). Readings are exact when values
+repeat and no two distinct values are neighbouring steps of that resolution (:func:`exact_readings`):
+noise, at any resolution, spreads one primitive over neighbouring steps; exact experience reads each
+primitive as one value.
 
 Example
 -------
@@ -76,6 +79,19 @@ ON_STEP = 1e-6
 #: another source, do not make a log's readings continuous (continuous readings lie on a step by chance
 #: about once in a million).
 ON_STEP_SHARE = 0.95
+#: Readings on a decimal step lie on a coarser grid, a multiple of it (5 cm, half a degree), where they are
+#: all multiples of it and at least this many pairs of distinct readings lie one grid step apart: what
+#: noise does at that resolution. One pair does not show a grid (exact lengths of 2.0 and 2.2 m are on a
+#: 20 cm grid by chance) ...
+GRID_EVIDENCE = 2
+#: ... nor does a grid coarser than this share of the readings' typical size: half the widest misreading
+#: of a travel's length the typing puts down to noise (:data:`LENGTH_RATIO`). Noise of a few per cent
+#: spreads a primitive over neighbouring steps of a finer grid (travels of 2 m read to 20 cm: 1.8, 2.0 and
+#: 2.2 m); exact travels of 4, 6, 8 and 10 m are primitives on a 2 m grid, not noisy readings of it ...
+GRID_SHARE = 0.125
+#: ... or, for angles, this many degrees (half the bias a robot may misread a primitive by: exact turns
+#: of 15 degrees and their multiples stay primitives).
+ANGLE_GRID_DEG = 5.0
 
 
 @dataclass(frozen=True)
@@ -120,20 +136,42 @@ class LengthType:
         return f"{self.length_dm / 10:g} m ({self.count}x, measured {self.mean_m:.2f} +- {self.sd_m:.2f})"
 
 
-def reading_step(values: Sequence[float]) -> float:
+def reading_step(values: Sequence[float], widest: float | None = None) -> float:
     """The resolution the readings were recorded at, as they show it: the coarsest decimal step
-    (:data:`STEPS`) that the readings are whole multiples of (:data:`ON_STEP_SHARE` of them); 0.0 where
-    there is none (continuous).
+    (:data:`STEPS`) that the readings are whole multiples of (:data:`ON_STEP_SHARE` of them), or the
+    coarser grid they show on it (:func:`_grid`: at most ``widest``, by default a share of their typical
+    size); 0.0 where there is none (continuous).
 
     >>> reading_step([3.95, 4.06, 12.1]), reading_step([-90.0, 91.3]), reading_step([2.0312345678])
     (0.01, 0.1, 0.0)
+    >>> reading_step([7.9, 7.95, 8.0, 8.05, 8.1, 7.95, 8.0, 16.05, 15.9])  # recorded at 5 cm
+    0.05
+    >>> reading_step([2.0, 2.2, 2.0, 2.2]), reading_step([4.0, 5.0, 6.0, 7.0, 5.0])  # exact: no grid shown
+    (0.1, 1.0)
     """
     v = np.asarray(values, dtype=float)
     for step in STEPS:
         q = v / step
         if np.mean(np.abs(q - np.round(q)) < ON_STEP) >= ON_STEP_SHARE:
-            return step
+            if widest is None:
+                widest = GRID_SHARE * float(np.median(np.abs(v))) if v.size else 0.0
+            return step * _grid(np.round(q).astype(np.int64), int(widest / step + ON_STEP))
     return 0.0
+
+
+def _grid(units: np.ndarray, widest: int) -> int:
+    """The multiple of their step that readings (``units``: whole multiples of it) show as their grid: the
+    smallest gap between distinct readings, where it is at most ``widest``, :data:`GRID_EVIDENCE` pairs of
+    distinct readings lie that far apart and :data:`ON_STEP_SHARE` of the readings are multiples of it;
+    else 1."""
+    distinct = np.unique(units)
+    if distinct.size < GRID_EVIDENCE + 1:
+        return 1
+    gaps = np.diff(distinct)
+    g = int(gaps.min())
+    if not 1 < g <= widest or int((gaps == g).sum()) < GRID_EVIDENCE:
+        return 1
+    return g if np.mean(units % g == 0) >= ON_STEP_SHARE else 1
 
 
 def exact_readings(values: Sequence[float], step: float, period: float | None = None) -> bool:
@@ -279,7 +317,7 @@ def action_types(actions: Sequence[Action], angles: Sequence[int], resolution_de
 def _as_recorded(read: np.ndarray, resolution_deg: float | None) -> tuple[float, bool]:
     """One kind's angles as recorded: the step they were recorded at (given, or read from them), and
     whether they are exact at it (:func:`exact_readings`, on the circle)."""
-    step = reading_step(read) if resolution_deg is None else resolution_deg
+    step = reading_step(read, widest=ANGLE_GRID_DEG) if resolution_deg is None else resolution_deg
     return step, exact_readings(_wrap(read), step, period=360.0)
 
 
@@ -450,6 +488,14 @@ LENGTH_RATIO = 1.25
 #: its extremes split off as types of their own made them other actions, and forced dstates apart that
 #: are one.
 LENGTH_TAIL = 0.025
+#: Readings that look exact may still be noisy where the resolution is coarser than the noise: most
+#: readings of a corridor land on one value, a few on the next step (a 4 m travel read to 20 cm: 4.0 m
+#: thirteen times, 4.2 m three times; a 2 m one read to 25 cm: 2.0 m a hundred times, 2.25 m six). Where
+#: the resolution is read from the readings, a length within :data:`GRID_SHARE` of one read this many
+#: times as often is that length, as a stray turn reading snaps onto its type; two exact lengths read
+#: alike often stay two (2.0 and 2.2 m, twice each), and a tableau that states its resolution keeps
+#: every exact length.
+STRAY_ODDS = 3
 
 
 def length_types(distances: Sequence[float], resolution_m: float | None = None) -> list[int]:
@@ -468,6 +514,8 @@ def length_types(distances: Sequence[float], resolution_m: float | None = None) 
     [40, 40, 40, 40, 40, 40]
     >>> length_types([1.0, 1.2, 1.4, 1.7, 2.0, 2.4])  # no step of 25%, yet 2.4 m is no 1 m travel
     [10, 13, 13, 18, 18, 24]
+    >>> length_types([4.0] * 13 + [4.2] * 3 + [2.0] * 4)[-8:]  # 4 m read to 20 cm: 4.2 is 4.0 misread
+    [40, 40, 40, 40, 20, 20, 20, 20]
     """
     return LengthTypes(resolution_m).fit(distances).labels_
 
@@ -509,7 +557,9 @@ class LengthTypes:
         out = np.empty(len(d), dtype=int)
         parts = np.split(order, splits)
         if not self.exact_:
-            parts = [p for part in parts for p in _within_ratio(part, d, np.log(LENGTH_RATIO))]
+            parts = [p for part in parts for p in _within_ratio(part, d, np.log(LENGTH_RATIO), self.resolution_m_)]
+        elif self.resolution_m is None:  # exact as they look: a few may be noise at a coarse resolution
+            parts = _strays_joined(parts, d)
         for part in parts:
             mine = d[part]
             out[part] = label = int(round(float(mine.mean()) * 10))
@@ -519,16 +569,39 @@ class LengthTypes:
         return self
 
 
-def _within_ratio(part: np.ndarray, d: np.ndarray, log_ratio: float) -> list[np.ndarray]:
+def _strays_joined(parts: list[np.ndarray], d: np.ndarray) -> list[np.ndarray]:
+    """Exact lengths (``parts``: indices into ``d``, one value each, shortest first), each joined to the
+    nearest within :data:`GRID_SHARE` of it read :data:`STRAY_ODDS` times as often (noise at a coarse
+    resolution), if any."""
+    value = [float(d[p[0]]) for p in parts]
+    into = list(range(len(parts)))
+    for i, p in enumerate(parts):
+        near = [j for j, q in enumerate(parts) if len(q) >= STRAY_ODDS * len(p)
+                and abs(value[j] - value[i]) <= GRID_SHARE * value[j]]
+        if near:
+            into[i] = min(near, key=lambda j: abs(value[j] - value[i]))
+    joined: dict[int, list[np.ndarray]] = {}
+    for i, p in enumerate(parts):
+        joined.setdefault(into[i], []).append(p)
+    return [np.concatenate(joined[k]) for k in sorted(joined)]
+
+
+def _within_ratio(part: np.ndarray, d: np.ndarray, log_ratio: float, resolution: float = 0.0) -> list[np.ndarray]:
     """``part`` (indices into ``d``, sorted by length) split at its widest steps (in log length) until
     no piece's longest is more than ``exp(log_ratio)`` times its shortest, but for the
-    :data:`LENGTH_TAIL` of its readings at either end."""
-    v = np.log(np.maximum(d[part], 1e-3))
+    :data:`LENGTH_TAIL` of its readings at either end, and for the ``resolution`` each was recorded at
+    (a 2 m travel read to 25 cm as 1.75, 2.0 and 2.25 m: each may have been half a step nearer)."""
+    lengths = d[part]
+    v = np.log(np.maximum(lengths, 1e-3))
     tail = int(len(v) * LENGTH_TAIL)
-    if len(part) < 2 or v[-1 - tail] - v[tail] <= log_ratio:
+    if len(part) < 2:
+        return [part]
+    lo, hi = lengths[tail] + resolution / 2, lengths[-1 - tail] - resolution / 2  # each within half a step
+    if hi <= lo or np.log(hi) - np.log(lo) <= log_ratio:
         return [part]
     cut = int(np.argmax(np.diff(v))) + 1
-    return _within_ratio(part[:cut], d, log_ratio) + _within_ratio(part[cut:], d, log_ratio)
+    return (_within_ratio(part[:cut], d, log_ratio, resolution)
+            + _within_ratio(part[cut:], d, log_ratio, resolution))
 
 
 # -------------------------------------------------------------------------------------------------
