@@ -10,8 +10,9 @@ from hypothesis import strategies as st
 
 from bootmap.cli import main
 from bootmap.mapping import Resolver
-from bootmap.mapping.motion import (LENGTH_RATIO, LENGTH_TAIL, LengthTypes, MotionPrimitives, exact_readings,
-                                   length_types, reading_step)
+from bootmap.mapping.motion import (GRID_EVIDENCE, LENGTH_RATIO, LENGTH_TAIL, NEAR_SHARE, LengthTypes,
+                                   MotionPrimitives, exact_readings, length_types, reading_step)
+from bootmap.mapping.facts import travel_length_types
 from bootmap.metrics import dstate_accuracy
 from bootmap.tableau import Step, Tableau, Travel, Turn
 from support.check import true_partition
@@ -271,6 +272,9 @@ def test_exact_lengths_are_each_their_own_type_at_any_resolution(units, repeat, 
     units = sorted(units)
     spaced = [u * 2 for u in units]  # no two neighbouring steps
     lengths = [round(u * step, 3) for u in spaced] * repeat
+    # (lengths a hundredth of a typical one apart, again and again, are noise, not primitives)
+    gaps = np.diff(sorted(set(lengths)))
+    assume(int((gaps <= NEAR_SHARE * np.median(lengths)).sum()) < GRID_EVIDENCE)
     for learned in (LengthTypes(resolution_m=step).fit(lengths), LengthTypes().fit(lengths)):
         if learned.resolution_m_ > step * 2 * np.gcd.reduce(units) + 1e-9:
             continue  # a coarser grid than any the lengths were written on: they read as noise on it
@@ -327,6 +331,46 @@ def test_rounded_noisy_turns_are_typed_as_the_unrounded_ones(seed, turn_sd, n, r
     assert m.angles_[:n] == [int(a) for a in true_turns] and set(m.angles_[n:]) == {0}
     assert m.resolution_["turn"] == rounding.angle_deg or turn_sd * 3 < rounding.angle_deg
     assert not m.exact_["turn"]
+
+
+@settings(max_examples=40, deadline=None)
+@given(corridors=st.lists(st.sampled_from(CORRIDORS_M[1:]), min_size=1, max_size=4, unique=True),
+       reads=st.integers(20, 200), printed=st.sampled_from([(0.0123, 3), (0.0328084, 2), (0.000123, 6)]),
+       seed=st.integers(0, 2**31))
+def test_noisy_readings_on_a_grid_the_printed_step_does_not_divide_are_noisy(corridors, reads, printed, seed):
+    # An encoder's tick printed finer than it is (12.3 mm to the millimetre), or centimetres converted to
+    # feet and printed to the hundredth: a corridor's readings lie 3 or 4 printed steps apart, never on
+    # neighbouring ones, and repeat. They are noisy readings of few lengths, not as many exact ones.
+    tick, decimals = printed
+    rng = np.random.default_rng(seed)
+    truth = [c for c in corridors for _ in range(reads)]
+    read = [round(round(c * (1 + 0.03 * rng.standard_normal()) / tick) * tick, decimals) for c in truth]
+    learned = LengthTypes().fit(read)
+    assert not learned.exact_ and len(set(learned.labels_)) == len(corridors)
+    assert all(len({lab for lab, c in zip(learned.labels_, truth) if c == corridor}) == 1 for corridor in corridors)
+    turns = rng.choice([-90.0, 90.0, 180.0], size=reads)
+    step_deg = 360 / 4096  # a gyro's tick, printed to the hundredth of a degree
+    m = MotionPrimitives().fit([Turn(round(round((a + 3.0 * rng.standard_normal()) / step_deg) * step_deg, 2))
+                                for a in turns])
+    assert not m.exact_["turn"] and m.angles_ == [int(a) for a in turns]
+
+
+def test_distances_read_by_odometry_that_reads_its_turns_with_noise_are_noisy():
+    # Recorded to 25 cm, a 4 m corridor read 3% off falls on 4.0 m eleven times and on 4.25 m five: it looks
+    # exact, two lengths. The same odometry read the turns with noise, so it read the distances with noise:
+    # one corridor. With exact turns (a clean tableau), exact distances stay what they are.
+    distances = [2.0] * 16 + [4.0] * 11 + [4.25] * 5
+    rng = np.random.default_rng(4)
+    for turn_sd, counts in ((3.0, [16, 16]), (0.0, [16, 11, 5])):
+        steps = [Step("A", Travel(d)) for d in distances]
+        steps += [Step("A", Turn(round(90.0 + turn_sd * rng.standard_normal(), 1))) for _ in distances]
+        _, types = travel_length_types(Tableau(tuple(steps) + (Step("A"),)))
+        assert [t.count for t in types] == counts
+        assert all(t.exact == (turn_sd == 0) for t in types)
+    # Readings a step of their resolution apart may be one travel, however far apart in ratio the step makes
+    # them (1.5 and 2.0 m to 50 cm).
+    assert len(LengthTypes(resolution_m=0.5, noisy=True).fit([1.5] + [2.0] * 89).types_) == 1
+    assert len(LengthTypes(resolution_m=0.01, noisy=True).fit([1.5] + [2.0] * 89).types_) == 2
 
 
 def test_the_readings_show_their_resolution_or_are_continuous():

@@ -23,7 +23,7 @@ from ..tableau import Action, Tableau, Travel, Turn
 from .compass import WallCompass
 from .sectors import sector_angles
 from .motion import (ActionType, LengthType, LengthTypes, MotionPrimitives, TypeSuspect, action_types, measured_angle,
-                     quantise, resolution_of, type_suspects)
+                     quantise, resolution_of, turns_exact, type_suspects)
 from .vocabulary import LENGTH, PASSES_THROUGH, RESUME, TRAVEL, TURN, VIEW, action_term
 
 
@@ -198,10 +198,12 @@ def length_types_of(tableau: Tableau) -> list[LengthType]:
 
 def travel_length_types(tableau: Tableau) -> tuple[dict[int, int], list[LengthType]]:
     """The length type (decimetres) of each travel by its time point, and the types, learned once
-    (:class:`.motion.LengthTypes`, at the resolution the tableau states, or the distances show)."""
+    (:class:`.motion.LengthTypes`, at the resolution the tableau states, or the distances show; noisy
+    where the same odometry read its turns with noise)."""
     travels = [t for t, s in enumerate(tableau.steps) if isinstance(s.action, Travel)]
     distances = [tableau.steps[t].action.distance_m for t in travels]  # type: ignore[union-attr]
-    learned = LengthTypes(resolution_of(tableau.meta, "distance_m")).fit(distances)
+    noisy = not turns_exact(tableau.actions, resolution_of(tableau.meta, "angle_deg"))
+    learned = LengthTypes(resolution_of(tableau.meta, "distance_m"), noisy=noisy).fit(distances)
     return dict(zip(travels, learned.labels_)), learned.types_
 
 

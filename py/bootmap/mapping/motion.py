@@ -92,6 +92,11 @@ GRID_SHARE = 0.125
 #: ... or, for angles, this many degrees (half the bias a robot may misread a primitive by: exact turns
 #: of 15 degrees and their multiples stay primitives).
 ANGLE_GRID_DEG = 5.0
+#: Distinct readings this close (a share of the readings' typical size; for angles, degrees) are never two
+#: primitives: where :data:`GRID_EVIDENCE` pairs of them are, the readings are noisy, whatever step they
+#: are printed at. An encoder's tick of 0.123 mm printed to the micrometre, or centimetres converted to
+#: feet, puts a corridor's readings 3 or 4 printed steps apart, never on neighbouring ones.
+NEAR_SHARE, NEAR_DEG = 0.01, 1.0
 
 
 @dataclass(frozen=True)
@@ -139,8 +144,8 @@ class LengthType:
 def reading_step(values: Sequence[float], widest: float | None = None) -> float:
     """The resolution the readings were recorded at, as they show it: the coarsest decimal step
     (:data:`STEPS`) that the readings are whole multiples of (:data:`ON_STEP_SHARE` of them), or the
-    coarser grid they show on it (:func:`_grid`: at most ``widest``, by default a share of their typical
-    size); 0.0 where there is none (continuous).
+    coarser grid they show on it (:func:`_grid`: a step at most ``widest``, by default at most
+    :data:`GRID_SHARE` of the readings it lies between); 0.0 where there is none (continuous).
 
     >>> reading_step([3.95, 4.06, 12.1]), reading_step([-90.0, 91.3]), reading_step([2.0312345678])
     (0.01, 0.1, 0.0)
@@ -153,36 +158,40 @@ def reading_step(values: Sequence[float], widest: float | None = None) -> float:
     for step in STEPS:
         q = v / step
         if np.mean(np.abs(q - np.round(q)) < ON_STEP) >= ON_STEP_SHARE:
-            if widest is None:
-                widest = GRID_SHARE * float(np.median(np.abs(v))) if v.size else 0.0
-            return step * _grid(np.round(q).astype(np.int64), int(widest / step + ON_STEP))
+            return step * _grid(np.round(q).astype(np.int64), None if widest is None else widest / step)
     return 0.0
 
 
-def _grid(units: np.ndarray, widest: int) -> int:
+def _grid(units: np.ndarray, widest: float | None) -> int:
     """The multiple of their step that readings (``units``: whole multiples of it) show as their grid: the
-    smallest gap between distinct readings, where it is at most ``widest``, :data:`GRID_EVIDENCE` pairs of
-    distinct readings lie that far apart and :data:`ON_STEP_SHARE` of the readings are multiples of it;
-    else 1."""
+    smallest gap between distinct readings, where :data:`GRID_EVIDENCE` pairs of distinct readings lie that
+    far apart, each gap at most ``widest`` (by default :data:`GRID_SHARE` of the longer reading beside it),
+    and :data:`ON_STEP_SHARE` of the readings are multiples of it; else 1."""
     distinct = np.unique(units)
     if distinct.size < GRID_EVIDENCE + 1:
         return 1
     gaps = np.diff(distinct)
     g = int(gaps.min())
-    if not 1 < g <= widest or int((gaps == g).sum()) < GRID_EVIDENCE:
+    limit = GRID_SHARE * np.maximum(np.abs(distinct[:-1]), np.abs(distinct[1:])) if widest is None else widest
+    if g <= 1 or int(((gaps == g) & (g <= limit + ON_STEP)).sum()) < GRID_EVIDENCE:
         return 1
     return g if np.mean(units % g == 0) >= ON_STEP_SHARE else 1
 
 
-def exact_readings(values: Sequence[float], step: float, period: float | None = None) -> bool:
+def exact_readings(values: Sequence[float], step: float, period: float | None = None,
+                   near: float | None = None) -> bool:
     """Whether readings recorded at ``step`` (0: continuous) are exact, each value a primitive read without
-    noise: values repeat (noise at a fine resolution never does), and no two distinct values are
+    noise: values repeat (noise at a fine resolution never does), no two distinct values are
     neighbouring steps (noise at a coarse one spreads a primitive over neighbouring steps: a corridor read
-    3.95, 3.96, ... 4.06 m). Angles wrap at ``period``.
+    3.95, 3.96, ... 4.06 m), and no :data:`GRID_EVIDENCE` pairs of distinct values lie within ``near`` of
+    each other (by default :data:`NEAR_SHARE` of their typical size: noise on a grid the printed step does
+    not divide). Angles wrap at ``period``.
 
     >>> exact_readings([2.0, 2.2, 2.0, 2.2], 0.1), exact_readings([3.95, 3.96, 3.95, 4.06, 3.96, 4.05], 0.01)
     (True, False)
     >>> exact_readings([4.0312, 3.9871, 4.0102], 0.0)
+    False
+    >>> exact_readings([6.53, 6.56, 6.53, 6.59, 6.56, 6.63, 6.59], 0.01)  # 2 m read to the cm, in feet
     False
     """
     v = np.asarray(values, dtype=float)
@@ -191,12 +200,16 @@ def exact_readings(values: Sequence[float], step: float, period: float | None = 
     units = np.unique(np.round(v / (step or ON_STEP)))
     if len(units) > len(v) / 2:
         return False
-    if step == 0 or len(units) < 2:
+    if len(units) < 2:
         return True
     gaps = np.diff(units)
     if period is not None:
-        gaps = np.append(gaps, units[0] + round(period / step) - units[-1])
-    return bool(gaps.min() > 1)
+        gaps = np.append(gaps, units[0] + round(period / (step or ON_STEP)) - units[-1])
+    if near is None:
+        near = NEAR_SHARE * float(np.median(np.abs(v)))
+    if int(((gaps > 0) & (gaps * (step or ON_STEP) <= near)).sum()) >= GRID_EVIDENCE:
+        return False
+    return step == 0 or bool(gaps.min() > 1)
 
 
 def resolution_of(tableau_meta: dict, field: str) -> float | None:
@@ -314,11 +327,18 @@ def action_types(actions: Sequence[Action], angles: Sequence[int], resolution_de
     return _types(is_turn, read, np.asarray(angles, dtype=int), resolution, exact)
 
 
+def turns_exact(actions: Sequence[Action], resolution_deg: float | None = None) -> bool:
+    """Whether the turns among ``actions`` are read exactly (:func:`exact_readings` at their resolution, given
+    or read from them); True where there are none."""
+    is_turn, read = _readings(actions)
+    return not is_turn.any() or _as_recorded(read[is_turn], resolution_deg)[1]
+
+
 def _as_recorded(read: np.ndarray, resolution_deg: float | None) -> tuple[float, bool]:
     """One kind's angles as recorded: the step they were recorded at (given, or read from them), and
     whether they are exact at it (:func:`exact_readings`, on the circle)."""
     step = reading_step(read, widest=ANGLE_GRID_DEG) if resolution_deg is None else resolution_deg
-    return step, exact_readings(_wrap(read), step, period=360.0)
+    return step, exact_readings(_wrap(read), step, period=360.0, near=NEAR_DEG)
 
 
 def _readings(actions: Sequence[Action]) -> tuple[np.ndarray, np.ndarray]:
@@ -528,6 +548,10 @@ class LengthTypes:
     resolution_m : float, optional
         The step the distances were recorded at (0: continuous); by default read from them
         (:func:`reading_step`).
+    noisy : bool
+        The same odometry read its turns with noise (:func:`turns_exact`): then it read the distances
+        with noise too, however exact they look (at a resolution coarser than the noise most readings
+        of a corridor fall on one value, and a few on the next: 4.0 m eleven times, 4.25 m five).
 
     Attributes
     ----------
@@ -541,19 +565,27 @@ class LengthTypes:
         Whether the distances were taken as exact (each value its own type).
     """
 
-    def __init__(self, resolution_m: float | None = None):
+    def __init__(self, resolution_m: float | None = None, noisy: bool = False):
         self.resolution_m = resolution_m
+        self.noisy = noisy
 
     def fit(self, distances: Sequence[float]) -> "LengthTypes":
         d = np.asarray(distances, dtype=float)
         self.resolution_m_ = (reading_step(d) if d.size else 0.0) if self.resolution_m is None else self.resolution_m
-        self.exact_ = exact_readings(d, self.resolution_m_)
+        self.exact_ = not self.noisy and exact_readings(d, self.resolution_m_)
         self.labels_, self.types_ = [], []
         if d.size == 0:
             return self
         order = np.argsort(d)
         v = np.log(np.maximum(d[order], 1e-3))
-        splits = np.flatnonzero(np.diff(v) > (1e-6 if self.exact_ else np.log(LENGTH_RATIO))) + 1
+        if self.exact_:
+            splits = np.flatnonzero(np.diff(v) > 1e-6) + 1
+        else:
+            # neighbours split where the longer is LENGTH_RATIO times the shorter, each taken half a step
+            # of the resolution towards the other (readings 1.5 and 2.0 m to 50 cm may be one travel)
+            half = self.resolution_m_ / 2
+            near, far = np.maximum(d[order] + half, 1e-3), np.maximum(d[order] - half, 1e-3)
+            splits = np.flatnonzero(np.log(far[1:]) - np.log(near[:-1]) > np.log(LENGTH_RATIO)) + 1
         out = np.empty(len(d), dtype=int)
         parts = np.split(order, splits)
         if not self.exact_:
