@@ -63,6 +63,13 @@ EXACT_DEG = 0.5
 #: readings (noise of a degree or more cannot do that; two turn-arounds of a real robot read at +163.0
 #: and +163.6 among eighteen at -174 +- 5 are chance, and must not make every heading its own).
 SAME_DEG = 0.05
+#: A gyro or a wheelbase read a little wrong scales every turn alike: a robot's odometry may read its turns
+#: up to this share long or short (real logs: 6% short). Where its turn types fit no grid as read, the
+#: scale that makes them fit the coarsest grid is taken out (a turn-around read 190.8 degrees, 10.8 from
+#: 180, beside right turns read -95.4: every turn read 6% long). Scales are tried every SCALE_STEP, for
+#: noisy turns only (exact ones are what they say) and grids of SCALED_GRID degrees or more (right angles
+#: and diagonals: with many fine types some scale fits a fine grid by chance).
+MAX_SCALE, SCALE_STEP, SCALED_GRID = 0.10, 0.002, 45
 #: A type of at most this many readings within this many spreads of a type three times its size is
 #: that type's tail (a real robot's turn-arounds are read from +167 to +222).
 TAIL, TAIL_SDS = 3, 4.0
@@ -242,6 +249,8 @@ class MotionPrimitives:
         The type angle of each action, in order.
     grid_deg_ : int
         The grid the type angles lie on.
+    turn_scale_ : float
+        How much longer than the type angles the turns were read (1.0: as read; :data:`MAX_SCALE`).
     resolution_ : dict
         Per kind, the step its angles were recorded at (given, or read from them).
     exact_ : dict
@@ -275,7 +284,7 @@ class MotionPrimitives:
         spreads = [_circular_sd(measured[i], m) for m, (_, i) in zip(means, clusters)]
         # A type seen once or twice is as likely a misread as a primitive: the grid is set by the types
         # that account for more (when there are any), and a stray reading snaps onto it like the others.
-        common, few = [], []
+        common, few = [], []  # (mean, spread, is a turn); (mean, is a turn)
         for kind in ("turn", "travel"):
             mine = [(m, sd, len(i)) for m, sd, (k, i) in zip(means, spreads, clusters) if k == kind]
             total = sum(n for _, _, n in mine)
@@ -286,14 +295,19 @@ class MotionPrimitives:
             keep = [(m, pooled) for i, (m, sd, n) in enumerate(mine)
                     if n >= max(3, MIN_SHARE * total) or (n >= 2 and sd < SAME_DEG and same) or pooled < self.exact_deg
                     or (n >= 3 and _apart(m, [o for j, (o, _, _) in enumerate(mine) if j != i], pooled))]
-            common += keep or [(m, pooled) for m, _, _ in mine]
+            common += [(m, sd, kind == "turn") for m, sd in (keep or [(m, pooled) for m, _, _ in mine])]
             # A few readings (a tail, at most TAIL) set the grid only where no grid angle is near them:
             # three turn-arounds read at -153 beside eighteen at +175 +- 8 are a tail of 180, not a
             # primitive that makes every heading its own; a bend read at 45 three times is a primitive.
-            few += [m for m, sd, n in mine if n <= TAIL and (m, pooled) in keep and pooled >= self.exact_deg]
-        self.grid_deg_ = _coarsest_grid([t for t in common if t[0] not in few], self.grids, few)
-        snapped = [quantise(m, self.grid_deg_) for m in means]
-        angles = np.array([quantise(m, self.grid_deg_) for m in measured], dtype=int)  # the untrusted
+            few += [(m, kind == "turn") for m, sd, n in mine
+                    if n <= TAIL and (m, pooled) in keep and pooled >= self.exact_deg]
+        few_means = {m for m, _ in few}
+        self.grid_deg_, self.turn_scale_ = _coarsest_grid([t for t in common if t[0] not in few_means], self.grids,
+                                                           few, scaled=not self.exact_.get("turn", True))
+        grid, scale = self.grid_deg_, self.turn_scale_
+        snapped = [quantise(_as_if(m, k == "turn", scale, grid), grid) for m, (k, _) in zip(means, clusters)]
+        angles = np.array([quantise(_as_if(m, turn, scale, grid), grid)  # the untrusted
+                           for m, turn in zip(measured, is_turn)], dtype=int)
         for (_, idx), angle in zip(clusters, snapped):
             angles[idx] = angle
         self.angles_ = angles.tolist()
@@ -477,15 +491,48 @@ def _circular_sd(a: np.ndarray, centre: float) -> float:
     return float(np.sqrt(np.mean(_wrap(a - centre) ** 2)))
 
 
-def _coarsest_grid(types: Sequence[tuple[float, float]], grids: Sequence[int], few: Sequence[float] = ()) -> int:
-    """The coarsest grid near every type: its mean within three spreads (sd, the noise of its kind), or
-    :data:`BIAS_DEG` for tight readings, of a grid angle, and less than a third of a step away; the
-    means of types of a ``few`` readings only less than a third of a step away."""
+def _coarsest_grid(types: Sequence[tuple[float, float, bool]], grids: Sequence[int],
+                   few: Sequence[tuple[float, bool]] = (), scaled: bool = True) -> tuple[int, float]:
+    """The coarsest grid near every type (mean, spread, whether a turn), and the turns' scale: each mean
+    within three spreads (sd, the noise of its kind), or :data:`BIAS_DEG` for tight readings, of a grid
+    angle, and less than a third of a step away; the means of types of a ``few`` readings only less than a
+    third of a step away. Turns are taken as read where that fits some grid as coarse as any scale would,
+    else (where ``scaled``: noisy turns) read up to :data:`MAX_SCALE` long or short, at the scale that
+    fits the coarsest grid (of :data:`SCALED_GRID` degrees or more) best: the least squared offsets."""
+    def fits(q: int, scale: float) -> float | None:
+        """The squared offsets of the types from the grid ``q``, turns as if read ``scale`` long; None
+        where one lies too far."""
+        total = 0.0
+        for m, sd, turn in types:
+            off = _between(_as_if(m, turn, scale, q), quantise(_as_if(m, turn, scale, q), q))
+            if off >= min(q / 3, max(3 * sd, BIAS_DEG)):
+                return None
+            total += off * off
+        if any(_between(_as_if(m, turn, scale, q), quantise(_as_if(m, turn, scale, q), q)) >= q / 3
+               for m, turn in few):
+            return None
+        return total
+
+    scales = np.arange(1.0 - MAX_SCALE, 1.0 + MAX_SCALE + SCALE_STEP / 2, SCALE_STEP)
+    turning = scaled and any(turn and abs(m) > BIAS_DEG for m, _, turn in types)
     for q in grids:
-        if all(_between(m, quantise(m, q)) < min(q / 3, max(3 * sd, BIAS_DEG)) for m, sd in types) and \
-                all(_between(m, quantise(m, q)) < q / 3 for m in few):
-            return q
-    return grids[-1]
+        if fits(q, 1.0) is not None:
+            return q, 1.0
+        if turning and q >= SCALED_GRID:
+            fitted = [(total, abs(s - 1.0), float(s)) for s in scales if (total := fits(q, float(s))) is not None]
+            if fitted:
+                return q, round(min(fitted)[2], 3)
+    return grids[-1], 1.0
+
+
+def _as_if(angle: float, turn: bool, scale: float, grid: int) -> float:
+    """A measured angle as if the robot had read it ``scale`` long (turns only): of the angle and its turn
+    the other way round the circle, whichever lies nearer the grid once scaled (a turn-around read 190.8
+    degrees is recorded as -169.2)."""
+    if not turn or scale == 1.0:
+        return angle
+    candidates = (angle / scale, (angle - 360.0 if angle > 0 else angle + 360.0) / scale)
+    return min(candidates, key=lambda a: _between(a, quantise(a, grid)))
 
 
 def quantise(angle_deg: float, quantum_deg: float) -> int:
