@@ -204,17 +204,18 @@ def exact_readings(values: Sequence[float], step: float, period: float | None = 
     v = np.asarray(values, dtype=float)
     if v.size == 0:
         return True
-    units = np.unique(np.round(v / (step or ON_STEP)))
+    unit = step or ON_STEP  # continuous readings: equal within ON_STEP
+    units = np.unique(np.round(v / unit))
     if len(units) > len(v) / 2:
         return False
     if len(units) < 2:
         return True
     gaps = np.diff(units)
     if period is not None:
-        gaps = np.append(gaps, units[0] + round(period / (step or ON_STEP)) - units[-1])
+        gaps = np.append(gaps, units[0] + round(period / unit) - units[-1])
     if near is None:
         near = NEAR_SHARE * float(np.median(np.abs(v)))
-    if int(((gaps > 0) & (gaps * (step or ON_STEP) <= near)).sum()) >= GRID_EVIDENCE:
+    if int(((gaps > 0) & (gaps * unit <= near)).sum()) >= GRID_EVIDENCE:
         return False
     return step == 0 or bool(gaps.min() > 1)
 
@@ -504,12 +505,11 @@ def _coarsest_grid(types: Sequence[tuple[float, float, bool]], grids: Sequence[i
         where one lies too far."""
         total = 0.0
         for m, sd, turn in types:
-            off = _between(_as_if(m, turn, scale, q), quantise(_as_if(m, turn, scale, q), q))
+            off = _off_grid(_as_if(m, turn, scale, q), q)
             if off >= min(q / 3, max(3 * sd, BIAS_DEG)):
                 return None
             total += off * off
-        if any(_between(_as_if(m, turn, scale, q), quantise(_as_if(m, turn, scale, q), q)) >= q / 3
-               for m, turn in few):
+        if any(_off_grid(_as_if(m, turn, scale, q), q) >= q / 3 for m, turn in few):
             return None
         return total
 
@@ -532,7 +532,12 @@ def _as_if(angle: float, turn: bool, scale: float, grid: int) -> float:
     if not turn or scale == 1.0:
         return angle
     candidates = (angle / scale, (angle - 360.0 if angle > 0 else angle + 360.0) / scale)
-    return min(candidates, key=lambda a: _between(a, quantise(a, grid)))
+    return min(candidates, key=lambda a: _off_grid(a, grid))
+
+
+def _off_grid(angle: float, grid: int) -> float:
+    """How far an angle lies from the nearest angle of the grid (degrees, on the circle)."""
+    return _between(angle, quantise(angle, grid))
 
 
 def quantise(angle_deg: float, quantum_deg: float) -> int:
@@ -630,9 +635,9 @@ class LengthTypes:
         else:
             # neighbours split where the longer is LENGTH_RATIO times the shorter, each taken half a step
             # of the resolution towards the other (readings 1.5 and 2.0 m to 50 cm may be one travel)
-            half = self.resolution_m_ / 2
-            near, far = np.maximum(d[order] + half, 1e-3), np.maximum(d[order] - half, 1e-3)
-            splits = np.flatnonzero(np.log(far[1:]) - np.log(near[:-1]) > np.log(LENGTH_RATIO)) + 1
+            sorted_d = d[order]
+            spans = _log_span(sorted_d[:-1], sorted_d[1:], self.resolution_m_)
+            splits = np.flatnonzero(spans > np.log(LENGTH_RATIO)) + 1
         out = np.empty(len(d), dtype=int)
         parts = np.split(order, splits)
         if not self.exact_:
@@ -665,20 +670,23 @@ def _strays_joined(parts: list[np.ndarray], d: np.ndarray) -> list[np.ndarray]:
     return [np.concatenate(joined[k]) for k in sorted(joined)]
 
 
+def _log_span(shorter, longer, resolution: float):
+    """How many times longer ``longer`` is than ``shorter`` (log; arrays alike), each reading taken half a
+    step of its ``resolution`` towards the other (either may lie half a step from what was driven); at most
+    0 where they are within a step."""
+    return np.log(np.maximum(longer - resolution / 2, 1e-3)) - np.log(np.maximum(shorter + resolution / 2, 1e-3))
+
+
 def _within_ratio(part: np.ndarray, d: np.ndarray, log_ratio: float, resolution: float = 0.0) -> list[np.ndarray]:
     """``part`` (indices into ``d``, sorted by length) split at its widest steps (in log length) until
     no piece's longest is more than ``exp(log_ratio)`` times its shortest, but for the
     :data:`LENGTH_TAIL` of its readings at either end, and for the ``resolution`` each was recorded at
     (a 2 m travel read to 25 cm as 1.75, 2.0 and 2.25 m: each may have been half a step nearer)."""
     lengths = d[part]
-    v = np.log(np.maximum(lengths, 1e-3))
-    tail = int(len(v) * LENGTH_TAIL)
-    if len(part) < 2:
+    tail = int(len(lengths) * LENGTH_TAIL)
+    if len(part) < 2 or _log_span(lengths[tail], lengths[-1 - tail], resolution) <= log_ratio:
         return [part]
-    lo, hi = lengths[tail] + resolution / 2, lengths[-1 - tail] - resolution / 2  # each within half a step
-    if hi <= lo or np.log(hi) - np.log(lo) <= log_ratio:
-        return [part]
-    cut = int(np.argmax(np.diff(v))) + 1
+    cut = int(np.argmax(np.diff(np.log(np.maximum(lengths, 1e-3))))) + 1
     return (_within_ratio(part[:cut], d, log_ratio, resolution)
             + _within_ratio(part[cut:], d, log_ratio, resolution))
 

@@ -196,18 +196,15 @@ class ExactSearch:
         search at the bound would learn (the levels that judge the map alone left out of it); else None."""
         state = self.state
         classes = state.classes
-        check = state.map_check
-        if not state.deferred_levels or check is None or not check.monotone \
-                or not any(x.kind == "apart" and not x.soft for x in state.assertions):
+        if not state.deferred_levels or not any(x.kind == "apart" and not x.soft for x in state.assertions):
             return None
         spares = [(DSTATE(CANDIDATE_DSTATE(key, low)), False)
                   for key, size, low in zip(classes.keys, classes.sizes, classes.lower) if size > low]
         if not spares:
             return None
         layout = classes.layout(bound + 1) + [MINIMISE_DSTATES()]
-        slots = layout_slots(layout)
-        size = grounding_size(slots, classes, state.facts if state.suspects else ())
-        if size < LEARN_MIN_SIZE:
+        slots, size = self._size(layout)
+        if not self._learns(size):
             return None
         # (grounded by its first solve, after the budget's checks: ._solve)
         grounding = Grounding(state.resolver.theory, state.facts + layout, state.depth,
@@ -293,11 +290,8 @@ class ExactSearch:
         A large search (``LEARN_MIN_SIZE``) leaves the levels that say they are monotone out whatever it
         asks, and learns from the maps they reject (:meth:`_learn`)."""
         state = self.state
-        # (only a search that weighs misreads has may_be facts among its facts: .abduction)
-        slots = layout_slots(layout)
-        size = None if state.classes is None else grounding_size(slots, state.classes,
-                                                                 state.facts if state.suspects else ())
-        learning = state.map_check is not None and state.map_check.monotone and (size or 0) >= LEARN_MIN_SIZE
+        slots, size = self._size(layout)
+        learning = self._learns(size)
         deferred = state.deferred_levels if defer or learning else ()
         if deferred:
             outcome = self._solve(layout, what, models, optimise, size, deferred, learning and not keep, keep,
@@ -307,15 +301,31 @@ class ExactSearch:
             what = f"{what}, with the {' and '.join(deferred)} level in the search"
         return self._solve(layout, what, models, optimise, size, (), False, keep, slots=slots)
 
+    def _size(self, layout: list[Symbol]) -> tuple[dict[Symbol, int], int | None]:
+        """Each class's slots in ``layout``, and the size of its search's grounding
+        (:func:`.budget.grounding_size`; None before the classes are known: the first try)."""
+        state = self.state
+        slots = layout_slots(layout)
+        if state.classes is None:
+            return slots, None
+        # (only a search that weighs misreads has may_be facts among its facts: .abduction)
+        return slots, grounding_size(slots, state.classes, state.facts if state.suspects else ())
+
+    def _learns(self, size: int | None) -> bool:
+        """Whether a search of this size learns from the maps the monotone levels reject (``LEARN_MIN_SIZE``)."""
+        check = self.state.map_check
+        return check is not None and check.monotone and (size or 0) >= LEARN_MIN_SIZE
+
     def _solve(self, layout: list[Symbol], what: str, models: int | None, optimise: bool, size: int | None,
-               deferred: tuple[str, ...], learning: bool, keep: bool = False, grounding: Grounding | None = None,
-               assumptions: list[tuple[Symbol, bool]] | None = None,
-               slots: dict[Symbol, int] | None = None) -> Outcome | None:
+               deferred: tuple[str, ...], learning: bool, keep: bool = False, *, slots: dict[Symbol, int],
+               grounding: Grounding | None = None, assumptions: list[tuple[Symbol, bool]] | None = None
+               ) -> Outcome | None:
         """One grounding (of ``size``: None for the first try) and its solve, without the ``deferred`` levels:
         learning from the maps they reject (``learning``: :meth:`_learn`), or asking them of the maps found
-        (then None where their verdicts do not settle the question: see :func:`_settled`). A ``grounding``
-        given (:class:`Held`, made with optimisation and unlimited models) is grounded if it is not yet and
-        solved under ``assumptions``, optimising or not as asked."""
+        (then None where their verdicts do not settle the question: see :func:`_settled`). ``slots``: each
+        class's slots in ``layout``. A ``grounding`` given (:class:`Held`, made with optimisation and
+        unlimited models) is grounded if it is not yet and solved under ``assumptions``, optimising or not
+        as asked."""
         state, budget = self.state, self.budget
         cap = state.resolver.max_models + 1 if models is None else models
         if grounding is None:
@@ -349,8 +359,7 @@ class ExactSearch:
 
         unsettled, rejected = False, 0
         if learning:
-            learned = self._learn(grounding, cap, optimise, layout_slots(layout) if slots is None else slots,
-                                  assumptions or [])
+            learned = self._learn(grounding, cap, optimise, slots, assumptions or [])
             unsettled = learned is None  # not learned in time: search with the levels instead
             result, optimal, improving, rejected = learned or (None, [], [], 0)
         else:
