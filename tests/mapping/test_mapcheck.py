@@ -410,3 +410,23 @@ def test_learning_from_a_level_that_counts_dstates_gives_the_maps_of_a_search_wi
     with learning():
         deferred, searched = both(grid(1), axioms=axioms_copy)
     assert said(deferred) == said(searched)
+
+
+@settings(max_examples=100, deadline=None)
+@given(whole=edges, options=st.lists(edges, min_size=1, max_size=4))
+def test_one_grounding_judges_each_way_to_extend_a_map_as_a_check_of_each_would(whole, options):
+    # What a stream asks of the maps a new step extends one map into: each option's transitions added to the
+    # map (a new dstate 6 among them), in one grounding with each option assumed in turn.
+    from bootmap.mapping.mapcheck import MapCheck
+
+    check = MapCheck(load_theory(), ["topological"])
+    base = a_map(whole, 6)
+    added = [[Function("next", [Number(a), ACTIONS[k], Number(b + (b == 5))]) for a, k, b in o
+              if (a, k, b) not in whole] for o in options]
+    shown = check.each(base, added)
+    for option, got in zip(added, shown):
+        alone = check(base + option + [Function("dstate", [Number(6)])] * any(s.arguments[2].number == 6
+                                                                               for s in option))
+        assert (got is None) == (alone is None)
+        if got is not None:
+            assert sorted(map(str, got)) == sorted(map(str, alone))

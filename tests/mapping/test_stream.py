@@ -164,7 +164,7 @@ def test_the_replay_keeps_the_exact_map_where_the_resolver_would(seed, size):
     angles, _ = read_actions(tableau)
     actions = [action_symbol(s.action, a) for s, a in zip(tableau.steps, angles)]
     suspects = [s for s in find_suspects(tableau.views, actions) if s.reason != RARE_VIEW]
-    n_dstates, count = len(replay.view_of), classes.count
+    n_dstates, count = len(replay.maps[0].view_of), classes.count
     assert suspects and count < n_dstates and len(tableau) >= MIN_VISITS * count  # the bounds are asked for
     bound = sum(grounded.lower_bounds(classes))
     clear = {s.t for s in suspects if s.clear} or {s.t for s in suspects}
@@ -253,11 +253,12 @@ def tried(cmap, result: str | None = None) -> list[str]:
 
 
 def test_a_resolve_in_a_stream_starts_at_the_dstates_the_last_map_proved():
-    # 105 steps of an exploration have minimal maps of 55 dstates (more than one); the next step cannot be
-    # placed, and its resolve starts at 55, where the classes' bounds alone start lower.
-    before, after, fresh = last_step_streamed(106)
+    # 255 steps of an exploration have minimal maps of 92 dstates (more than one); the next step extends
+    # none of them, and its resolve starts at 93, where a fresh resolve tries 92 first.
+    before, after, fresh = last_step_streamed(256)
     assert same_map(after, fresh) and before.minimal and not before.unique
     assert tried(fresh, "unsat") and not tried(after, "unsat")
+    assert tried(after)[0] == f"at most {before.n_dstates + 1} dstates"
 
 
 def test_a_last_map_that_does_not_extend_proves_a_dstate_more():
@@ -278,3 +279,23 @@ def test_streaming_equals_batch_where_the_experience_leaves_several_minimal_maps
     tableau = with_misreads(notched_rectangle(6), 0.02, np.random.default_rng(seed))[0].prefix(steps)
     stream = streamed_equals_batch(tableau, since=steps, misreads=False)  # every prefix streamed, the last compared
     assert stream.map_.n_models > 1 and stream.map_.models_capped == (seed == 3)
+
+
+@pytest.mark.parametrize("seed", [4, 5])
+def test_each_of_several_minimal_maps_is_extended_without_a_search(seed):
+    # The paper's room with misclustered views, read as seen, leaves several minimal maps from some step on;
+    # each later step extends every one of them as the axioms allow, and those are the maps a fresh resolve
+    # finds, in the same order, on every prefix: fewer of them where a step rules some out.
+    from support.noise import with_misreads
+    tableau = with_misreads(notched_rectangle(6), 0.02, np.random.default_rng(seed))[0]
+    stream, resolver = MapStream(Resolver(time_limit=30, misreads=False)), Resolver(time_limit=30, misreads=False)
+    extended, narrowed, last = 0, False, None
+    for n in range(1, len(tableau) + 1):
+        resolved = stream.resolved_
+        cmap = stream.update(tableau.prefix(n))
+        assert same_map(cmap, resolver.resolve(tableau.prefix(n))), f"prefix of {n} time points"
+        if last is not None and not last.unique and stream.resolved_ == resolved:
+            extended += 1
+            narrowed |= cmap.n_models < last.n_models
+        last = cmap
+    assert extended >= 5 and narrowed

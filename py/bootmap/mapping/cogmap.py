@@ -245,15 +245,34 @@ def canonical_order(models: list[list[Symbol]], n: int) -> list[list[Symbol]]:
     >>> [[str(a.arguments[1]) for a in m] for m in canonical_order([model(5, 7, 5), model(2, 2, 9)], 3)]
     [['d(2)', 'd(2)', 'd(9)'], ['d(5)', 'd(7)', 'd(5)']]
     """
-    return [models[k] for k in _canonical(models, [Atoms(m) for m in models], n)]
+    readings = [Reading.of_model(Atoms(m), n) for m in models]
+    return [models[k] for k in _canonical(models, readings)]
 
 
-def _canonical(models: list[list[Symbol]], atoms: list[Atoms], n: int) -> list[int]:
-    """The indices of ``models`` (whose atoms are read in ``atoms``) in :func:`canonical_order`: by
-    partition, and by atoms only where partitions tie (a model's atoms as text cost a call each)."""
+@dataclass(frozen=True)
+class Reading:
+    """One minimal map as the cognitive map is built from it: each time point's dstate, numbered by first
+    appearance (``seq``), and the atoms about its dstates (views, headings, places, paths, sides, misreads)
+    whose dstate terms ``ids`` numbers. Read from a clingo model (:meth:`of_model`), or made from a
+    partition kept in Python (a stream's maps, :mod:`.stream`)."""
+
+    seq: list[int]
+    ids: dict[Symbol, int]
+    atoms: Atoms
+
+    @classmethod
+    def of_model(cls, atoms: Atoms, n: int) -> "Reading":
+        """The reading of a model's atoms (its ``is/2`` atoms give the partition) over ``n`` time points."""
+        ids, seq = _number_dstates(atoms[IS], n)
+        return cls(seq, ids, atoms)
+
+
+def _canonical(models: list[list[Symbol]], readings: list[Reading]) -> list[int]:
+    """The indices of ``models`` (read in ``readings``) in :func:`canonical_order`: by partition, and by
+    atoms only where partitions tie (a model's atoms as text cost a call each)."""
     if len(models) < 2:
         return list(range(len(models)))
-    parts = [tuple(_number_dstates(a[IS], n)[1]) for a in atoms]
+    parts = [tuple(r.seq) for r in readings]
     tied = {p for p in parts if parts.count(p) > 1}
     return sorted(range(len(models)), key=lambda k: (parts[k], sorted(map(str, models[k])) if parts[k] in tied else []))
 
@@ -278,12 +297,20 @@ def build_map(tableau: Tableau, models: list[list[Symbol]], exhausted: bool, lev
     ``misread_costs``: what taking each suspect view as a misread cost; ``retyped_steps``: the actions
     taken as mistyped; ``length_types``: the travels' length types, when already learned
     (:func:`~bootmap.mapping.facts.length_types_of`)."""
+    readings = [Reading.of_model(Atoms(m), len(tableau)) for m in models]
+    readings = [readings[k] for k in _canonical(models, readings)]
+    return map_of(tableau, readings, exhausted, levels, stats, minimal, action_types, misread_costs, retyped_steps,
+                  length_types)
+
+
+def map_of(tableau: Tableau, readings: list[Reading], exhausted: bool, levels, stats: SolveStats,
+           minimal: bool = True, action_types: list[ActionType] | None = None,
+           misread_costs: dict[int, int] | None = None, retyped_steps: list[dict] | None = None,
+           length_types: list | None = None) -> CognitiveMap:
+    """The map of the first of ``readings`` (in canonical order: :func:`canonical_order`), the others its
+    alternatives; the rest as :func:`build_map`."""
     n = len(tableau)
-    read = [Atoms(m) for m in models]
-    order = _canonical(models, read, n)
-    models, read = [models[k] for k in order], [read[k] for k in order]
-    atoms = read[0]
-    ids, seq = _number_dstates(atoms[IS], n)
+    atoms, ids, seq = readings[0].atoms, readings[0].ids, readings[0].seq
     S = [f"S{i}" for i in range(len(ids))]
     views = {S[ids[d]]: v.string for d, v in atoms[VIEW_OF]}
     headings = {S[ids[d]]: h.number for d, h in atoms[HEADING_OF]}
@@ -322,10 +349,10 @@ def build_map(tableau: Tableau, models: list[list[Symbol]], exhausted: bool, lev
     paths = {pa: _ordered_places(pa, on, order) for pa in sorted(set(paname.values()), key=_natural1)}
     steps = [step_row(t, tableau.steps[t], S[i], place_of, path_of) for t, i in enumerate(seq)]
     alternatives, alternative_places = [], []
-    for alt_atoms in read[1:]:
-        alt_ids, alt = _number_dstates(alt_atoms[IS], n)
+    for other in readings[1:]:
+        alt_ids, alt = other.ids, other.seq
         alternatives.append([f"S{i}" for i in alt])
-        place_of_alt = {alt_ids[d]: str(p) for d, p in alt_atoms[PLACE_OF]}
+        place_of_alt = {alt_ids[d]: str(p) for d, p in other.atoms[PLACE_OF]}
         alternative_places.append([place_of_alt.get(i) for i in alt])
     misread = sorted(t.number for (t,) in atoms[MISREAD])
     suspect_steps = [{"t": t, "observed": tableau.steps[t].view, "expected": views[S[seq[t]]],
@@ -334,7 +361,7 @@ def build_map(tableau: Tableau, models: list[list[Symbol]], exhausted: bool, lev
         suspect_steps=suspect_steps, retyped_steps=list(retyped_steps or []), steps=steps, dstate_of=[S[i] for i in seq], views=dict(sorted(views.items(), key=_natural1)),
         headings=headings, place_of=place_of, path_of=path_of, places=places, paths=paths, on=on,
         order=order, right_of=sorted(sides["right"], key=_natural), left_of=sorted(sides["left"], key=_natural),
-        n_models=len(models) if minimal else 0, unique=minimal and len(models) == 1 and exhausted,
+        n_models=len(readings) if minimal else 0, unique=minimal and len(readings) == 1 and exhausted,
         models_capped=minimal and not exhausted, alternatives=alternatives, levels=list(levels),
         stats=stats, minimal=minimal, action_types=list(action_types or []),
         length_types=length_types_of(tableau) if length_types is None else list(length_types),

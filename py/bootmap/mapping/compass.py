@@ -125,8 +125,13 @@ class WallCompass:
             images = [s.image if isinstance(s.image, tuple) else tuple(s.image) for s in tableau.steps]
             for t in range(len(actions)):
                 candidates[t] = _candidates(images[t], images[t + 1], lo, hi, rmax)
-        kinds = [a.kind for a in actions]
         self.spread_deg_ = {}
+        if laser is None:  # no walls to read: every reading is odometry's own (as _read makes it of no candidates)
+            out = [Reading(o, o, False, None) for o in odometry]
+            self.results_, self.readings_ = out, list(odometry)
+            self.confirmed_, self.alternatives_ = [False] * len(out), [None] * len(out)
+            return self
+        kinds = [a.kind for a in actions]
         for kind in ("turn", "travel"):
             off = [_nearest([a for a, _ in c], o)[1] for c, o, k in zip(candidates, odometry, kinds) if k == kind and c]
             if off:

@@ -105,6 +105,26 @@ class MapCheck:
             return None
         return own + list(shown[0])
 
+    def each(self, inputs: Sequence[Symbol], options: Sequence[Sequence[Symbol]] = ((),)) -> list[list[Symbol] | None]:
+        """What the levels show of the map made of ``inputs`` (its ``next/3`` and ``dstate/1``) with each
+        option's transitions added (``next/3`` atoms, whose dstates are dstates too), or None for an option
+        they reject: a map and the ways a new step could extend it (:mod:`.stream`). One grounding: each
+        option's transitions are external atoms, assumed true for it and false for the others."""
+        extra = list(dict.fromkeys(s for option in options for s in option))
+        control = self._grounded(list(inputs) + [clingo.Function(_TRANSITION, s.arguments) for s in extra],
+                                 ASK_TRANSITIONS)
+        literal = {s: control.symbolic_atoms[s].literal for s in extra}
+        for lit in literal.values():
+            control.assign_external(lit, None)
+        out: list[list[Symbol] | None] = []
+        for option in options:
+            own = set(option)
+            shown: list[list[Symbol]] = []
+            control.solve(assumptions=[lit if s in own else -lit for s, lit in literal.items()],
+                          on_model=lambda m: shown.append(m.symbols(shown=True)))
+            out.append(shown[0] if shown else None)
+        return out
+
     def reasons(self, model: Sequence[Symbol]) -> list[Symbol]:
         """Of a map the levels reject (the shown symbols of its model), a fewest set of its transitions
         (``next/3``) that they reject alone: no transition of the set can be left out. Where the levels are

@@ -1,18 +1,22 @@
 """The stock axioms replayed on repeated experience, step by step: what keeps a streamed map current in
 a few milliseconds.
 
-:class:`~.stream.MapStream` extends the unique minimal map of a tableau by determinism when new steps
-repeat transitions already taken. Whether the map so extended still satisfies the axioms, and whether a
-fresh resolve would keep it, clingo can say by grounding the whole tableau with the partition fixed; but
-that grounds every step again on every step. For the axiom files bootmap ships, the answer needs only
-what the new steps change, and :class:`Replay` keeps it as the steps arrive:
+:class:`~.stream.MapStream` extends the minimal maps of a tableau to new steps (its docstring has the
+argument why the extensions the axioms accept are the minimal maps of the longer experience). Whether
+a map so extended still satisfies the axioms, clingo can say by grounding the whole tableau with the
+partition fixed; but that grounds every step again on every step. For the axiom files bootmap ships,
+the answer needs only what the new steps change, and :class:`Replay` keeps it as the steps arrive:
 
-* causal.lp: a time point shows its dstate's view (``one_value_per_feature``). What it saw after a
-  sequence of actions (``after(S)``) then follows from the views and determinism, and ``next/3`` gains no
-  transition, so ``deterministic_action`` and the whole topological level (which reads only ``next/3``)
-  hold as before.
+* causal.lp: a time point shows its dstate's view (``one_value_per_feature``). Where determinism places
+  it, what it saw after a sequence of actions (``after(S)``) then follows from the views and
+  determinism, and ``next/3`` gains no transition, so ``deterministic_action`` and the whole
+  topological level (which reads only ``next/3``) hold as before. Where its action was never taken
+  from the dstate before it (a new transition), no other time point at a dstate took the same actions
+  up to it, so no ``after(S)`` feature disagrees; ``next/3`` gains the transition, which the topological
+  level is asked of (:meth:`.mapcheck.MapCheck.each`, in the stream).
 * metrical.lp: the heading after an action is the heading before plus the action's type angle, and must
-  be its dstate's; a travel's length type must be the one its dstate's travels have.
+  be its dstate's; a travel's length type must be the one its dstate's travels have (a dstate's one
+  travel: a new one from a dstate is its first).
 
 What the resolver does with the longer tableau also depends on what it derives before any search, and
 :class:`Replay` keeps that too, as :mod:`.grounding`'s prepass would derive it: the classes of time points
@@ -34,6 +38,7 @@ from __future__ import annotations
 
 import hashlib
 from collections import ChainMap
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Sequence
 
@@ -42,6 +47,7 @@ from .cogmap import CognitiveMap
 from .grounding import apart_clique
 from .misreads import MIN_VISITS, SuspectWatch
 from .theory import Theory
+from .vocabulary import Atoms
 
 #: The axiom files the replay's argument is about (path in the axiom directory -> sha256). When one
 #: changes, check the argument above against it, then update its digest (tests/mapping/test_stream.py).
@@ -74,9 +80,35 @@ def action_key(step: Step, angle: int) -> tuple:
     return ("turn", angle) if isinstance(step.action, Turn) else ("travel",)
 
 
+@dataclass
+class Partition:
+    """One map of the replayed experience, its dstates numbered by first appearance (as the map names
+    them, ``S0, S1, ...``; a new dstate, the last to appear, takes the next number): each time point's
+    dstate, where each (dstate, action) led, each dstate's view, heading (None without the metrical level)
+    and travels' length type, and the dstates of each class; and what the levels that judge the map alone
+    show of it (:mod:`.mapcheck`, its dstates ``Number`` terms), once asked, with the transitions added
+    since (``added``), which they have not judged yet."""
+
+    dstate_of: list[int]
+    led: dict[tuple[int, tuple], int] = field(default_factory=dict)
+    view_of: dict[int, str] = field(default_factory=dict)
+    heading_of: dict[int, int | None] = field(default_factory=dict)
+    length_of: dict[int, int] = field(default_factory=dict)
+    in_class: dict[tuple, list[int]] = field(default_factory=dict)
+    shown: Atoms | None = None
+    added: list[tuple[int, tuple, int]] = field(default_factory=list)
+    origin: object = field(default_factory=object)  # the map shown was asked of; its branches share it
+
+    def branch(self) -> "Partition":
+        """A copy to extend another way."""
+        return Partition(list(self.dstate_of), dict(self.led), dict(self.view_of), dict(self.heading_of),
+                         dict(self.length_of), {k: list(v) for k, v in self.in_class.items()}, self.shown,
+                         list(self.added), self.origin)
+
+
 class Replay:
-    """A tableau's experience as the stock axioms read it before any search, and the last map, kept up
-    to date as steps are appended.
+    """A tableau's experience as the stock axioms read it before any search, and its minimal maps, kept
+    up to date as steps are appended.
 
     Parameters
     ----------
@@ -97,70 +129,105 @@ class Replay:
         self.class_of: list[tuple] = []         # (view, heading) of each time point
         self.members: dict[tuple, list[int]] = {}
         self.watch = SuspectWatch()
-        # The map: each time point's dstate; where each (dstate, action) led; each dstate's features.
-        self.dstate_of: list[str] = []
-        self.led: dict[tuple[str, tuple], str] = {}
-        self.view_of: dict[str, str] = {}
-        self.heading_of: dict[str, int] = {}
-        self.length_of: dict[str, int] = {}
-        self.dstates_in: dict[tuple, int] = {}  # class -> its dstates in the map
+        self.maps: list[Partition] = []         # every minimal map, the one shown first
         self._lower: dict[tuple, int] = {}      # class -> its lower bound, while no step changes it
         self._without: dict[tuple, int] = {}    # ... and without the clear suspects' views
         self._cleared: frozenset[int] = frozenset()
-        self.unplaced: int | None = None        # the last extension's new time point no transition placed
-        self.refuted = False                    # ... or the one it placed where the axioms refuse it
+        self.refuted = False                    # the last extension left no map with as many dstates
 
     # ------------------------------------------------------------------------------------------------
 
     @classmethod
     def of(cls, steps: Sequence[Step], angles: Sequence[int], lengths: dict[int, int], cmap: CognitiveMap,
            metrical: bool, future_depth: int) -> "Replay":
-        """The replay of a tableau's steps and its map, from scratch."""
+        """The replay of a tableau's steps and its minimal maps (the map and its alternatives), from scratch."""
         replay = cls(metrical, future_depth)
         for t in range(len(steps)):
             replay._observe(t, steps, angles, lengths, watch=False)
         replay.watch = SuspectWatch.of(replay.views, replay.actions)
-        replay.dstate_of = list(cmap.dstate_of)
-        replay.view_of, replay.heading_of = dict(cmap.views), dict(cmap.headings)
-        for t in range(len(steps) - 1):
-            d = cmap.dstate_of[t]
-            replay.led[(d, replay.actions[t])] = cmap.dstate_of[t + 1]
-            if t in lengths:
-                replay.length_of[d] = lengths[t]
-        for d in cmap.views:
-            key = replay._class(cmap.views[d], cmap.headings.get(d))
-            replay.dstates_in[key] = replay.dstates_in.get(key, 0) + 1
+        replay.maps = [replay._partition([int(d[1:]) for d in names])
+                       for names in [cmap.dstate_of] + list(cmap.alternatives)]
         return replay
 
-    def extend(self, steps: Sequence[Step], angles: Sequence[int], lengths: dict[int, int]) -> list[str] | None:
-        """The dstate of each new time point by determinism, if the map so extended satisfies the
-        stock axioms; else None (the replay is then stale: make a new one). Where only the last new time
-        point is reached by a transition never taken from its dstate before, ``unplaced`` names it (the
-        experience, but no dstate, is then read up to it: :attr:`watch` and :meth:`exact_stands` hold);
-        where determinism placed a new point where the axioms refuse it, ``refuted`` says so."""
-        self.unplaced, self.refuted = None, False
-        if angles[:len(self.actions)] != self.angles or any(lengths.get(t) != v for t, v in self.lengths.items()):
-            return None  # the action types learned from the longer experience read an old action anew
-        for t in range(len(self.views), len(steps)):
-            d_before = self.dstate_of[t - 1]
-            self._observe(t, steps, angles, lengths)
-            d = self.led.get((d_before, self.actions[t - 1]))
-            if d is None:  # a transition never taken from there
-                self.unplaced = t if t == len(steps) - 1 else None
-                return None
-            if not self._fits(t, d, d_before):
-                self.refuted = True
-                return None
-            self.dstate_of.append(d)
-        return self.dstate_of
+    def _partition(self, dstate_of: list[int]) -> Partition:
+        """The map that puts each time point at ``dstate_of[t]``."""
+        p = Partition(list(dstate_of))
+        for t, d in enumerate(dstate_of):
+            if d not in p.view_of:
+                p.view_of[d] = self.views[t]
+                p.heading_of[d] = self.headings[t] if self.metrical else None
+                p.in_class.setdefault(self.class_of[t], []).append(d)
+            if t + 1 < len(dstate_of):
+                p.led[(d, self.actions[t])] = dstate_of[t + 1]
+            if t in self.lengths:
+                p.length_of[d] = self.lengths[t]
+        return p
 
-    def _fits(self, t: int, d: str, d_before: str) -> bool:
-        """Whether the stock axioms accept time point t at dstate d (where determinism places it)."""
-        if self.view_of[d] != self.views[t]:
+    def extend(self, steps: Sequence[Step], angles: Sequence[int], lengths: dict[int, int],
+               at_most: int) -> list[Partition] | None:
+        """Every minimal map extended to the new time points as the causal and metrical axioms allow (see
+        :meth:`_placed`): each is a map of the longer experience with as many dstates, or with one more
+        where a new time point's class is new (no other time point has its view and heading, so every map
+        gives it a dstate of its own). Of the maps returned, those with ``added`` transitions the levels
+        that judge the map alone must still accept. Empty where none extends (``refuted``: no map of the
+        longer experience has as few dstates); None where the action types learned from the longer
+        experience read an old action anew, or the maps grow past ``at_most`` (the replay is then stale:
+        make a new one)."""
+        self.refuted = False
+        if angles[:len(self.actions)] != self.angles or any(lengths.get(t) != v for t, v in self.lengths.items()):
+            return None
+        for t in range(len(self.views), len(steps)):
+            self._observe(t, steps, angles, lengths)
+            fresh = len(self.members[self.class_of[t]]) == 1
+            extended = [e for m in self.maps for e in self._placed(m, t, fresh)]
+            self.maps = extended
+            if not extended:
+                self.refuted = True
+                return []
+            if len(extended) > at_most:
+                return None
+        return self.maps
+
+    def _placed(self, m: Partition, t: int, fresh: bool) -> list[Partition]:
+        """Map ``m`` extended to time point t, every way the causal and metrical axioms accept:
+
+        - a transition taken before from t - 1's dstate: where it led (determinism), if t shows that
+          dstate's view and heading and the travel has its length type;
+        - a transition never taken from there: at each dstate of t's class, or at a new dstate where the
+          class is new. What the experience shows after an action sequence (``after(S)``) tells nothing
+          against it: time points at one dstate that took the same actions would have taken this
+          transition before. (A new transition is one the map's levels have not judged: ``added``.)
+        """
+        d_before, action = m.dstate_of[t - 1], self.actions[t - 1]
+        d = m.led.get((d_before, action))
+        if d is not None:
+            if not self._fits(m, t, d, d_before):
+                return []
+            m.dstate_of.append(d)
+            return [m]
+        key = self.class_of[t]
+        targets = [len(m.view_of)] if fresh else list(m.in_class.get(key, ()))
+        out = []
+        for i, d in enumerate(targets):
+            b = m if i == len(targets) - 1 else m.branch()
+            b.dstate_of.append(d)
+            b.led[(d_before, action)] = d
+            if t - 1 in self.lengths:
+                b.length_of[d_before] = self.lengths[t - 1]
+            if fresh:
+                b.view_of[d], b.heading_of[d] = self.views[t], self.headings[t] if self.metrical else None
+                b.in_class.setdefault(key, []).append(d)
+            b.added.append((d_before, action, d))
+            out.append(b)
+        return out
+
+    def _fits(self, m: Partition, t: int, d: int, d_before: int) -> bool:
+        """Whether the stock axioms accept time point t at dstate d of map m (where determinism places it)."""
+        if m.view_of[d] != self.views[t]:
             return False  # another view at its end
-        if self.metrical and self.heading_of.get(d) != self.headings[t]:
+        if self.metrical and m.heading_of.get(d) != self.headings[t]:
             return False  # the action's type angle does not lead to the dstate's heading
-        if self.metrical and t - 1 in self.lengths and self.lengths[t - 1] != self.length_of.get(d_before):
+        if self.metrical and t - 1 in self.lengths and self.lengths[t - 1] != m.length_of.get(d_before):
             return False  # a travel of another length than the dstate's travels
         return True
 
@@ -175,7 +242,7 @@ class Replay:
             return True
         for key, times in self.members.items():
             if key not in self._lower:
-                self._lower[key] = apart_clique(times, self.partial, exact=True, at_most=self.dstates_in.get(key))
+                self._lower[key] = apart_clique(times, self.partial, exact=True, at_most=self._dstates_in(key))
         bound = sum(self._lower.values())
         if bound != n_dstates:
             return False
@@ -186,8 +253,13 @@ class Replay:
         for key, times in self.members.items():
             if key not in self._without:
                 self._without[key] = apart_clique([t for t in times if t not in clear], without, exact=True,
-                                                  at_most=self.dstates_in.get(key))
+                                                  at_most=self._dstates_in(key))
         return bound - sum(self._without.values()) < len(clear)
+
+    def _dstates_in(self, key: tuple) -> int | None:
+        """A class's dstates in a map (the first): as many as any set of its time points that pairwise
+        disagree can hold."""
+        return len(self.maps[0].in_class[key]) if self.maps and key in self.maps[0].in_class else None
 
     def _clear(self, images: bool) -> frozenset[int]:
         """The suspects the resolver would leave out first: the clear ones, or all where none is clear

@@ -1,43 +1,43 @@
-"""Maps that keep up with a robot as it explores: extend the map by each new step, re-solve only when
-that does not stand.
+"""Maps that keep up with a robot as it explores: extend the minimal maps by each new step, re-solve only
+when that does not stand.
 
 A robot explores step by step, and most steps repeat what it has done before: the same action from
-the same dstate. When the map of the experience so far is the unique minimal map, a new time point
-reached by an action already taken from the same dstate must be at the dstate that action led to
-before (determinism). If the map so extended still satisfies every axiom, it is the unique minimal map
-of the longer experience as well:
+the same dstate. The resolver's answer is every minimal map of the experience (where there are more
+than it lists, some of them). Listed in full, they are all the stream needs for the next step: a map of
+the longer experience restricted to the old steps is a map of them, so it has at least as many dstates
+as their minimal maps; one with as many restricts to one of them, and puts the new time point
 
-* minimal: a map of the longer experience restricted to the old steps is a map of them, so it has at
-  least as many dstates as their minimal map; the extension adds none;
-* unique: every minimal map of the longer experience restricts to the old steps' unique map, and
-  determinism then places the new time point.
+* where the action led before from the same dstate (determinism), if the action was taken there before;
+* else at one of that map's dstates of the new point's class (its view, and heading with the metrical
+  level): a transition never taken from there, which the axioms may accept at several dstates or none;
+* or, where no time point before it has its class, at a dstate of its own: then every map of the
+  longer experience has one more dstate, and those that have no more are exactly the minimal maps so
+  extended.
 
-So the result equals a fresh resolve of the same steps, which is what the tests check on every prefix
-of long walks. A new step reached by an action never taken from its dstate before is placed by the
-axioms instead, where they allow one place only: the last map with the new time point at each dstate of
-its view, checked by clingo in one grounding (the old partition fixed, the new point's dstate chosen
-among those). If exactly one is accepted, that map is the unique minimal map of the longer experience:
+So the minimal maps of the longer experience are the extensions of the last ones that the axioms accept,
+where any is accepted: the same maps as a fresh resolve finds, shown in the same (canonical) order, which
+the tests check on every prefix of long walks. Where none is accepted, every map of the longer experience
+has a dstate more than the last ones, and the resolve starts there; where more are accepted than the
+resolver lists, or the last maps were more than it lists, the stream resolves as a fresh resolve does
+(which of them are listed depends on the search's path).
 
-* minimal: it has as many dstates as the last map, which no map of the longer experience has fewer of;
-* unique: a minimal map of the longer experience restricts to the old steps' unique map, and puts the
-  new time point at one of its dstates, of which the axioms accepted one.
-
-Anything else (a new transition the axioms accept nowhere or in several places, a changed action type, a
-view that may be a misread, an ambiguous map) is resolved again from scratch, from the dstates the last
-map proved necessary: a minimal map read as seen has as many as any map of the longer experience needs
-at least; one more where it was the only one and does not extend (a new step the axioms place nowhere,
-or not where determinism puts it); so the search skips the bounds below. (The minimal maps it finds are
-shown in their canonical order, as a fresh resolve shows them; where they are more than the resolver
-lists, which ones are listed depends on the search's path, and the stream resolves from scratch.) Where
-some views are suspect (possible misreads, :mod:`.misreads`), the map is extended only where the
-resolver too would keep the exact map without weighing them: one dstate per class, experience too little
-repeated for misreads to show, or as many dstates as the classes' proved lower bounds.
+Anything else (a changed action type, a view that may be a misread) is resolved again from scratch,
+from the dstates the last map proved necessary: a minimal map read as seen has as many as any map of the
+longer experience needs at least. Where some views are suspect (possible misreads, :mod:`.misreads`),
+the maps are extended only where the resolver too would keep the exact map without weighing them: one
+dstate per class, experience too little repeated for misreads to show, or as many dstates as the
+classes' proved lower bounds.
 
 Who checks: with the axiom files bootmap ships, :mod:`.replay` keeps, step by step, what the axioms
 derive from the experience (headings, classes, the features that tell time points apart, the suspect
-views, the classes' lower bounds) and checks only what the new steps change: a few milliseconds a step,
-however long the tableau. With a theory a user added to or edited, clingo checks the whole extended map
-with the partition fixed (``fixed/2``), so the user's axioms are honoured.
+views, the classes' lower bounds) and places the new steps in each map as the causal and metrical levels
+allow; the levels that judge the map alone (the topological one) are asked by clingo of each map with a
+new transition, on its dstates and transitions only (:meth:`.mapcheck.MapCheck.each`: one grounding for
+the ways to extend one map). A few milliseconds a step where determinism places it, 15-30 ms where a
+transition is new, however long the tableau. With a theory a user added to or edited, clingo checks the
+whole extended map with the partition fixed (``fixed/2``), so the user's axioms are honoured; there the
+stream extends a unique map only (and places a new transition's end where the axioms accept it at one
+dstate only).
 
 Example
 -------
@@ -55,18 +55,19 @@ from __future__ import annotations
 import time
 from dataclasses import replace
 
-from clingo import Symbol
+from clingo import Number, String, Symbol
 
 from ..tableau import Tableau
-from .cogmap import CognitiveMap, SolveStats, Try, build_map, step_row
+from .cogmap import CognitiveMap, Reading, SolveStats, Try, build_map, map_of, step_row
 from .facts import (action_symbol, action_symbols, passes_through, tableau_facts, travel_length_types,
                     travel_lengths, typing_of)
 from .grounding import Deadline, check_fixed, prepass
 from .misreads import MIN_VISITS, find_suspects, has_images, rare_clustered_views
 from .motion import ActionType
-from .replay import Replay, covers, length_labels
+from .mapcheck import MapCheck
+from .replay import Partition, Replay, covers, length_labels
 from .resolver import Resolver
-from .vocabulary import FIXED, fixed_dstate
+from .vocabulary import DSTATE, FIXED, HEADING_OF, NEXT, VIEW_OF, Atoms, action_term, fixed_dstate
 
 __all__ = ["MapStream"]
 
@@ -84,10 +85,10 @@ class MapStream:
     map_ : CognitiveMap or None
         The map of the last tableau given.
     extended_ : int
-        Updates answered by extending the map (checked by clingo, no search).
+        Updates answered by extending the minimal maps by determinism (no search).
     joined_ : int
-        Updates answered by placing a new transition's end at the one dstate the axioms accept there
-        (checked by clingo, no search).
+        Updates answered by placing a new transition's end where the axioms accept it, in each minimal
+        map (no search).
     resolved_ : int
         Updates answered by a full resolve.
     """
@@ -105,6 +106,7 @@ class MapStream:
         # The stock axioms are replayed in Python (:mod:`.replay`); a theory a user changed, by clingo.
         self._replays = covers(self.resolver.theory)
         self._replay: Replay | None = None
+        self._map_check: MapCheck | None = None
         self._images = False  # every step so far has an image (misreads.rare_clustered_views)
 
     def update(self, tableau: Tableau, deadline: Deadline | None = None) -> CognitiveMap:
@@ -147,9 +149,11 @@ class MapStream:
         """The last map extended by determinism to the new steps, if it is still the unique minimal map;
         else None."""
         old, cmap = self._tableau, self.map_
-        if old is None or cmap is None or not (cmap.unique and cmap.minimal) or cmap.suspect_steps \
+        if old is None or cmap is None or not cmap.minimal or cmap.models_capped or cmap.suspect_steps \
                 or cmap.retyped_steps:  # its actions were typed against the whole experience: resolve anew
             return None
+        if not cmap.unique and not self._replays:
+            return None  # clingo checks one map extended (a theory a user changed): several need a search
         n = len(old)
         if not self._continues(tableau, angles):
             return None
@@ -199,32 +203,80 @@ class MapStream:
 
     def _replayed(self, tableau: Tableau, angles: list[int], types: list[ActionType], deadline: Deadline,
                   start: float) -> CognitiveMap | None:
-        """The stock axioms' verdict on the extended map, from what the new steps change (:mod:`.replay`)."""
+        """The minimal maps of the longer tableau from the last ones: each extended as the stock axioms
+        allow (:mod:`.replay`), a map with a new transition judged by the levels that judge the map alone
+        (:meth:`_judged`). None where a resolve must say."""
         old, cmap = self._tableau, self.map_
         replay = self._replay or Replay.of(old.steps, self._angles, length_labels(travel_lengths(old)), cmap,
                                            "metrical" in self.resolver.theory.levels, self.resolver.future_depth)
         self._replay = None  # stale unless all below holds
         lengths, length_types = travel_length_types(tableau)
-        dstate_of = replay.extend(tableau.steps, angles, length_labels(lengths))
+        unique = len(replay.maps) == 1
+        maps = replay.extend(tableau.steps, angles, length_labels(lengths), self.resolver.max_models)
         if replay.refuted:
             self._one_more()
-        if dstate_of is None and replay.unplaced is None:
+        if not maps:
             return None
         if self.resolver.misreads and self._images and replay.watch.rare:
             return None  # the resolver weighs views of one or two images against any map: let it
-        if self.resolver.misreads and not replay.exact_stands(cmap.n_dstates, self._images):
+        n_dstates = len(maps[0].view_of)
+        if self.resolver.misreads and not replay.exact_stands(n_dstates, self._images):
             return None  # some views are suspect and the bounds do not prove the exact map: resolve
-        if dstate_of is None:  # the last step's action was never taken from its dstate: the axioms place it
-            return self._join(tableau, tableau_facts(tableau, angles=angles), types, replay.dstate_of, deadline, start)
-        self._replay = replay
-        rows = cmap.steps[:len(old) - 1] + [step_row(t, tableau.steps[t], dstate_of[t], cmap.place_of, cmap.path_of)
-                                           for t in range(len(old) - 1, len(tableau))]
+        joined = any(m.added for m in maps)
+        if joined or not unique or len(maps) > 1:
+            if deadline.passed():
+                return None
+            maps = self._judged(maps)
+            if not maps:  # the levels reject every way to extend: no map has as few dstates
+                self._one_more()
+                return None
+            replay.maps = maps
+        self._replay, self._joined = replay, joined
         seconds = time.perf_counter() - start
-        stats = SolveStats(classes=len(replay.members), lower_bound=cmap.n_dstates, total_s=seconds,
-                           bounds=(Try("the last map extended by determinism (stock axioms replayed)", "sat",
-                                       seconds),))
-        return replace(cmap, steps=rows, dstate_of=list(dstate_of), action_types=types,
-                       length_types=length_types, stats=stats)
+        how = ("the last maps extended, new transitions placed where the axioms accept them" if joined else
+               "the last map extended by determinism") + " (stock axioms replayed)"
+        stats = SolveStats(classes=len(replay.members), lower_bound=n_dstates, total_s=seconds,
+                           bounds=(Try(how, "sat", seconds),))
+        if unique and len(maps) == 1 and not joined:
+            # The last map's places and paths stand, and so do its names: a replayed map numbers its dstates
+            # by first appearance, as the map names them (a new dstate, the last to appear, is numbered next).
+            rows = cmap.steps[:len(old) - 1] + [step_row(t, tableau.steps[t], f"S{maps[0].dstate_of[t]}", cmap.place_of,
+                                                         cmap.path_of) for t in range(len(old) - 1, len(tableau))]
+            return replace(cmap, steps=rows, dstate_of=[f"S{d}" for d in maps[0].dstate_of], action_types=types,
+                           length_types=length_types, stats=stats)
+        readings = sorted((_reading(m, replay.metrical) for m in maps), key=lambda r: r.seq)
+        return map_of(tableau, readings, True, self.resolver.theory.levels, stats, action_types=types,
+                      length_types=length_types)
+
+    def _judged(self, maps: list[Partition]) -> list[Partition]:
+        """The maps the levels that judge the map alone accept (all, where the theory has none), each with
+        what they show of it. Maps extended from one map only by their new transitions are asked in one
+        grounding (:meth:`.mapcheck.MapCheck.each`)."""
+        levels = self.resolver.theory.map_levels
+        if not levels:
+            for m in maps:
+                m.shown, m.added = Atoms(()), []
+            return maps
+        check = self._map_check or MapCheck(self.resolver.theory, levels)
+        self._map_check = check
+        groups: dict[int, list[Partition]] = {}  # by the map they were extended from: its transitions and more
+        for m in maps:
+            if m.shown is None or m.added:
+                groups.setdefault(id(m.origin), []).append(m)
+        rejected: set[int] = set()
+        for group in groups.values():
+            first = group[0]
+            base = {(d, a, d2) for (d, a), d2 in first.led.items()} - set(first.added)
+            inputs = [NEXT(Number(d), _action(a), Number(d2)) for d, a, d2 in base]
+            known = {d for d, _, d2 in base for d in (d, d2)} | {first.dstate_of[0]}
+            inputs += [DSTATE(Number(d)) for d in known]
+            options = [[NEXT(Number(d), _action(a), Number(d2)) for d, a, d2 in m.added] for m in group]
+            for m, shown in zip(group, check.each(inputs, options)):
+                if shown is None:
+                    rejected.add(id(m))
+                else:
+                    m.shown, m.added, m.origin = Atoms(shown), [], object()
+        return [m for m in maps if id(m) not in rejected]
 
     def _join(self, tableau: Tableau, facts: list[Symbol], types, placed: list[str], deadline: Deadline,
               start: float) -> CognitiveMap | None:
@@ -314,3 +366,20 @@ def _by_determinism(cmap: CognitiveMap, tableau: Tableau, angles: list[int], n: 
             return None
         dstate_of.append(led[key])
     return dstate_of
+
+
+def _action(key: tuple) -> Symbol:
+    """A replayed action (:func:`.replay.action_key`) as the causal level names it."""
+    return action_term(key[0], key[1] if len(key) > 1 else 0)
+
+
+def _reading(m: Partition, metrical: bool) -> Reading:
+    """A replayed map as the cognitive map is built from it: its partition, its dstates' views and
+    headings, and what the levels that judge the map alone showed of it."""
+    ids: dict[int, int] = {}
+    seq = [ids.setdefault(d, len(ids)) for d in m.dstate_of]
+    terms = {d: Number(d) for d in ids}
+    more = {VIEW_OF: [(terms[d], String(v)) for d, v in m.view_of.items()]}
+    if metrical:
+        more[HEADING_OF] = [(terms[d], Number(h)) for d, h in m.heading_of.items()]
+    return Reading(seq, {terms[d]: i for d, i in ids.items()}, m.shown.plus(more))

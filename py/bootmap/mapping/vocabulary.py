@@ -108,6 +108,15 @@ class Atoms:
     def __getitem__(self, p: Predicate) -> list[Sequence[Symbol]]:
         return self._args.get(p.signature, [])
 
+    def plus(self, more: dict[Predicate, list[Sequence[Symbol]]]) -> "Atoms":
+        """These atoms and more, given by predicate as their arguments (atoms Python knows without reading
+        a model)."""
+        other = Atoms(())
+        other._args = dict(self._args)
+        for p, rows in more.items():
+            other._args[p.signature] = other._args.get(p.signature, []) + list(rows)
+        return other
+
 
 def _term(x: int | str | Symbol) -> Symbol:
     if isinstance(x, bool):
