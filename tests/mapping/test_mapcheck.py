@@ -430,3 +430,15 @@ def test_one_grounding_judges_each_way_to_extend_a_map_as_a_check_of_each_would(
         assert (got is None) == (alone is None)
         if got is not None:
             assert sorted(map(str, got)) == sorted(map(str, alone))
+
+
+def test_a_search_that_learns_from_many_rejected_maps_is_not_cut_short_by_its_small_grounding():
+    # A 287-step exploration of a 6x6 grid, resolved from the 118 dstates a stream of it proves: the
+    # topological level rejects 27 maps before the minimal one, each learned from (a few seconds in all),
+    # where the search with the level in it took 43 s. Learning once stopped at five times its grounding's
+    # time (0.06 s) and gave way to that search; it may now take half the time left.
+    rng = np.random.default_rng(23)
+    tableau = walk(random_world(rng, 6, 6, extra_edges=4, landmarks=0.4), 2000, rng, policy="explore").prefix(287)
+    cmap = Resolver(time_limit=120).resolve(tableau, at_least=118)
+    assert [(t.result, t.rejected > 0) for t in cmap.stats.bounds] == [("sat", True)]
+    assert cmap.n_dstates == 118 and cmap.minimal

@@ -10,6 +10,7 @@ and misreads.
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
@@ -33,12 +34,15 @@ CLIMB_STEPS, CLIMB_SHARE = 3, (0.6, 60.0)
 
 #: Learning from maps the levels reject pays where the search is large: a search of at least LEARN_MIN_SIZE
 #: (:func:`.budget.grounding_size`, pairs of candidate dstates of consecutive time points) learns, and may
-#: spend LEARN_SHARE times as long as its grounding without the levels did before it searches with them
-#: instead. Measured: 2,000 steps with a person's apart (size 15,989), grounding and solving with the
-#: level 3.2 s + 5.4 s, without it 1.0 s + 0.4 s and 0.2-0.4 s learning from two or three rejected maps; a
-#: 257-step exploration with spare dstates (size 1,751), 2.5 s with the level against 0.03 s without,
-#: where the level rejects map after map, each costing 0.1-0.2 s to learn from.
-LEARN_MIN_SIZE, LEARN_SHARE = 5000, 5.0
+#: spend LEARN_SHARE of the time left on it before it searches with the levels instead. Measured: 2,000
+#: steps with a person's apart (size 15,989), grounding and solving with the level 3.2 s + 5.4 s, without
+#: it 1.0 s + 0.4 s and 0.2-0.4 s learning from two or three rejected maps; a 287-step exploration of a 6x6
+#: grid at 118 dstates, 43 s with the level against 6.4 s learning from 27 rejected maps. (Learning was
+#: once allowed five times its grounding's time, 0.3 s there: what a search with the level costs is its
+#: solve, which its grounding does not tell.) A 257-step exploration with spare dstates (size 1,751), 2.5 s
+#: with the level against 0.03 s without, where the level rejects map after map (0.1-0.2 s to learn from
+#: each), is below the size that learns.
+LEARN_MIN_SIZE, LEARN_SHARE = 5000, 0.5
 
 #: At most so many renamings of one rejected map's reasons are learned.
 MAX_RENAMINGS = 5000
@@ -402,11 +406,10 @@ class ExactSearch:
         out, so the accepted maps are the whole theory's maps (optimal ones: its optimal maps).
 
         Learning costs a check of each map found and, for each rejected one, the reasons (a few dozen solves
-        of a small grounding) and their renamings. Where the levels reject map after map, grounding them
-        with the search costs less: learning stops once it has taken ``LEARN_SHARE`` times as long as the
-        grounding it learns for (a search with the levels grounds several times as much), and None is
-        returned; so it is where the levels give no reason (a map rejected for a dstate no transition
-        reaches), as nothing could be ruled out beside that map.
+        of a small grounding) and their renamings. Where the levels reject map after map, a search with them
+        may cost less: learning stops once it has taken ``LEARN_SHARE`` of the time left, and None is
+        returned (the search with the levels has the rest); so it is where the levels give no reason (a map
+        rejected for a dstate no transition reaches), as nothing could be ruled out beside that map.
 
         Returns clingo's result (None on time-out), the accepted maps (the optimal ones, optimising; at most
         ``cap``), the accepted improving ones, and how many maps were rejected. ``slots``: each class's
@@ -415,7 +418,8 @@ class ExactSearch:
         check, control, deadline = self.state.map_check, grounding.control, self.budget.deadline
         learned: list[list[Symbol]] = []
         rejected, spent = 0, 0.0  # maps rejected; seconds checking maps and learning from the rejected ones
-        allowed = LEARN_SHARE * grounding.ground_s
+        left = self.budget.deadline.remaining()
+        allowed = math.inf if left is None else LEARN_SHARE * left
         renamings: list[Renamings] = []  # indexed at the first map rejected (most searches reject none)
         if self.state.set_aside:
             # A search before this one (a bound below) set aside maps the levels reject: their reasons hold
