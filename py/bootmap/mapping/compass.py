@@ -117,33 +117,27 @@ class WallCompass:
         odometry = [measured_angle(a) for a in actions]
         laser = _laser(tableau)
         self.used_ = laser is not None
-        candidates: list[list[tuple[float, float]]] = [[] for _ in actions]
-        if laser is not None:
+        self.spread_deg_ = {}
+        if laser is None:  # no walls to read: every reading is odometry's own (what _read makes of no candidates)
+            out = [Reading(o, o, False, None) for o in odometry]
+        else:
             # (each image's walls and each pair's candidates are remembered: a map kept current as steps
             # arrive reads only the new ones)
             lo, hi, rmax = float(laser[0][0]), float(laser[0][-1]), laser[1]
             images = [s.image if isinstance(s.image, tuple) else tuple(s.image) for s in tableau.steps]
-            for t in range(len(actions)):
-                candidates[t] = _candidates(images[t], images[t + 1], lo, hi, rmax)
-        self.spread_deg_ = {}
-        if laser is None:  # no walls to read: every reading is odometry's own (as _read makes it of no candidates)
-            out = [Reading(o, o, False, None) for o in odometry]
-            self.results_, self.readings_ = out, list(odometry)
-            self.confirmed_, self.alternatives_ = [False] * len(out), [None] * len(out)
-            return self
-        kinds = [a.kind for a in actions]
-        for kind in ("turn", "travel"):
-            off = [_nearest([a for a, _ in c], o)[1] for c, o, k in zip(candidates, odometry, kinds) if k == kind and c]
-            if off:
-                self.spread_deg_[kind] = max(MIN_SPREAD_DEG, 1.4826 * float(np.median(off)))
-        # A robot that stops at its dstates turns on the spot: the images before and after a turn share
-        # the beams that look the same way, and those must agree.
-        out = []
-        for t, (o, c, k) in enumerate(zip(odometry, candidates, kinds)):
-            agrees = None
-            if laser is not None and k == "turn":
-                agrees = partial(overlap_agrees, images[t], images[t + 1], *laser)
-            out.append(_read(o, c, self.spread_deg_.get(k, MIN_SPREAD_DEG), agrees))
+            candidates = [_candidates(images[t], images[t + 1], lo, hi, rmax) for t in range(len(actions))]
+            kinds = [a.kind for a in actions]
+            for kind in ("turn", "travel"):
+                off = [_nearest([a for a, _ in c], o)[1] for c, o, k in zip(candidates, odometry, kinds)
+                       if k == kind and c]
+                if off:
+                    self.spread_deg_[kind] = max(MIN_SPREAD_DEG, 1.4826 * float(np.median(off)))
+            # A robot that stops at its dstates turns on the spot: the images before and after a turn share
+            # the beams that look the same way, and those must agree.
+            out = []
+            for t, (o, c, k) in enumerate(zip(odometry, candidates, kinds)):
+                agrees = partial(overlap_agrees, images[t], images[t + 1], *laser) if k == "turn" else None
+                out.append(_read(o, c, self.spread_deg_.get(k, MIN_SPREAD_DEG), agrees))
         self.results_ = out
         self.readings_ = [r.reading for r in out]
         self.confirmed_ = [r.confirmed for r in out]

@@ -94,6 +94,16 @@ class MapCheck:
         control.ground([("base", [])])
         return control
 
+    def _asking(self, facts: Sequence[Symbol], transitions: Sequence[Symbol]) -> tuple[clingo.Control, list[int]]:
+        """The levels grounded on ``facts`` with each of ``transitions`` an external atom (ASK_TRANSITIONS), and
+        their program literals: each solve's assumptions say which hold."""
+        control = self._grounded(list(facts) + [clingo.Function(_TRANSITION, s.arguments) for s in transitions],
+                                 ASK_TRANSITIONS)
+        literal = [control.symbolic_atoms[s].literal for s in transitions]
+        for lit in literal:  # an external is false unless assigned, by an assumption of its own: let it free,
+            control.assign_external(lit, None)  # so that each solve's assumptions say which hold
+        return control, literal
+
     def __call__(self, model: Sequence[Symbol]) -> list[Symbol] | None:
         own, inputs = [], []
         for s in model:  # one call into clingo per symbol: a model lists every time point's dstate
@@ -111,16 +121,12 @@ class MapCheck:
         they reject: a map and the ways a new step could extend it (:mod:`.stream`). One grounding: each
         option's transitions are external atoms, assumed true for it and false for the others."""
         extra = list(dict.fromkeys(s for option in options for s in option))
-        control = self._grounded(list(inputs) + [clingo.Function(_TRANSITION, s.arguments) for s in extra],
-                                 ASK_TRANSITIONS)
-        literal = {s: control.symbolic_atoms[s].literal for s in extra}
-        for lit in literal.values():
-            control.assign_external(lit, None)
+        control, literal = self._asking(inputs, extra)
         out: list[list[Symbol] | None] = []
         for option in options:
             own = set(option)
             shown: list[list[Symbol]] = []
-            control.solve(assumptions=[lit if s in own else -lit for s, lit in literal.items()],
+            control.solve(assumptions=[lit if s in own else -lit for s, lit in zip(extra, literal)],
                           on_model=lambda m: shown.append(m.symbols(shown=True)))
             out.append(shown[0] if shown else None)
         return out
@@ -133,10 +139,7 @@ class MapCheck:
         assumption of one small grounding: a few dozen solves. Empty if the levels accept the map made of
         its transitions alone (as they do any map they reject only for a dstate no transition reaches)."""
         transitions = [s for s in model if NEXT.matches(s)]
-        control = self._grounded([clingo.Function(_TRANSITION, s.arguments) for s in transitions], ASK_TRANSITIONS)
-        literal = [control.symbolic_atoms[s].literal for s in transitions]
-        for lit in literal:  # an external is false unless assigned, by an assumption of its own: let it free,
-            control.assign_external(lit, None)  # so that each solve's assumptions say which hold
+        control, literal = self._asking((), transitions)
 
         def rejected(chosen: Sequence[int]) -> bool:
             keep = set(chosen)
