@@ -292,7 +292,10 @@ def test_each_of_several_minimal_maps_is_extended_without_a_search():
     for n in range(1, len(tableau) + 1):
         resolved = stream.resolved_
         cmap = stream.update(tableau.prefix(n))
-        if n >= 30:  # (every prefix before is compared on other walks above)
+        # Compared with a fresh resolve where the number of maps changes, every third prefix and the last
+        # (every prefix is compared on the other walks above; a resolve here takes 0.25-0.35 s).
+        changed = last is None or cmap.n_models != last.n_models
+        if n >= 30 and (changed or n % 3 == 0 or n == len(tableau)):
             assert same_map(cmap, resolver.resolve(tableau.prefix(n))), f"prefix of {n} time points"
         if last is not None and not last.unique and stream.resolved_ == resolved:
             extended += 1

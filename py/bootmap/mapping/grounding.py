@@ -190,9 +190,10 @@ class Grounding:
                 k = ids[key] = len(ids)
                 if AFTER.matches(key):
                     distance[k] = _actions_in(key.arguments[0])
-            partial[t.number][k].add(ids.setdefault(value, len(ids)))
+            n = t.number  # (a call into clingo: once)
+            partial[n][k].add(ids.setdefault(value, len(ids)))
             if k in distance:
-                seen_from[t.number + distance[k]][t.number].add(k)
+                seen_from[n + distance[k]][n].add(k)
         features = PartialFeatures(partial, seen_from, distance)
         self._partial = (list(times), features)
         return features
