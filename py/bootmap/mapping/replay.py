@@ -26,6 +26,11 @@ tell the same time points apart), and, where some
 views are suspect (:class:`~.misreads.SuspectWatch`), the classes' lower bounds, recomputed only for the
 classes whose time points a step changed.
 
+A resolution needs the same before its search: :class:`Prepassed` works out, from a tableau's steps, the
+classes and the features that tell time points of a class apart, as the prepass grounds them (and
+whether determinism over the classes refutes one dstate per class), so that a resolution under the stock
+files grounds no prepass and, where determinism refutes it, no first try.
+
 These arguments are about the stock files, which :func:`covers` recognises by their digests (a test pins
 them to ``asp/``), on tableaux of a robot that stopped at every dstate: their rules for a log that drove
 through dstates (``passes_through``) never fire here, since :class:`~.stream.MapStream` resolves such a
@@ -42,12 +47,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Sequence
 
+from clingo import Number, String, Symbol
+
 from ..tableau import Step, Turn
 from .cogmap import CognitiveMap
-from .grounding import apart_clique
+from .grounding import Classes, PartialFeatures, apart_clique
 from .misreads import MIN_VISITS, SuspectWatch
 from .theory import Theory
-from .vocabulary import Atoms
+from .vocabulary import CLASS_KEY_TERM, HEADING_FEATURE, NIL, VIEW_FEATURE, Atoms
 
 #: The axiom files the replay's argument is about (path in the axiom directory -> sha256). When one
 #: changes, check the argument above against it, then update its digest (tests/mapping/test_stream.py).
@@ -317,6 +324,111 @@ class Replay:
         self.partial[t][key] = value
         self._lower.pop(self.class_of[t], None)
         self._without.pop(self.class_of[t], None)
+
+
+class Prepassed:
+    """What :func:`.grounding.prepass` derives from a tableau's facts under the stock axioms (:func:`covers`),
+    worked out in Python from the steps, with no grounding: the classes of time points (view, and heading
+    with the metrical level; their keys the terms core/partition.lp folds, ``k(heading, H, k(view, V,
+    nil))``) and the features that tell time points of one class apart (core/prepass.lp's ``telling/3``:
+    ``after(S)``, the view seen after the action sequence S, up to ``future_depth`` actions on, and a
+    travel's ``length``, each where its class shows it with two values or more). The same arguments as
+    :class:`Replay`'s, for a robot that stopped at every dstate (not ``passes_through``), without a
+    person's assertions or suspect views among the facts (their features are core/assert.lp's and
+    causal.lp's to derive); the property tests compare both with a prepass.
+
+    A resolution reads the classes first (a pass over the steps), and the features only where one dstate
+    per class is not the answer (:meth:`refutes_one_per_class`, or the first try failed).
+    """
+
+    def __init__(self, steps: Sequence[Step], angles: Sequence[int], lengths: dict[int, int], metrical: bool,
+                 future_depth: int):
+        self.steps, self.lengths, self.metrical, self.depth = steps, lengths, metrical, future_depth
+        n = len(steps)
+        self.views = [s.view for s in steps]
+        self.actions = [action_key(steps[t], angles[t]) for t in range(n - 1)]
+        heading, headings = 0, [0]
+        for angle in angles[:n - 1]:  # metrical.lp: a turn or a travel adds its angle type
+            heading = (heading + angle) % 360
+            headings.append(heading)
+        ids: dict[tuple, int] = {}
+        self.class_of: list[int] = []
+        keys: list[Symbol] = []
+        sizes: list[int] = []
+        prev: list[int | None] = []
+        last: dict[int, int] = {}
+        for t in range(n):
+            group = (self.views[t], headings[t] if metrical else None)
+            c = ids.get(group)
+            if c is None:
+                c = ids[group] = len(keys)
+                key = CLASS_KEY_TERM(VIEW_FEATURE(), String(self.views[t]), NIL())  # type: ignore[arg-type]
+                keys.append(CLASS_KEY_TERM(HEADING_FEATURE(), Number(headings[t]), key) if metrical else key)
+                sizes.append(0)
+            sizes[c] += 1
+            self.class_of.append(c)
+            prev.append(last.get(c))
+            last[c] = t
+        self.classes = Classes(keys, list(range(n)), list(self.class_of), sizes, prev, [1] * len(sizes))
+        self._features: PartialFeatures | None = None
+
+    def refutes_one_per_class(self) -> bool:
+        """Two time points of one class took one action to time points of two classes: with one dstate per
+        class, determinism (causal.lp) fails there."""
+        led: dict[tuple[int, tuple], int] = {}
+        class_of = self.class_of
+        for t, action in enumerate(self.actions):
+            if led.setdefault((class_of[t], action), class_of[t + 1]) != class_of[t + 1]:
+                return True
+        return False
+
+    @property
+    def features(self) -> PartialFeatures:
+        """The features that tell time points of a class apart, as :meth:`.Grounding.partial_features`
+        reads them from a prepass (small ints; each feature's values a set of one)."""
+        if self._features is None:
+            self._features = self._telling()
+        return self._features
+
+    def _telling(self) -> PartialFeatures:
+        n, views, actions, class_of = len(self.views), self.views, self.actions, self.class_of
+        # Each action sequence (a future) as a small int, built one action at a time: (shorter, action).
+        sequence: dict[tuple, int] = {}
+        shown: list[list[tuple[int, object]]] = [[] for _ in range(n)]  # t -> [(feature, value)]
+        distance: dict[int, int] = {}
+        for t in range(n - 1):
+            s = -1
+            for d in range(1, min(self.depth, n - 1 - t) + 1):
+                step = (s, actions[t + d - 1])
+                s = sequence.get(step, -2)
+                if s == -2:
+                    s = sequence[step] = len(sequence)
+                    distance[s] = d
+                shown[t].append((s, views[t + d]))
+        length = len(sequence)  # the length feature's int, after every sequence's
+        if self.metrical:
+            for t, dm in self.lengths.items():
+                shown[t].append((length, dm))
+        # core/prepass.lp: a feature tells time points apart only in a class that shows two values of it.
+        first: dict[tuple[int, int], object] = {}
+        varies: set[tuple[int, int]] = set()
+        for t in range(n):
+            c = class_of[t]
+            for f, x in shown[t]:
+                if first.setdefault((c, f), x) != x:
+                    varies.add((c, f))
+        values: dict[object, int] = {}
+        of: dict[int, dict[int, set[int]]] = {}
+        seen_from: dict[int, dict[int, set[int]]] = {}
+        for t in range(n):
+            c = class_of[t]
+            mine = of[t] = {}
+            for f, x in shown[t]:
+                if (c, f) in varies:
+                    mine[f] = {values.setdefault(x, len(values))}
+                    if f in distance:
+                        seen_from.setdefault(t + distance[f], {}).setdefault(t, set()).add(f)
+        return PartialFeatures(of, seen_from, distance)
 
 
 def length_labels(lengths: dict[int, int]) -> dict[int, int]:

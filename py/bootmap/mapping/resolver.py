@@ -6,9 +6,11 @@ different. Concretely:
 1. Features every time point shows (its view; with the metrical level, its heading) group time points
    into *classes*, named by a key term the theory folds from them (core/partition.lp): only time points
    of one class can share a dstate. The first try, in a single grounding, is one dstate per class;
-   usually that settles it, by propagation alone.
+   usually that settles it, by propagation alone. (Under the stock axioms the classes are read from the
+   steps, and where determinism over them refutes one dstate per class, it is not grounded.)
 2. Otherwise, features only some time points show (what was seen after a given sequence of actions)
-   tell time points of a class apart: a set of pairwise disagreeing time points is a proved lower bound
+   tell time points of a class apart (a prepass grounds the theory on the facts alone to read them; under
+   the stock axioms they are worked out from the steps, :class:`~.replay.Prepassed`): a set of pairwise disagreeing time points is a proved lower bound
    on the dstates of that class. Try exactly those bounds, then the few just above them (by clingo's
    core-guided optimisation, which opens a class's spare dstate only where a core asks for it).
 3. Otherwise find some valid map, allowing a few spare dstates per class: an upper bound.
@@ -46,6 +48,7 @@ from .assertions import Assertion
 from .cogmap import CognitiveMap
 from .diagnosis import diagnosed
 from .grounding import Deadline
+from .replay import covers
 from .search import Search
 from .search.retyping import MISTYPE_COST
 from .theory import Theory, load_theory
@@ -102,6 +105,9 @@ class Resolver:
     ----------
     theory : Theory
         The loaded axiom files.
+    stock : bool
+        They are the stock files, unchanged (:func:`.replay.covers`): the classes and the features a
+        prepass would derive are worked out from the steps.
     """
 
     axioms: str | Path | None = None
@@ -115,11 +121,15 @@ class Resolver:
     retype: bool = True
     defer_map_levels: bool = True
     theory: Theory = field(init=False, repr=False, compare=False)
+    stock: bool = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         if self.levels is not None:
             object.__setattr__(self, "levels", tuple(self.levels))
         object.__setattr__(self, "theory", load_theory(self.axioms, self.levels))
+        # The axiom files are the stock ones, unchanged: what a prepass derives can be worked out from the
+        # steps (:class:`.replay.Prepassed`) rather than grounded.
+        object.__setattr__(self, "stock", covers(self.theory))
 
     def with_levels(self, levels: Sequence[str]) -> "Resolver":
         """The same resolver (same axiom directory and settings) on other levels, without a diagnosis."""

@@ -19,11 +19,12 @@ from ...errors import SolveTimeout
 from ...tableau import Tableau
 from ..assertions import Assertion, assertion_facts
 from ..cogmap import CognitiveMap, SolveStats, Try, build_map
-from ..facts import tableau_facts, travel_length_types, typing_of
+from ..facts import passes_through, tableau_facts, travel_length_types, typing_of
 from ..grounding import Classes, Grounding, PartialFeatures
 from ..mapcheck import MapCheck
 from ..misreads import Suspect
 from ..motion import TypeSuspect
+from ..replay import Prepassed
 from .retyping import MISTYPE_COST
 
 if TYPE_CHECKING:
@@ -50,6 +51,7 @@ class SearchState:
         # the prepass, grounded before the first try where the caller's bound may make that try needless
         # (.exact.first_try), with the facts it was grounded on: the lower bounds read it then
         self.prepassed: tuple[list[Symbol], Grounding] | None = None
+        self._stock: tuple[list[Symbol], Prepassed] | None = None  # the same, from the steps (stock_prepass)
         self.suspects: dict[int, Suspect] = {}  # views the search may take as misreads (robust only)
         self.as_seen: int | None = None  # dstates proved necessary reading every view as seen
         self.depth = 0  # futures only matter once one dstate per class has failed
@@ -67,12 +69,28 @@ class SearchState:
         self.set_aside: list[list[Symbol]] = []
 
     def learn_classes(self) -> Classes:
-        """The classes of time points, read from the first try's grounding once needed; that grounding (a
-        whole control, the largest object of a long resolution: 420 MiB at 100,000 steps) is let go then."""
+        """The classes of time points, read from the first try's grounding once needed (or from the steps,
+        under the stock axioms: :meth:`stock_prepass`); that grounding (a whole control, the largest object
+        of a long resolution: 420 MiB at 100,000 steps) is let go then."""
         if self.classes is None:
-            self.classes = self.first.classes(range(len(self.tableau)))
+            stock = self.stock_prepass()
+            self.classes = stock.classes if stock is not None else self.first.classes(range(len(self.tableau)))
         self.first = None
         return self.classes
+
+    def stock_prepass(self) -> Prepassed | None:
+        """What a prepass of the facts in force derives, worked out from the steps (:class:`.replay.Prepassed`)
+        where the stock axioms are loaded and those facts are the experience's alone (no person's assertion,
+        no suspect view, a robot that stopped at every dstate, every step but the last with its action);
+        else None (a prepass grounds them)."""
+        if (not self.resolver.stock or self.assertions or self.suspects or passes_through(self.tableau)
+                or any(s.action is None for s in self.tableau.steps[:-1])):
+            return None
+        if self._stock is None or self._stock[0] is not self.facts:
+            self._stock = (self.facts, Prepassed(self.tableau.steps, self.angles, self.lengths,
+                                                 "metrical" in self.resolver.theory.levels,
+                                                 self.resolver.future_depth))
+        return self._stock[1]
 
     def experience_facts(self, angles: Sequence[int]) -> list[Symbol]:
         """The tableau as facts with these action angles, and the person's assertions."""

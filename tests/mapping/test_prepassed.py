@@ -1,0 +1,126 @@
+"""Under the stock axioms, what a prepass derives (the classes, the features that tell time points of a
+class apart) is worked out from the steps (replay.Prepassed): it must be what clingo's prepass derives,
+and a resolution must give the same maps either way."""
+
+import shutil
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings, strategies as st
+
+from bootmap.examples import notched_rectangle
+from bootmap.mapping import Resolver
+from bootmap.mapping.facts import read_actions, tableau_facts, travel_lengths
+from bootmap.mapping.grounding import Deadline, Grounding, prepass
+from bootmap.mapping.replay import Prepassed, covers
+from bootmap.mapping.theory import default_axioms_dir
+from bootmap.mapping.vocabulary import ONE_PER_CLASS
+from support.gridworld import random_world, walk
+from support.noise import with_misreads, with_odometry_noise
+
+
+def _tableau(seed: int, steps: int, noise: bool, misread: float, landmarks: float):
+    rng = np.random.default_rng(seed)
+    world = random_world(rng, 3 + seed % 3, 3 + (seed // 3) % 2, extra_edges=seed % 4, landmarks=landmarks)
+    tableau = walk(world, steps, rng, policy="explore" if seed % 2 else "random")
+    if noise:  # learned action types, travel lengths as a robot's odometry reads them
+        tableau = with_odometry_noise(tableau, 3.0, 1.2, rng, distance_sd=0.03)
+    # (a misread shows another view of the tableau: there must be two)
+    return with_misreads(tableau, misread, rng)[0] if misread and len(set(tableau.views)) > 1 else tableau
+
+
+def _both(tableau, resolver):
+    angles, _ = read_actions(tableau)
+    lengths = travel_lengths(tableau)
+    grounded = prepass(resolver.theory, tableau_facts(tableau, angles=angles, lengths=lengths),
+                       resolver.future_depth)
+    stock = Prepassed(tableau.steps, angles, lengths, "metrical" in resolver.theory.levels, resolver.future_depth)
+    return grounded, stock, angles, lengths
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=list(HealthCheck))
+@given(seed=st.integers(0, 10 ** 6), steps=st.integers(2, 160), noise=st.booleans(),
+       misread=st.sampled_from([0.0, 0.0, 0.04]), metrical=st.booleans(), landmarks=st.sampled_from([0.0, 0.4]),
+       depth=st.sampled_from([1, 3, 8]))
+def test_the_steps_give_what_the_prepass_derives(seed, steps, noise, misread, metrical, landmarks, depth):
+    tableau = _tableau(seed, steps, noise, misread, landmarks)
+    resolver = Resolver(levels=None if metrical else ["causal", "topological"], future_depth=depth)
+    grounded, stock, _, _ = _both(tableau, resolver)
+    n = len(tableau)
+    # The classes: the same key terms, in the same order, the same members.
+    classes, mine = grounded.classes(range(n)), stock.classes
+    assert [str(k) for k in mine.keys] == [str(k) for k in classes.keys]
+    assert (mine.of_time, mine.sizes, mine.prev) == (classes.of_time, classes.sizes, classes.prev)
+    # The features: as many at each time point (the lower bounds' greedy order reads the counts), the same
+    # time points apart, the same bounds, loners and inflators, with any views left out as suspects.
+    theirs, ours = grounded.partial_features(classes.times), stock.features
+    assert [len(ours.of[t]) for t in range(n)] == [len(theirs.of[t]) for t in range(n)]
+    rng = np.random.default_rng(seed)
+    for leave_out in [(), sorted(rng.choice(n, size=min(n, 1 + n // 20), replace=False).tolist()) if n else []]:
+        a, b = theirs.without(leave_out), ours.without(leave_out)
+        assert [len(a[t]) for t in range(n)] == [len(b[t]) for t in range(n)]
+        for c, members in enumerate(_members(classes)):
+            for i, s in enumerate(members):
+                for u in members[i + 1:]:
+                    assert _apart(a[s], a[u]) == _apart(b[s], b[u]), (s, u, leave_out)
+        assert ours.lower_bounds(mine, leave_out) == theirs.lower_bounds(classes, leave_out)
+        assert ours.loners(mine, leave_out) == theirs.loners(classes, leave_out)
+        assert ours.inflators(mine, leave_out) == theirs.inflators(classes, leave_out)
+    # Determinism over the classes, where it refutes one dstate per class, refutes it in clingo too.
+    if stock.refutes_one_per_class():
+        first = Grounding(resolver.theory, tableau_facts(tableau, angles=read_actions(tableau)[0],
+                                                         lengths=travel_lengths(tableau)) + [ONE_PER_CLASS()], 0)
+        assert not first.ground().solve(Deadline.after(30)).satisfiable
+
+
+def _members(classes):
+    out = [[] for _ in classes.sizes]
+    for t, c in zip(classes.times, classes.of_time):
+        out[c].append(t)
+    return out
+
+
+def _apart(a, b):
+    from bootmap.mapping.grounding import _apart as apart
+    return apart(a, b)
+
+
+@pytest.fixture(scope="module")
+def copied_axioms(tmp_path_factory):
+    """The stock axioms with a comment added: the same theory, which the resolver no longer recognises
+    as stock (so it grounds its prepasses)."""
+    axioms = tmp_path_factory.mktemp("copy") / "asp"
+    shutil.copytree(default_axioms_dir(), axioms)
+    causal = axioms / "causal.lp"
+    causal.write_text(causal.read_text() + "\n% a user's note\n")
+    return axioms
+
+
+@pytest.mark.parametrize("seed, steps, noise, misread", [(1, 300, False, 0.0), (2, 300, True, 0.0),
+                                                          (3, 400, True, 0.02), (6, 300, False, 0.02),
+                                                          (8, 250, False, 0.02), (5, 120, False, 0.0)])
+def test_a_resolution_gives_the_same_maps_whether_the_prepass_is_grounded_or_worked_out(
+        copied_axioms, seed, steps, noise, misread):
+    tableau = _tableau(seed, steps, noise, misread, landmarks=0.3)
+    stock, grounded = Resolver(time_limit=60), Resolver(axioms=copied_axioms, time_limit=60)
+    assert stock.stock and not grounded.stock and not covers(grounded.theory)
+    a, b = stock.resolve(tableau), grounded.resolve(tableau)
+    assert (a.dstate_of, list(a.alternatives), a.n_models, a.minimal) == \
+           (b.dstate_of, list(b.alternatives), b.n_models, b.minimal)
+    assert [s["t"] for s in a.suspect_steps] == [s["t"] for s in b.suspect_steps]
+    assert (a.stats.classes, a.stats.lower_bound) == (b.stats.classes, b.stats.lower_bound)
+
+
+def test_one_dstate_per_class_refuted_from_the_steps_is_not_grounded():
+    # A 10,000-step exploration's one dstate per class fails by determinism over its classes: its first try
+    # is recorded as refuted, with no grounding, and the map is the one a grounded first try leads to.
+    from support.gridworld import random_world as world_of
+    rng = np.random.default_rng(7)
+    tableau = walk(world_of(rng, 5, 5, extra_edges=3, landmarks=0.3), 2000, rng, policy="explore")
+    cmap = Resolver(time_limit=60).resolve(tableau)
+    assert cmap.stats.bounds[0].dstates == "one dstate per class"
+    assert cmap.stats.bounds[0].result == "unsat" and cmap.stats.bounds[0].seconds == 0.0
+    assert cmap.n_dstates == 76 and cmap.unique and cmap.minimal
+    # The paper's room: determinism over its classes holds, and one dstate per class is the map.
+    paper = Resolver(time_limit=60).resolve(notched_rectangle(6))
+    assert paper.stats.bounds[0].result == "sat" and paper.stats.bounds[0].seconds > 0
