@@ -124,3 +124,19 @@ def test_one_dstate_per_class_refuted_from_the_steps_is_not_grounded():
     # The paper's room: determinism over its classes holds, and one dstate per class is the map.
     paper = Resolver(time_limit=60).resolve(notched_rectangle(6))
     assert paper.stats.bounds[0].result == "sat" and paper.stats.bounds[0].seconds > 0
+
+
+@pytest.mark.parametrize("seed", [1, 2, 22])
+def test_a_mistyped_turn_is_retyped_the_same_whether_the_prepass_is_grounded_or_worked_out(copied_axioms, seed):
+    # The retyping weighs each suspect action by the dstates the classes' lower bounds prove with and without
+    # it retyped: a prepass per trial, grounded or worked out from the steps.
+    from support.noise import with_mistyped_action
+    rng = np.random.default_rng(seed)
+    noisy = with_odometry_noise(walk(random_world(rng, 4, 3, extra_edges=2, landmarks=0.4), 120, rng,
+                                     policy="explore"), 3.0, 1.2, rng)
+    tableau, at = with_mistyped_action(noisy, rng)
+    a = Resolver(time_limit=60).resolve(tableau)
+    b = Resolver(axioms=copied_axioms, time_limit=60).resolve(tableau)
+    assert [s["t"] for s in a.retyped_steps] == [s["t"] for s in b.retyped_steps]
+    assert at in [s["t"] for s in a.retyped_steps]
+    assert (a.dstate_of, a.n_models, a.stats.lower_bound) == (b.dstate_of, b.n_models, b.stats.lower_bound)

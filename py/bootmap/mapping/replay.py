@@ -47,6 +47,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Sequence
 
+import numpy as np
 from clingo import Number, String, Symbol
 
 from ..tableau import Step, Turn
@@ -370,7 +371,6 @@ class Prepassed:
             prev.append(last.get(c))
             last[c] = t
         self.classes = Classes(keys, list(range(n)), list(self.class_of), sizes, prev, [1] * len(sizes))
-        self._features: PartialFeatures | None = None
 
     def refutes_one_per_class(self) -> bool:
         """Two time points of one class took one action to time points of two classes: with one dstate per
@@ -385,49 +385,55 @@ class Prepassed:
     @property
     def features(self) -> PartialFeatures:
         """The features that tell time points of a class apart, as :meth:`.Grounding.partial_features`
-        reads them from a prepass (small ints; each feature's values a set of one)."""
-        if self._features is None:
-            self._features = self._telling()
-        return self._features
-
-    def _telling(self) -> PartialFeatures:
+        reads them from a prepass (small ints; each feature's values a set of one). Worked out anew on each
+        call: the caller keeps them as long as it needs them (140 MiB at 100,000 steps)."""
         n, views, actions, class_of = len(self.views), self.views, self.actions, self.class_of
-        # Each action sequence (a future) as a small int, built one action at a time: (shorter, action).
+        depth = max(0, min(self.depth, n - 1))
+        # What each time point saw d actions on (d = 1..depth), as ints: the action sequence (a future,
+        # built one action at a time: (shorter, action) -> int) and the view. -1 past the last time point.
+        view_id: dict[str, int] = {}
+        seen = np.fromiter((view_id.setdefault(v, len(view_id)) for v in views), dtype=np.int64, count=n)
+        feature = np.full((n, depth), -1, dtype=np.int64)
         sequence: dict[tuple, int] = {}
-        shown: list[list[tuple[int, object]]] = [[] for _ in range(n)]  # t -> [(feature, value)]
         distance: dict[int, int] = {}
         for t in range(n - 1):
-            s = -1
-            for d in range(1, min(self.depth, n - 1 - t) + 1):
+            s, row = -1, feature[t]
+            for d in range(1, min(depth, n - 1 - t) + 1):
                 step = (s, actions[t + d - 1])
                 s = sequence.get(step, -2)
                 if s == -2:
                     s = sequence[step] = len(sequence)
                     distance[s] = d
-                shown[t].append((s, views[t + d]))
-        length = len(sequence)  # the length feature's int, after every sequence's
-        if self.metrical:
-            for t, dm in self.lengths.items():
-                shown[t].append((length, dm))
+                row[d - 1] = s
+        value = np.full((n, depth), -1, dtype=np.int64)
+        for d in range(1, depth + 1):
+            value[:n - d, d - 1] = seen[d:]
+        # A travel's length is one more feature (its int after every sequence's), its values after the views'.
+        times = np.repeat(np.arange(n), depth)
+        feature, value = feature.ravel(), value.ravel()
+        if self.metrical and self.lengths:
+            travelled = np.fromiter(self.lengths, dtype=np.int64, count=len(self.lengths))
+            length_id: dict[int, int] = {}
+            measured = np.fromiter((len(view_id) + length_id.setdefault(dm, len(length_id))
+                                    for dm in self.lengths.values()), dtype=np.int64, count=len(self.lengths))
+            times = np.concatenate([times, travelled])
+            feature = np.concatenate([feature, np.full(len(travelled), len(sequence), dtype=np.int64)])
+            value = np.concatenate([value, measured])
+        shown = feature >= 0
+        times, feature, value = times[shown], feature[shown], value[shown]
         # core/prepass.lp: a feature tells time points apart only in a class that shows two values of it.
-        first: dict[tuple[int, int], object] = {}
-        varies: set[tuple[int, int]] = set()
-        for t in range(n):
-            c = class_of[t]
-            for f, x in shown[t]:
-                if first.setdefault((c, f), x) != x:
-                    varies.add((c, f))
-        values: dict[object, int] = {}
-        of: dict[int, dict[int, set[int]]] = {}
+        classes = np.asarray(class_of, dtype=np.int64)[times]
+        pair = classes * (len(sequence) + 1) + feature
+        distinct = np.unique(np.stack([pair, value]), axis=1)[0]  # each (class, feature) once per value
+        keys, counts = np.unique(distinct, return_counts=True)
+        telling = np.isin(pair, keys[counts > 1])
+        of: dict[int, dict[int, set[int]]] = {t: {} for t in range(n)}
         seen_from: dict[int, dict[int, set[int]]] = {}
-        for t in range(n):
-            c = class_of[t]
-            mine = of[t] = {}
-            for f, x in shown[t]:
-                if (c, f) in varies:
-                    mine[f] = {values.setdefault(x, len(values))}
-                    if f in distance:
-                        seen_from.setdefault(t + distance[f], {}).setdefault(t, set()).add(f)
+        for t, f, x in zip(times[telling].tolist(), feature[telling].tolist(), value[telling].tolist()):
+            of[t][f] = {x}
+            d = distance.get(f)
+            if d is not None:
+                seen_from.setdefault(t + d, {}).setdefault(t, set()).add(f)
         return PartialFeatures(of, seen_from, distance)
 
 

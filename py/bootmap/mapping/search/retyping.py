@@ -81,8 +81,12 @@ class Retyping:
             state.action_types = action_types(state.typing.read, angles)
 
     def proved_with(self, angles: list[int]) -> int:
-        """The dstates the theory proves necessary (the classes' lower bounds) with these action angles."""
+        """The dstates the theory proves necessary (the classes' lower bounds) with these action angles
+        (under the stock axioms worked out from the steps, else from a prepass)."""
         state = self.state
+        stock = state.stock_prepass_with(angles)
+        if stock is not None:
+            return sum(stock.features.lower_bounds(stock.classes))
         grounded = prepass(state.resolver.theory, state.experience_facts(angles),
                            state.resolver.future_depth)
         state.ground_s += grounded.ground_s

@@ -83,14 +83,22 @@ class SearchState:
         where the stock axioms are loaded and those facts are the experience's alone (no person's assertion,
         no suspect view, a robot that stopped at every dstate, every step but the last with its action);
         else None (a prepass grounds them)."""
-        if (not self.resolver.stock or self.assertions or self.suspects or passes_through(self.tableau)
-                or any(s.action is None for s in self.tableau.steps[:-1])):
+        if self.suspects:
             return None
         if self._stock is None or self._stock[0] is not self.facts:
-            self._stock = (self.facts, Prepassed(self.tableau.steps, self.angles, self.lengths,
-                                                 "metrical" in self.resolver.theory.levels,
-                                                 self.resolver.future_depth))
+            stock = self.stock_prepass_with(self.angles)
+            if stock is None:
+                return None
+            self._stock = (self.facts, stock)
         return self._stock[1]
+
+    def stock_prepass_with(self, angles: Sequence[int]) -> Prepassed | None:
+        """:meth:`stock_prepass` of the experience with these action angles (the retyping's trials)."""
+        if (not self.resolver.stock or self.assertions or passes_through(self.tableau)
+                or any(s.action is None for s in self.tableau.steps[:-1])):
+            return None
+        return Prepassed(self.tableau.steps, angles, self.lengths, "metrical" in self.resolver.theory.levels,
+                         self.resolver.future_depth)
 
     def experience_facts(self, angles: Sequence[int]) -> list[Symbol]:
         """The tableau as facts with these action angles, and the person's assertions."""
