@@ -140,3 +140,51 @@ def test_a_mistyped_turn_is_retyped_the_same_whether_the_prepass_is_grounded_or_
     assert [s["t"] for s in a.retyped_steps] == [s["t"] for s in b.retyped_steps]
     assert at in [s["t"] for s in a.retyped_steps]
     assert (a.dstate_of, a.n_models, a.stats.lower_bound) == (b.dstate_of, b.n_models, b.stats.lower_bound)
+
+
+def _without_timings(cmap) -> dict:
+    d = cmap.to_dict()
+    d.pop("stats")
+    return d
+
+
+@pytest.mark.parametrize("make", ["paper", "paper, noisy", "paper, no metrical level", "grid prefix", "square room",
+                                  "corridor"])
+def test_one_dstate_per_class_checked_without_grounding_the_tableau_gives_the_grounded_first_tries_map(
+        copied_axioms, make):
+    # Where one dstate per class is the map, under the stock axioms it is checked in Python (determinism over
+    # the classes, one travel length per dstate) and by the topological level on its dstates alone: the same
+    # map, places, paths and sides as the first try grounded over every time point.
+    levels = ["causal", "topological"] if make == "paper, no metrical level" else None
+    rng = np.random.default_rng(5)
+    if make.startswith("paper"):
+        tableau = notched_rectangle(12)
+        if make == "paper, noisy":
+            tableau = with_odometry_noise(tableau, 3.0, 1.2, rng, distance_sd=0.03)
+    elif make == "grid prefix":  # a landmark-rich world, early in its exploration
+        tableau = walk(random_world(rng, 4, 4, extra_edges=2, landmarks=0.9), 400, rng, policy="explore").prefix(20)
+    else:
+        from bootmap.examples import corridor, square_room
+        tableau = square_room(4) if make == "square room" else corridor(3)
+    a = Resolver(levels=levels, time_limit=60).resolve(tableau)
+    b = Resolver(axioms=copied_axioms, levels=levels, time_limit=60).resolve(tableau)
+    assert a.stats.bounds[0].dstates == b.stats.bounds[0].dstates == "one dstate per class"
+    assert a.stats.bounds[0].result == b.stats.bounds[0].result
+    assert _without_timings(a) == _without_timings(b)
+    if make in ("paper", "paper, noisy"):  # (without headings, the room's corners alias: a search)
+        assert a.stats.bounds[0].result == "sat" and len(a.stats.bounds) == 1
+
+
+@settings(max_examples=30, deadline=None, suppress_health_check=list(HealthCheck))
+@given(seed=st.integers(0, 10 ** 6), steps=st.integers(2, 60), noise=st.booleans(), metrical=st.booleans())
+def test_short_walks_resolve_to_the_same_maps_whether_the_first_try_is_grounded_or_replayed(
+        copied_axioms, seed, steps, noise, metrical):
+    # Early in an exploration of a landmark-rich world one dstate per class is often the map (checked from
+    # the steps), and where it is not, what refuted it (determinism, a travel's length, the places and paths)
+    # must be what the grounded first try finds.
+    tableau = _tableau(seed, steps, noise, 0.0, landmarks=0.9)
+    levels = None if metrical else ["causal", "topological"]
+    a = Resolver(levels=levels, time_limit=60).resolve(tableau)
+    b = Resolver(axioms=copied_axioms, levels=levels, time_limit=60).resolve(tableau)
+    assert a.stats.bounds[0].result == b.stats.bounds[0].result
+    assert _without_timings(a) == _without_timings(b)

@@ -359,6 +359,13 @@ class Classes:
     def count(self) -> int:
         return len(self.sizes)
 
+    def first_times(self) -> list[int]:
+        """Each class's first time point, by class."""
+        first: dict[int, int] = {}
+        for t, c in zip(self.times, self.of_time):
+            first.setdefault(c, t)
+        return [first[c] for c in range(self.count)]
+
     @property
     def lower_bound(self) -> int:
         return sum(self.lower)

@@ -51,11 +51,12 @@ import numpy as np
 from clingo import Number, String, Symbol
 
 from ..tableau import Step, Turn
-from .cogmap import CognitiveMap
+from .cogmap import CognitiveMap, Reading
 from .grounding import Classes, PartialFeatures, apart_clique
 from .misreads import MIN_VISITS, SuspectWatch
 from .theory import Theory
-from .vocabulary import CLASS_KEY_TERM, HEADING_FEATURE, NIL, VIEW_FEATURE, Atoms
+from .vocabulary import (CLASS_KEY_TERM, DSTATE, HEADING_FEATURE, HEADING_OF, NEXT, NIL, VIEW_FEATURE, VIEW_OF,
+                         Atoms, action_term)
 
 #: The axiom files the replay's argument is about (path in the axiom directory -> sha256). When one
 #: changes, check the argument above against it, then update its digest (tests/mapping/test_stream.py).
@@ -88,6 +89,11 @@ def action_key(step: Step, angle: int) -> tuple:
     return ("turn", angle) if isinstance(step.action, Turn) else ("travel",)
 
 
+def action_symbol_of(key: tuple) -> Symbol:
+    """A replayed action (:func:`action_key`) as the causal level names it."""
+    return action_term(key[0], key[1] if len(key) > 1 else 0)
+
+
 @dataclass
 class Partition:
     """One map of the replayed experience, its dstates numbered by first appearance (as the map names
@@ -106,6 +112,25 @@ class Partition:
     shown: Atoms | None = None
     added: list[tuple[int, tuple, int]] = field(default_factory=list)
     origin: object = field(default_factory=object)  # the map shown was asked of; its branches share it
+
+    def transitions(self, leave_out: Sequence[tuple[int, tuple, int]] = ()) -> list[Symbol]:
+        """The map as the levels that judge the map alone read it (:mod:`.mapcheck`): its ``next/3``
+        transitions (but those left out) and the ``dstate/1`` they and the first time point's make."""
+        kept = {(d, a, d2) for (d, a), d2 in self.led.items()} - set(leave_out)
+        known = {d for d, _, d2 in kept for d in (d, d2)} | {self.dstate_of[0]}
+        return ([NEXT(Number(d), action_symbol_of(a), Number(d2)) for d, a, d2 in kept]
+                + [DSTATE(Number(d)) for d in known])
+
+    def reading(self, metrical: bool) -> Reading:
+        """The map as the cognitive map is built from it: its partition, its dstates' views and headings, and
+        what the levels that judge the map alone showed of it (``shown``)."""
+        ids: dict[int, int] = {}
+        seq = [ids.setdefault(d, len(ids)) for d in self.dstate_of]
+        terms = {d: Number(d) for d in ids}
+        more = {VIEW_OF: [(terms[d], String(v)) for d, v in self.view_of.items()]}
+        if metrical:
+            more[HEADING_OF] = [(terms[d], Number(h)) for d, h in self.heading_of.items()]
+        return Reading(seq, {terms[d]: i for d, i in ids.items()}, (self.shown or Atoms(())).plus(more))
 
     def branch(self) -> "Partition":
         """A copy to extend another way."""
@@ -352,6 +377,7 @@ class Prepassed:
         for angle in angles[:n - 1]:  # metrical.lp: a turn or a travel adds its angle type
             heading = (heading + angle) % 360
             headings.append(heading)
+        self.headings = headings
         ids: dict[tuple, int] = {}
         self.class_of: list[int] = []
         keys: list[Symbol] = []
@@ -381,6 +407,26 @@ class Prepassed:
             if led.setdefault((class_of[t], action), class_of[t + 1]) != class_of[t + 1]:
                 return True
         return False
+
+    def one_per_class(self) -> Partition | None:
+        """The map with one dstate per class (numbered as the classes are, by first appearance), where the
+        causal and metrical axioms accept it: determinism over the classes (:meth:`refutes_one_per_class`),
+        and every travel from a dstate of one length type (metrical.lp's ``length`` feature); views and
+        headings are the classes' own. None where they do not (the levels that judge the map alone are
+        the caller's to ask, :meth:`Partition.transitions`)."""
+        if self.refutes_one_per_class():
+            return None
+        m = Partition(list(self.class_of))
+        for c, t in enumerate(self.classes.first_times()):
+            m.view_of[c] = self.views[t]
+            m.heading_of[c] = self.headings[t] if self.metrical else None
+        for t, action in enumerate(self.actions):
+            m.led[(self.class_of[t], action)] = self.class_of[t + 1]
+        if self.metrical:
+            for t, dm in self.lengths.items():
+                if m.length_of.setdefault(self.class_of[t], dm) != dm:
+                    return None
+        return m
 
     @property
     def features(self) -> PartialFeatures:

@@ -55,19 +55,19 @@ from __future__ import annotations
 import time
 from dataclasses import replace
 
-from clingo import Number, String, Symbol
+from clingo import Number, Symbol
 
 from ..tableau import Tableau
-from .cogmap import CognitiveMap, Reading, SolveStats, Try, build_map, map_of, step_row
+from .cogmap import CognitiveMap, SolveStats, Try, build_map, map_of, step_row
 from .facts import (action_symbol, action_symbols, passes_through, tableau_facts, travel_length_types,
                     travel_lengths, typing_of)
 from .grounding import Deadline, check_fixed, prepass
 from .misreads import MIN_VISITS, find_suspects, has_images, rare_clustered_views
 from .motion import ActionType
 from .mapcheck import MapCheck
-from .replay import Partition, Replay, covers, length_labels
+from .replay import Partition, Replay, action_symbol_of, covers, length_labels
 from .resolver import Resolver
-from .vocabulary import DSTATE, FIXED, HEADING_OF, NEXT, VIEW_OF, Atoms, action_term, fixed_dstate
+from .vocabulary import FIXED, NEXT, Atoms, fixed_dstate
 
 __all__ = ["MapStream"]
 
@@ -244,7 +244,7 @@ class MapStream:
                                                          cmap.path_of) for t in range(len(old) - 1, len(tableau))]
             return replace(cmap, steps=rows, dstate_of=[f"S{d}" for d in maps[0].dstate_of], action_types=types,
                            length_types=length_types, stats=stats)
-        readings = sorted((_reading(m, replay.metrical) for m in maps), key=lambda r: r.seq)
+        readings = sorted((m.reading(replay.metrical) for m in maps), key=lambda r: r.seq)
         return map_of(tableau, readings, True, self.resolver.theory.levels, stats, action_types=types,
                       length_types=length_types)
 
@@ -266,11 +266,8 @@ class MapStream:
         rejected: set[int] = set()
         for group in groups.values():
             first = group[0]
-            base = {(d, a, d2) for (d, a), d2 in first.led.items()} - set(first.added)
-            inputs = [NEXT(Number(d), _action(a), Number(d2)) for d, a, d2 in base]
-            known = {d for d, _, d2 in base for d in (d, d2)} | {first.dstate_of[0]}
-            inputs += [DSTATE(Number(d)) for d in known]
-            options = [[NEXT(Number(d), _action(a), Number(d2)) for d, a, d2 in m.added] for m in group]
+            inputs = first.transitions(leave_out=first.added)
+            options = [[NEXT(Number(d), action_symbol_of(a), Number(d2)) for d, a, d2 in m.added] for m in group]
             for m, shown in zip(group, check.each(inputs, options)):
                 if shown is None:
                     rejected.add(id(m))
@@ -368,18 +365,3 @@ def _by_determinism(cmap: CognitiveMap, tableau: Tableau, angles: list[int], n: 
     return dstate_of
 
 
-def _action(key: tuple) -> Symbol:
-    """A replayed action (:func:`.replay.action_key`) as the causal level names it."""
-    return action_term(key[0], key[1] if len(key) > 1 else 0)
-
-
-def _reading(m: Partition, metrical: bool) -> Reading:
-    """A replayed map as the cognitive map is built from it: its partition, its dstates' views and
-    headings, and what the levels that judge the map alone showed of it."""
-    ids: dict[int, int] = {}
-    seq = [ids.setdefault(d, len(ids)) for d in m.dstate_of]
-    terms = {d: Number(d) for d in ids}
-    more = {VIEW_OF: [(terms[d], String(v)) for d, v in m.view_of.items()]}
-    if metrical:
-        more[HEADING_OF] = [(terms[d], Number(h)) for d, h in m.heading_of.items()]
-    return Reading(seq, {terms[d]: i for d, i in ids.items()}, m.shown.plus(more))

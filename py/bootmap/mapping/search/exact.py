@@ -21,7 +21,8 @@ from clingo import Symbol
 from ...errors import InconsistentTableau
 from ..cogmap import CognitiveMap, Try
 from ..grounding import Grounding, prepass
-from ..vocabulary import CANDIDATE_DSTATE, DSTATE, DSTATE_COST, MINIMISE_DSTATES, NEXT, ONE_PER_CLASS
+from ..replay import Prepassed
+from ..vocabulary import CANDIDATE_DSTATE, DSTATE, DSTATE_COST, MINIMISE_DSTATES, NEXT, ONE_PER_CLASS, Atoms
 from .budget import PREPARE_FACTOR, grounding_size, layout_slots
 
 if TYPE_CHECKING:
@@ -113,7 +114,7 @@ class ExactSearch:
             # there are classes, one dstate per class is not tried; where two time points of a class took
             # one action to two classes, it fails by determinism, without a grounding.
             if state.at_least <= stock.classes.count and not stock.refutes_one_per_class():
-                return self.one_per_class()
+                return self.one_per_class_replayed(stock)
             if state.at_least <= stock.classes.count:
                 state.tries.append(Try("one dstate per class", "unsat", 0.0))
             state.proved = max(state.proved, state.learn_classes().count + 1)
@@ -131,6 +132,29 @@ class ExactSearch:
             return self.one_per_class()
         state.proved = max(state.proved, state.classes.count + 1)
         return None
+
+    def one_per_class_replayed(self, stock: Prepassed) -> CognitiveMap | None:
+        """The first try under the stock axioms, without grounding the tableau: the map with one dstate per
+        class where the causal and metrical axioms accept it (:meth:`.replay.Prepassed.one_per_class`),
+        its transitions asked of the levels that judge the map alone (one grounding over its dstates, not
+        its time points). Where no such level is asked of maps (``defer_map_levels`` off), the grounded
+        first try."""
+        state = self.state
+        if state.map_check is None and state.resolver.theory.map_levels:
+            return self.one_per_class()
+        t0 = time.perf_counter()
+        found = stock.one_per_class()
+        if found is not None:
+            shown = state.map_check.each(found.transitions())[0] if state.map_check is not None else []
+            found.shown = None if shown is None else Atoms(shown)
+        seconds = time.perf_counter() - t0
+        if found is None or found.shown is None:
+            state.tries.append(Try("one dstate per class", "unsat", seconds))
+            state.proved = state.learn_classes().count + 1
+            return None
+        state.tries.append(Try("one dstate per class", "sat", seconds))
+        cmap = state.build_from([found.reading(stock.metrical)], True)
+        return replace(cmap, stats=replace(cmap.stats, classes=cmap.n_dstates, lower_bound=cmap.n_dstates))
 
     def one_per_class(self) -> CognitiveMap | None:
         """The first try, in one grounding: one dstate per class. If it fails, learn the classes from it."""

@@ -18,7 +18,7 @@ from clingo import Symbol
 from ...errors import SolveTimeout
 from ...tableau import Tableau
 from ..assertions import Assertion, assertion_facts
-from ..cogmap import CognitiveMap, SolveStats, Try, build_map
+from ..cogmap import CognitiveMap, Reading, SolveStats, Try, build_map, map_of
 from ..facts import passes_through, tableau_facts, travel_length_types, typing_of
 from ..grounding import Classes, Grounding, PartialFeatures
 from ..mapcheck import MapCheck
@@ -110,6 +110,12 @@ class SearchState:
                          minimal=minimal, action_types=self.action_types,
                          misread_costs=self.misread_costs(), retyped_steps=self.retyped_steps(),
                          length_types=self.length_types)
+
+    def build_from(self, readings: list[Reading], exhausted: bool) -> CognitiveMap:
+        """:meth:`build` of maps kept in Python (:class:`.cogmap.Reading`), not read from models."""
+        return map_of(self.tableau, readings, exhausted, self.resolver.theory.levels, self.stats(),
+                      action_types=self.action_types, misread_costs=self.misread_costs(),
+                      retyped_steps=self.retyped_steps(), length_types=self.length_types)
 
     def retyped_steps(self) -> list[dict]:
         return [s.to_dict(MISTYPE_COST) for s in self.retyped]
