@@ -94,7 +94,8 @@ def test_an_abandoned_hard_solve_frees_its_solver_within_a_second(fair_server):
         freed = wait_for(lambda: solves(c)[0] == 0, timeout=5)
         print(f"the solver was freed {freed:.2f} s after the client left")
         assert freed < 1.0, f"the solver was freed {freed:.2f} s after the client left"
-        assert c.get("/health").json()["solvers"] == 2  # a fresh solver replaced the stopped one
+        # A fresh solver replaces the stopped one (its process starting takes a moment on a busy host).
+        assert wait_for(lambda: c.get("/health").json()["solvers"] == 2, timeout=10) < 10
         r = c.post("/tableaux", json=examples.notched_rectangle(circuits=2).to_dict(),
                    headers=bearer(fair_server.tokens["flooder"]))
         assert r.status_code == 201, r.text  # its solve place was given back too

@@ -28,8 +28,8 @@ classes whose time points a step changed.
 
 A resolution needs the same before its search: :class:`Prepassed` works out, from a tableau's steps, the
 classes and the features that tell time points of a class apart, as the prepass grounds them (and
-whether determinism over the classes refutes one dstate per class), so that a resolution under the stock
-files grounds no prepass and, where determinism refutes it, no first try.
+whether the causal and metrical axioms accept one dstate per class, :meth:`Prepassed.one_per_class`), so
+that a resolution under the stock files grounds no prepass, and no first try over its time points.
 
 These arguments are about the stock files, which :func:`covers` recognises by their digests (a test pins
 them to ``asp/``), on tableaux of a robot that stopped at every dstate: their rules for a log that drove

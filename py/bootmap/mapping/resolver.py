@@ -7,7 +7,8 @@ different. Concretely:
    into *classes*, named by a key term the theory folds from them (core/partition.lp): only time points
    of one class can share a dstate. The first try, in a single grounding, is one dstate per class;
    usually that settles it, by propagation alone. (Under the stock axioms the classes are read from the
-   steps, and where determinism over them refutes one dstate per class, it is not grounded.)
+   steps, and one dstate per class is checked without grounding the tableau: refuted by determinism over
+   the classes or a travel's length, else the topological level asked of its transitions alone.)
 2. Otherwise, features only some time points show (what was seen after a given sequence of actions)
    tell time points of a class apart (a prepass grounds the theory on the facts alone to read them; under
    the stock axioms they are worked out from the steps, :class:`~.replay.Prepassed`): a set of pairwise disagreeing time points is a proved lower bound

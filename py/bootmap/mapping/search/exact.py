@@ -101,8 +101,9 @@ class ExactSearch:
     def first_try(self) -> CognitiveMap | None:
         """The map with one dstate per class, if there is one (:meth:`one_per_class`). Under the stock
         axioms the classes are read from the steps first (:class:`~..replay.Prepassed`): one dstate per
-        class is not grounded where determinism over the classes refutes it (recorded as refuted, in no
-        time), nor where the caller proved more dstates than there are classes. Otherwise, where the caller
+        class is refuted where determinism over the classes refutes it (recorded as refuted, in no time),
+        not tried where the caller proved more dstates than there are classes, and otherwise checked without
+        grounding the tableau (:meth:`one_per_class_replayed`). Otherwise, where the caller
         proved more than one dstate necessary (a stream, from its last map; a person's assertion, from the
         map before it), the prepass is grounded first and its classes read: with fewer classes than the
         dstates proved, one dstate per class cannot do and is not tried (a grounding fewer), and the lower
