@@ -45,13 +45,13 @@ class SearchState:
         self.angles, self.action_types, self.grid = self.typing.angles, self.typing.types, self.typing.grid
         # the travels' length types, learned once (the facts and every map built read them)
         self.lengths, self.length_types = travel_length_types(tableau)
-        self.facts = self.experience_facts(self.angles)
+        self._facts: list[Symbol] | None = None  # the tableau as facts, made when first asked (facts)
         self.retyped: list[TypeSuspect] = []  # actions taken as mistyped
         self.first: Grounding | None = None  # the first try's grounding
         # the prepass, grounded before the first try where the caller's bound may make that try needless
         # (.exact.first_try), with the facts it was grounded on: the lower bounds read it then
         self.prepassed: tuple[list[Symbol], Grounding] | None = None
-        self._stock: tuple[list[Symbol], Prepassed] | None = None  # the same, from the steps (stock_prepass)
+        self._stock: tuple[list[int], Prepassed] | None = None  # the same, from the steps, by the angles read
         self.suspects: dict[int, Suspect] = {}  # views the search may take as misreads (robust only)
         self.as_seen: int | None = None  # dstates proved necessary reading every view as seen
         self.depth = 0  # futures only matter once one dstate per class has failed
@@ -67,6 +67,19 @@ class SearchState:
         # maps a search set aside, rejected by those levels but not learned from (.exact): the next search
         # that learns learns from them before it solves
         self.set_aside: list[list[Symbol]] = []
+
+    @property
+    def facts(self) -> list[Symbol]:
+        """The facts in force: the experience's (with the action angles read, and a person's assertions) until
+        a concern changes them (retyped actions, views allowed as misreads). Made when first asked: a first
+        try checked from the steps needs none (:meth:`.exact.ExactSearch.one_per_class_replayed`)."""
+        if self._facts is None:
+            self._facts = self.experience_facts(self.angles)
+        return self._facts
+
+    @facts.setter
+    def facts(self, facts: list[Symbol]) -> None:
+        self._facts = facts
 
     def learn_classes(self) -> Classes:
         """The classes of time points, read from the first try's grounding once needed (or from the steps,
@@ -85,11 +98,11 @@ class SearchState:
         else None (a prepass grounds them)."""
         if self.suspects:
             return None
-        if self._stock is None or self._stock[0] is not self.facts:
+        if self._stock is None or self._stock[0] is not self.angles:
             stock = self.stock_prepass_with(self.angles)
             if stock is None:
                 return None
-            self._stock = (self.facts, stock)
+            self._stock = (self.angles, stock)
         return self._stock[1]
 
     def stock_prepass_with(self, angles: Sequence[int]) -> Prepassed | None:
