@@ -132,19 +132,7 @@ class Grounding:
     def classes(self, times: Sequence[int]) -> "Classes":
         """Group time points by the class key the theory derived for each (``class_key/2``)."""
         key_of = {t.number: key for t, key in CLASS_KEY.facts_in(self.control)}
-        ids: dict[Symbol | None, int] = {}
-        keys, of_time, sizes, prev, last = [], [], [], [], {}
-        for t in times:
-            key = key_of.get(t)
-            c = ids.setdefault(key, len(ids))
-            if c == len(sizes):
-                keys.append(key)
-                sizes.append(0)
-            sizes[c] += 1
-            of_time.append(c)
-            prev.append(last.get(c))
-            last[c] = t
-        return Classes(keys, list(times), of_time, sizes, prev, [1] * len(sizes))
+        return Classes.grouped(times, [key_of.get(t) for t in times])
 
     def lower_bounds(self, classes: "Classes", leave_out: Collection[int] = ()) -> list[int]:
         """Per class, a set of time points that pairwise disagree on a feature only some of them show
@@ -359,12 +347,22 @@ class Classes:
     def count(self) -> int:
         return len(self.sizes)
 
-    def first_times(self) -> list[int]:
-        """Each class's first time point, by class."""
-        first: dict[int, int] = {}
-        for t, c in zip(self.times, self.of_time):
-            first.setdefault(c, t)
-        return [first[c] for c in range(self.count)]
+    @classmethod
+    def grouped(cls, times: Sequence[int], keys: Sequence) -> "Classes":
+        """The time points grouped by their keys (``keys[i]`` that of ``times[i]``), classes numbered by first
+        appearance, each named by its key; every lower bound 1."""
+        ids: dict = {}
+        named, of_time, sizes, prev, last = [], [], [], [], {}
+        for t, key in zip(times, keys):
+            c = ids.setdefault(key, len(ids))
+            if c == len(sizes):
+                named.append(key)
+                sizes.append(0)
+            sizes[c] += 1
+            of_time.append(c)
+            prev.append(last.get(c))
+            last[c] = t
+        return cls(named, list(times), of_time, sizes, prev, [1] * len(sizes))
 
     @property
     def lower_bound(self) -> int:

@@ -139,6 +139,23 @@ class Partition:
                          list(self.added), self.origin)
 
 
+def partition_of(dstate_of: list[int], read: "Replay | Prepassed") -> Partition:
+    """The map that puts each time point at ``dstate_of[t]``, of an experience as the stock axioms read it
+    (its views, actions, headings with the metrical level, travels' length types and classes): each
+    dstate's view, heading and class as its first time point's, its transitions, its travels' length type."""
+    p = Partition(list(dstate_of))
+    for t, d in enumerate(dstate_of):
+        if d not in p.view_of:
+            p.view_of[d] = read.views[t]
+            p.heading_of[d] = read.headings[t] if read.metrical else None
+            p.in_class.setdefault(read.class_of[t], []).append(d)
+        if t + 1 < len(dstate_of):
+            p.led[(d, read.actions[t])] = dstate_of[t + 1]
+        if t in read.lengths:
+            p.length_of[d] = read.lengths[t]
+    return p
+
+
 class Replay:
     """A tableau's experience as the stock axioms read it before any search, and its minimal maps, kept
     up to date as steps are appended.
@@ -184,17 +201,7 @@ class Replay:
 
     def _partition(self, dstate_of: list[int]) -> Partition:
         """The map that puts each time point at ``dstate_of[t]``."""
-        p = Partition(list(dstate_of))
-        for t, d in enumerate(dstate_of):
-            if d not in p.view_of:
-                p.view_of[d] = self.views[t]
-                p.heading_of[d] = self.headings[t] if self.metrical else None
-                p.in_class.setdefault(self.class_of[t], []).append(d)
-            if t + 1 < len(dstate_of):
-                p.led[(d, self.actions[t])] = dstate_of[t + 1]
-            if t in self.lengths:
-                p.length_of[d] = self.lengths[t]
-        return p
+        return partition_of(dstate_of, self)
 
     def extend(self, steps: Sequence[Step], angles: Sequence[int], lengths: dict[int, int],
                at_most: int) -> list[Partition] | None:
@@ -369,7 +376,7 @@ class Prepassed:
 
     def __init__(self, steps: Sequence[Step], angles: Sequence[int], lengths: dict[int, int], metrical: bool,
                  future_depth: int):
-        self.steps, self.lengths, self.metrical, self.depth = steps, lengths, metrical, future_depth
+        self.lengths, self.metrical, self.depth = lengths, metrical, future_depth
         n = len(steps)
         self.views = [s.view for s in steps]
         self.actions = [action_key(steps[t], angles[t]) for t in range(n - 1)]
@@ -378,25 +385,10 @@ class Prepassed:
             heading = (heading + angle) % 360
             headings.append(heading)
         self.headings = headings
-        ids: dict[tuple, int] = {}
-        self.class_of: list[int] = []
-        keys: list[Symbol] = []
-        sizes: list[int] = []
-        prev: list[int | None] = []
-        last: dict[int, int] = {}
-        for t in range(n):
-            group = (self.views[t], headings[t] if metrical else None)
-            c = ids.get(group)
-            if c is None:
-                c = ids[group] = len(keys)
-                key = CLASS_KEY_TERM(VIEW_FEATURE(), String(self.views[t]), NIL())  # type: ignore[arg-type]
-                keys.append(CLASS_KEY_TERM(HEADING_FEATURE(), Number(headings[t]), key) if metrical else key)
-                sizes.append(0)
-            sizes[c] += 1
-            self.class_of.append(c)
-            prev.append(last.get(c))
-            last[c] = t
-        self.classes = Classes(keys, list(range(n)), list(self.class_of), sizes, prev, [1] * len(sizes))
+        # The classes, grouped by (view, heading), then each named by the key term partition.lp folds.
+        self.classes = Classes.grouped(range(n), [(v, h if metrical else None) for v, h in zip(self.views, headings)])
+        self.classes.keys = [_class_key(view, heading) for view, heading in self.classes.keys]
+        self.class_of = self.classes.of_time
 
     def refutes_one_per_class(self) -> bool:
         """Two time points of one class took one action to time points of two classes: with one dstate per
@@ -416,17 +408,12 @@ class Prepassed:
         the caller's to ask, :meth:`Partition.transitions`)."""
         if self.refutes_one_per_class():
             return None
-        m = Partition(list(self.class_of))
-        for c, t in enumerate(self.classes.first_times()):
-            m.view_of[c] = self.views[t]
-            m.heading_of[c] = self.headings[t] if self.metrical else None
-        for t, action in enumerate(self.actions):
-            m.led[(self.class_of[t], action)] = self.class_of[t + 1]
         if self.metrical:
+            length_of: dict[int, int] = {}
             for t, dm in self.lengths.items():
-                if m.length_of.setdefault(self.class_of[t], dm) != dm:
+                if length_of.setdefault(self.class_of[t], dm) != dm:
                     return None
-        return m
+        return partition_of(self.class_of, self)
 
     @property
     def features(self) -> PartialFeatures:
@@ -481,6 +468,13 @@ class Prepassed:
             if d is not None:
                 seen_from.setdefault(t + d, {}).setdefault(t, set()).add(f)
         return PartialFeatures(of, seen_from, distance)
+
+
+def _class_key(view: str, heading: int | None) -> Symbol:
+    """The key term core/partition.lp folds from a class's grouping features, in the order of their names:
+    ``k(heading, H, k(view, V, nil))``, or ``k(view, V, nil)`` without the metrical level."""
+    key = CLASS_KEY_TERM(VIEW_FEATURE(), String(view), NIL())  # type: ignore[arg-type]
+    return key if heading is None else CLASS_KEY_TERM(HEADING_FEATURE(), Number(heading), key)
 
 
 def length_labels(lengths: dict[int, int]) -> dict[int, int]:

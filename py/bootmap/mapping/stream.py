@@ -65,7 +65,7 @@ from .grounding import Deadline, check_fixed, prepass
 from .misreads import MIN_VISITS, find_suspects, has_images, rare_clustered_views
 from .motion import ActionType
 from .mapcheck import MapCheck
-from .replay import Partition, Replay, action_symbol_of, covers, length_labels
+from .replay import Partition, Replay, action_symbol_of, length_labels
 from .resolver import Resolver
 from .vocabulary import FIXED, NEXT, Atoms, fixed_dstate
 
@@ -104,7 +104,7 @@ class MapStream:
         self._tableau: Tableau | None = None
         self._angles: list[int] = []
         # The stock axioms are replayed in Python (:mod:`.replay`); a theory a user changed, by clingo.
-        self._replays = covers(self.resolver.theory)
+        self._replays = self.resolver.stock
         self._replay: Replay | None = None
         self._map_check: MapCheck | None = None
         self._images = False  # every step so far has an image (misreads.rare_clustered_views)
