@@ -37,13 +37,15 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # tests/
 from support.check import tableau_headings
 from support.gridworld import random_world, walk
 from support.noise import LOGGED, with_odometry_noise
+from huge_resolve import grid_walk
 from targets import Targets
 
 
 NO_METRICAL = ["causal", "topological"]
 PAPER_MAX_S = 0.1  # the paper's 401-step tableau, resolved
 LARGE_STEPS, LARGE_MAX_S = 10_000, 2.0  # the largest grid walk, resolved
-# --huge: a 100,000-step walk resolved in a process of its own (its peak memory is the resolve's)
+# --huge: a 100,000-step walk resolved in a process of its own (bench/huge_resolve.py: its peak memory
+# is the walk's and the resolve's)
 HUGE_STEPS, HUGE_MAX_S, HUGE_MAX_MB = 100_000, 20.0, 1024.0
 ALIASED_TIME_LIMIT_S = 10.0
 RATIO_MAX = 3.0  # ours / RPNI where both find the true map (at 401, 2,001 and 5,001 steps)
@@ -78,11 +80,6 @@ def cases(quick: bool):
     n = 500 if quick else 2_000
     yield f"4x4 grid, no landmarks, {n} steps", aliased_grid_walk(n)
     yield from read_by_a_robot(quick)
-
-
-def grid_walk(n: int) -> Tableau:
-    rng = np.random.default_rng(7)
-    return walk(random_world(rng, 5, 5, extra_edges=3, landmarks=0.3), n, rng, policy="explore")
 
 
 def aliased_grid_walk(n: int) -> Tableau:
@@ -151,28 +148,13 @@ def ratio_where_both_are_right(targets: Targets, sizes=(50, 250, 625), runs: int
         targets.check(f"  ours / RPNI, {len(tableau)} steps", o / r, "<=", RATIO_MAX, fmt="{:.1f}", unit="x")
 
 
-def huge(steps: int) -> dict:
-    """Resolve the 5x5 grid walk of ``steps`` steps here (the child process of :func:`huge_row`): its time,
-    dstates, whether proved minimal, and this process's peak memory (MiB) before and after."""
-    import resource
-
-    tableau = grid_walk(steps)
-    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    t0 = time.perf_counter()
-    cmap = Resolver(time_limit=600).resolve(tableau)
-    seconds = time.perf_counter() - t0
-    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    return {"steps": steps, "seconds": seconds, "dstates": cmap.n_dstates, "minimal": cmap.minimal,
-            "ground_s": cmap.stats.ground_s, "solve_s": cmap.stats.solve_s, "walk_mb": before, "peak_mb": peak}
-
-
 def huge_row(targets: Targets, steps: int = HUGE_STEPS) -> None:
     """The walk of ``steps`` steps resolved in a child process; its figures against the targets."""
     import json
     import subprocess
 
-    out = subprocess.run([sys.executable, __file__, "--huge-child", str(steps)], capture_output=True, text=True,
-                         check=True)
+    child = Path(__file__).with_name("huge_resolve.py")
+    out = subprocess.run([sys.executable, str(child), str(steps)], capture_output=True, text=True, check=True)
     r = json.loads(out.stdout.strip().splitlines()[-1])
     print(f"\n5x5 grid, landmarks, {steps} steps: {r['dstates']} dstates, proved minimal {r['minimal']}, "
           f"{r['seconds']:.1f} s (ground {r['ground_s']:.1f}, solve {r['solve_s']:.1f}), peak memory "
@@ -180,6 +162,7 @@ def huge_row(targets: Targets, steps: int = HUGE_STEPS) -> None:
     targets.check(f"ours, {steps} steps: time", r["seconds"], "<", HUGE_MAX_S, fmt="{:.1f}", unit=" s")
     targets.check(f"ours, {steps} steps: peak memory", r["peak_mb"], "<", HUGE_MAX_MB, fmt="{:.0f}", unit=" MiB")
     targets.check(f"ours, {steps} steps: proved minimal", r["minimal"], "==", True, fmt="{}", bound_text="True")
+    targets.check(f"ours, {steps} steps: accuracy", r["accuracy"], "==", 1.0, fmt="{:.1%}", bound_text="100%")
 
 
 def main(argv=None) -> int:
@@ -191,12 +174,7 @@ def main(argv=None) -> int:
     ap.add_argument("--search-map-levels", action="store_true",
                     help="search with the levels that judge the map alone (the topological one) instead of "
                          "asking them of each map found: Resolver(defer_map_levels=False), for comparison")
-    ap.add_argument("--huge-child", type=int, help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
-    if args.huge_child:
-        import json
-        print(json.dumps(huge(args.huge_child)))
-        return 0
     head = (f"{'tableau':52} {'steps':>6} {'true':>5} | {'ours':>5} {'acc':>6} {'ground':>7} {'solve':>7} {'total':>7}"
             f" {'uniq':>5} | {'rpni(v)':>7} {'acc':>6} {'time':>7} | {'rpni(v+h)':>9} {'acc':>6} {'time':>7}")
     print(head)

@@ -31,7 +31,7 @@ from .errors import TableauError
 FORMAT = "bootmap.tableau/1"
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Turn:
     """Turn in place. Negative angles turn right (clockwise), positive left; near +-180 turns around."""
 
@@ -43,7 +43,7 @@ class Turn:
         return {"type": self.kind, "angle_deg": self.angle_deg}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Travel:
     """Travel along a path to the next dstate, with the net heading change of a curved path."""
 
@@ -62,7 +62,7 @@ class Travel:
 Action = Union[Turn, Travel]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Step:
     """One time point: the view (or image) at a dstate, and the action to the next time point."""
 

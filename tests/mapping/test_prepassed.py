@@ -14,7 +14,7 @@ from bootmap.mapping.facts import read_actions, tableau_facts, travel_lengths
 from bootmap.mapping.grounding import Deadline, Grounding, prepass
 from bootmap.mapping.replay import Prepassed, covers
 from bootmap.mapping.theory import default_axioms_dir
-from bootmap.mapping.vocabulary import ONE_PER_CLASS
+from bootmap.mapping.vocabulary import CLASSES_GIVEN, ONE_PER_CLASS
 from support.gridworld import random_world, walk
 from support.noise import with_misreads, with_odometry_noise
 
@@ -109,6 +109,37 @@ def test_a_resolution_gives_the_same_maps_whether_the_prepass_is_grounded_or_wor
            (b.dstate_of, list(b.alternatives), b.n_models, b.minimal)
     assert [s["t"] for s in a.suspect_steps] == [s["t"] for s in b.suspect_steps]
     assert (a.stats.classes, a.stats.lower_bound) == (b.stats.classes, b.stats.lower_bound)
+
+
+@pytest.mark.parametrize("seed, steps, metrical", [(1, 100, True), (4, 100, True), (7, 40, False)])
+def test_a_search_under_the_stock_axioms_is_given_the_class_keys_and_folds_none(seed, steps, metrical):
+    # The layout of a search on classes worked out from the steps gives each time point's key
+    # (class_key/2 with classes_given): partition.lp then grounds none of its folding, and the search
+    # has the same answers as one whose keys partition.lp folds itself.
+    from dataclasses import replace
+
+    tableau = _tableau(seed, steps, True, 0.0, landmarks=0.3)
+    resolver = Resolver(levels=None if metrical else ["causal", "topological"])
+    _, stock, angles, lengths = _both(tableau, resolver)
+    facts = tableau_facts(tableau, angles=angles, lengths=lengths)
+    classes = stock.classes
+    cmap = resolver.resolve(tableau)
+    bound = cmap.n_dstates  # every class with spare slots (each class's lower bound here 1): a search
+    answers = {}
+    for given in (True, False):
+        layout = replace(classes, given=given).layout(bound)
+        assert any(CLASSES_GIVEN.matches(x) for x in layout) == given
+        grounding = Grounding(resolver.theory, facts + layout, resolver.future_depth, ["0"]).ground()
+        atoms = grounding.control.symbolic_atoms
+        folded = sum(1 for _ in atoms.by_signature("group_fold", 3))
+        assert (folded == 0) == given
+        keys = {a.symbol.arguments[0].number: str(a.symbol.arguments[1]) for a in atoms.by_signature("class_key", 2)}
+        assert keys == {t: str(classes.keys[c]) for t, c in zip(classes.times, classes.of_time)}
+        models = []
+        grounding.solve(Deadline.after(60), lambda m: models.append(
+            frozenset(str(x) for x in m.symbols(shown=True) if x.name == "is")))
+        answers[given] = set(models)
+    assert answers[True] == answers[False] and len(answers[True]) == cmap.n_models
 
 
 def test_one_dstate_per_class_refuted_from_the_steps_is_not_grounded():

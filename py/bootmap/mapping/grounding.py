@@ -23,7 +23,7 @@ from .facts import add_facts
 from .mapcheck import SHOW_MAP
 from .theory import Theory
 from .trace import Instrumented, load_instrumented
-from .vocabulary import (AFTER, CLASS_KEY, CLASS_KEY_TERM, DSTATE_BOUND, FEATURE, FUTURE_DEPTH_CONST,
+from .vocabulary import (AFTER, CLASS_KEY, CLASS_KEY_TERM, DSTATE_BOUND, FEATURE, FUTURE_DEPTH_CONST, CLASSES_GIVEN,
                          PREPASS_PART, PREV_IN_CLASS, SEQUENCE, SHOWN_BY_ALL, SLOTS, TELLING, VIEW_FEATURE)
 
 
@@ -342,6 +342,8 @@ class Classes:
     sizes: list[int]                        # time points per class
     prev: list[int | None]                  # previous time point of the same class
     lower: list[int]                        # dstates each class needs at least
+    given: bool = False                     # the keys were worked out from the steps (replay.Prepassed):
+                                            # a layout gives them, and core/partition.lp folds none
 
     @property
     def count(self) -> int:
@@ -384,6 +386,9 @@ class Classes:
         for t, p in zip(self.times, self.prev):
             if p is not None:
                 out.append(PREV_IN_CLASS(p, t))
+        if self.given:
+            out.append(CLASSES_GIVEN())
+            out.extend(CLASS_KEY(t, self.keys[c]) for t, c in zip(self.times, self.of_time))
         return out
 
 

@@ -65,7 +65,7 @@ STOCK_DIGESTS = {
     "metrical.lp": "4628513194f19408c98f56c8d15750bd6f1cb69f46904f76d5521ada01d6dbb5",
     "topological.lp": "729a309a6a1c99d71f9769994c8d83671d5bdf02b740bfac88e3f71b7759cb71",
     "core/ask.lp": "2e8adf403568adf1bc5e166b19bde32ba2fdaac7f873adef0930bb9071c939ca",
-    "core/partition.lp": "5a5041dcda4ff90134c77b13f5c751ef32325af467a675c6f5272a5a5f7f41c0",
+    "core/partition.lp": "f02aad45d48ee30e03278067ded3427cc71ea3ac02fd7bd4e4d31b13351ca51a",
     "core/assert.lp": "2c01befdceb28aa69c8a639e07b55dc2b96f6280fd2d7f052fe55fa211a76c17",
     "core/prepass.lp": "7c0467733eb5c9806a227948479ee56cca2bf41d51a193d0f00b736594110478",
 }
@@ -388,6 +388,7 @@ class Prepassed:
         # The classes, grouped by (view, heading), then each named by the key term partition.lp folds.
         self.classes = Classes.grouped(range(n), [(v, h if metrical else None) for v, h in zip(self.views, headings)])
         self.classes.keys = [_class_key(view, heading) for view, heading in self.classes.keys]
+        self.classes.given = True
         self.class_of = self.classes.of_time
 
     def refutes_one_per_class(self) -> bool:

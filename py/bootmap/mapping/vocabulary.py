@@ -148,6 +148,7 @@ DSTATE_BOUND = Predicate("dstate_bound", 1, "layout")
 MINIMISE_DSTATES = Predicate("minimise_dstates", 0, "layout")
 SUSPECT = Predicate("suspect", 2, "layout", "the view seen at t{0} may be a misread (cost {1})")
 MAY_BE = Predicate("may_be", 2, "layout")
+CLASSES_GIVEN = Predicate("classes_given", 0, "layout", "the class keys are given (worked out from the steps)")
 FIXED = Predicate("fixed", 2, "layout", "t{0} is at {1} in the map being checked")
 
 # --------------------------------------------------------------------------------------------------
