@@ -7,7 +7,7 @@ import pytest
 from bootmap.cli import main
 from bootmap.errors import BadInput, LogError
 from bootmap.experiments.evaluate import DESCRIPTORS
-from bootmap.experiments.log import LOCAL_MAP, SCAN_MATCH, run_log_experiment
+from bootmap.experiments.log import LOCAL_MAP, LOCAL_MAP_IN_REACH, SCAN_MATCH, run_log_experiment
 from bootmap.ingest.places import PlaceDetector
 
 from log_data import EXCERPT
@@ -181,6 +181,10 @@ def test_places_the_laser_shows_are_revisited_lap_after_lap_and_scan_matching_re
     # So does matching the corners' local maps, rendered all round (bootmap.ingest.local_maps).
     local = r["place_recognition"][LOCAL_MAP]
     assert local["revisits"] == 8 and local["recall_at_95_precision"] >= 0.75
+    # Searched within odometry's reach, no fewer of them: exact odometry rules out no true revisit.
+    reached = r["place_recognition"][LOCAL_MAP_IN_REACH]
+    assert (reached["revisits"], reached["queries"]) == (8, local["queries"])
+    assert reached["recall_at_95_precision"] >= local["recall_at_95_precision"]
     # The raw scans of a corner's two visits, a few centimetres apart, are told apart less well.
     assert matched["average_precision"] >= max(r["place_recognition"][d]["average_precision"] for d in DESCRIPTORS)
 

@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 from scipy.spatial.distance import cdist
 
 from bootmap.experiments.evaluate import (against_baselines, loop_closure, place_recognition,
-                                          revisit_candidates, sector_of_truth)
+                                          revisit_candidates, sector_of_truth, within_reach)
 from bootmap.ingest.truth import true_dstates, visit_positions
 
 # Five visits on a line: 0 and 3 at one pose, 4 back near 2, 1 alone; the robot leaves each place between,
@@ -47,6 +47,43 @@ def test_a_confident_wrong_match_costs_precision_at_its_threshold():
     assert r["curve"][0] == {"threshold": 5.0, "precision": 0.0, "recall": 0.0}
     assert r["curve"][-1]["recall"] == 1.0 and r["curve"][-1]["precision"] == pytest.approx(2 / 3)
     assert r["recall_at_95_precision"] == 0.0
+
+
+def test_a_look_alike_beyond_odometrys_reach_is_no_match():
+    # Visit 2 looks like visit 0 (a score above all), but odometry puts them 20 m apart after 20 m driven:
+    # searched within odometry's reach, 2 makes no detection and precision is whole again.
+    scores = _near(POSES).astype(float)
+    scores[2, 0] = 5.0
+    driven = [0.0, 10.0, 20.0, 40.0, 60.0]
+    allowed = within_reach(POSES, driven)
+    assert not allowed[2, 0] and allowed[3, 0] and allowed[4, 2]
+    r = place_recognition(scores, POSES, allowed=allowed)
+    assert (r["queries"], r["revisits"], r["best_correct"]) == (3, 2, 2)
+    assert r["recall_at_95_precision"] == 1.0 and r["curve"][0]["threshold"] == 1.0
+
+
+def test_a_true_revisit_odometry_rules_out_is_a_miss():
+    # Odometry drifted: visit 3 (a true revisit of 0) is dead-reckoned 30 m from it after 40 m driven.
+    odometry = [(0.0, 0.0), (10.0, 0.0), (20.0, 0.0), (30.0, 0.0), (20.5, 0.0)]
+    r = place_recognition(_near(POSES).astype(float), POSES, allowed=within_reach(odometry, [0, 10, 20, 40, 60]))
+    assert (r["queries"], r["revisits"], r["best_correct"]) == (3, 2, 1)
+    assert r["recall_at_99_precision"] == 0.5
+
+
+@settings(max_examples=40, deadline=None)
+@given(poses=st.lists(st.tuples(st.floats(0, 30), st.floats(0, 30)), min_size=2, max_size=25),
+       seed=st.integers(0, 2**16))
+def test_searching_within_reach_keeps_the_queries_and_revisits_and_never_detects_more(poses, seed):
+    rng = np.random.default_rng(seed)
+    scores = rng.normal(size=(len(poses), len(poses)))
+    odometry = np.asarray(poses) + rng.normal(scale=2.0, size=(len(poses), 2))
+    driven = np.cumsum(rng.uniform(0, 20, len(poses)))
+    everywhere, reached = place_recognition(scores, poses), place_recognition(scores, poses, allowed=within_reach(
+        odometry, driven))
+    assert (reached["queries"], reached["revisits"]) == (everywhere["queries"], everywhere["revisits"])
+    assert len(reached["curve"]) <= len(everywhere["curve"]) and reached["best_correct"] <= reached["revisits"]
+    # Everything allowed is the search of every candidate.
+    assert place_recognition(scores, poses, allowed=np.ones((len(poses),) * 2, bool)) == everywhere
 
 
 def test_without_revisits_recall_is_not_measured():

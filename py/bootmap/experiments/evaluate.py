@@ -47,6 +47,7 @@ from typing import Hashable, Sequence
 import numpy as np
 from scipy.spatial.distance import cdist
 
+from ..mapping.loops import LoopCloser
 from ..metrics import dstate_accuracy
 from ..views import uncertainty_coefficient
 from ..ingest.scans import Pose
@@ -55,6 +56,8 @@ from ..paths import main_axis
 
 #: Descriptors :func:`nn_on_revisits` compares scans with.
 DESCRIPTORS = ("raw", "shift")
+#: How far odometry may drift per metre driven between two visits of one place: loop closing's bound.
+DRIFT_SHARE = LoopCloser.__dataclass_fields__["drift_share"].default
 #: Beams a shift-tolerant match may turn one scan against another (1 degree a beam: +-10 degrees).
 MAX_SHIFT = 10
 
@@ -255,14 +258,44 @@ def revisit_candidates(poses, radius_m: float = 3.0) -> np.ndarray:
     return np.arange(n)[:, None] > left[None, :]
 
 
-def place_recognition(scores: np.ndarray, poses, radius_m: float = 3.0) -> dict:
+def within_reach(odometry, driven, radius_m: float = 3.0, drift_share: float = DRIFT_SHARE) -> np.ndarray:
+    """Which pairs of visits odometry allows to be one place: ``allowed[j, i]`` when their dead-reckoned
+    positions lie within ``radius_m`` plus ``drift_share`` of the metres driven between them. A loop closer
+    searches for a revisit only there (Cartographer's constraint search window; bootmap's loop closing
+    joins no visits farther apart, :class:`~bootmap.mapping.loops.LoopCloser`'s ``drift_share``), so that a
+    place that looks like this one but lies across the building is never its match.
+
+    Parameters
+    ----------
+    odometry : array-like (n, 2 or 3)
+        Each visit's dead-reckoned pose (the learning's own evidence, never the truth).
+    driven : array-like (n,)
+        The metres the robot had driven by each visit, by its odometry.
+
+    Examples
+    --------
+    Visits 10 m apart after 10 m driven cannot be one place; after 190 m driven, 9 m apart can:
+
+    >>> within_reach([(0, 0), (10, 0), (1, 0)], [0, 10, 200]).astype(int).tolist()
+    [[1, 0, 1], [0, 1, 1], [1, 1, 1]]
+    """
+    xy = _xy(odometry)
+    d = np.asarray(driven, dtype=float)
+    reach = radius_m + drift_share * np.abs(d[:, None] - d[None, :])
+    return cdist(xy, xy) <= reach if len(xy) else np.zeros((0, 0), dtype=bool)
+
+
+def place_recognition(scores: np.ndarray, poses, radius_m: float = 3.0,
+                      allowed: np.ndarray | None = None) -> dict:
     """Place recognition as precision-recall, for any descriptor.
 
     Each visit ``j`` takes its best match among the earlier visits it may be matched with
     (:func:`revisit_candidates`): the ``i`` of the highest ``scores[j, i]``. A threshold is swept over
     those best scores: a visit whose best score reaches it is a detection, a true positive when its match
     lies within ``radius_m`` of it (corrected poses); a visit with a candidate within ``radius_m`` (a true
-    revisit) counts in recall's denominator.
+    revisit) counts in recall's denominator. Given ``allowed`` (:func:`within_reach`), the best match is
+    sought among the allowed candidates only, and a visit with none makes no detection (a true revisit
+    odometry rules out is a miss).
 
     Parameters
     ----------
@@ -273,6 +306,8 @@ def place_recognition(scores: np.ndarray, poses, radius_m: float = 3.0) -> dict:
         The corrected pose of each visit.
     radius_m : float
         The place radius.
+    allowed : numpy.ndarray (n, n) of bool, optional
+        The pairs a match may join (``allowed[j, i]``); every candidate when None.
 
     Returns
     -------
@@ -298,15 +333,19 @@ def place_recognition(scores: np.ndarray, poses, radius_m: float = 3.0) -> dict:
         raise ValueError(f"scores of shape {s.shape} for {len(xy)} visits")
     near = cdist(xy, xy) <= radius_m if len(xy) else np.zeros((0, 0), dtype=bool)
     candidates = revisit_candidates(xy, radius_m)
-    best, correct, revisit = [], [], 0
+    searched = candidates if allowed is None else candidates & np.asarray(allowed, dtype=bool)
+    best, correct, revisit, queries = [], [], 0, 0
     for j in np.flatnonzero(candidates.any(axis=1)):
-        cand = np.flatnonzero(candidates[j])
+        queries += 1
+        revisit += bool(near[j, candidates[j]].any())
+        cand = np.flatnonzero(searched[j])
+        if not len(cand):
+            continue
         i = cand[np.argmax(s[j, cand])]
         best.append(s[j, i])
         correct.append(bool(near[j, i]))
-        revisit += bool(near[j, cand].any())
     curve = _pr_curve(np.asarray(best), np.asarray(correct, dtype=bool), revisit)
-    return {"visits": len(xy), "queries": len(best), "revisits": revisit, "best_correct": int(sum(correct)),
+    return {"visits": len(xy), "queries": queries, "revisits": revisit, "best_correct": int(sum(correct)),
             "recall_at_95_precision": recall_at_precision(curve, 0.95, revisit),
             "recall_at_99_precision": recall_at_precision(curve, 0.99, revisit),
             "average_precision": average_precision(curve, revisit), "curve": curve}

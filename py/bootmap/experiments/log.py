@@ -47,7 +47,7 @@ from ..ingest.dstates import JunctionDetector, TurnDetector
 from ..ingest.places import PlaceDetector
 from .evaluate import (DESCRIPTORS, against_baselines, dead_reckoned_dstates, descriptor_scores, loop_closure,
                        map_against_truth, nn_on_revisits, place_of_truth, place_recognition, sector_of_truth,
-                       views_against_truth)
+                       views_against_truth, within_reach)
 from ..ingest.ingest import log_tableau, read_log, travel_ends, turn_ends
 from ..ingest.truth import visit_positions
 from ..ingest.local_maps import local_images
@@ -59,6 +59,9 @@ VIEW_CRITERIA = ("auto", "M", "davies-bouldin")
 SCAN_MATCH = "scan match"
 #: ... and by scan matching each visit's local map, rendered all round (:mod:`bootmap.ingest.local_maps`).
 LOCAL_MAP = "local map"
+#: ... and by scan matching the local maps of the visits odometry allows to be one place only
+#: (:func:`~bootmap.experiments.evaluate.within_reach`): as a loop closer searches.
+LOCAL_MAP_IN_REACH = "local map in reach"
 #: Processes scan matching runs in (its pairs are independent; the result does not depend on how many).
 SCAN_MATCH_JOBS = 2
 #: Each visit's so many likeliest matches by the correlative search alone are aligned and scored in full
@@ -165,23 +168,26 @@ def _experiment(scans, log, lap, seed, k_max, time_limit, quantum_deg, view_crit
                 "retyped_steps": cmap.retyped_steps},
         "dead_reckoning": {"dstates": len(set(dead)), "dstate_accuracy": dstate_accuracy(truth, dead)},
         "recognition": recognition, "nn_revisited": nn, "timings": timings}
-    local = local_images(scans, tableau.meta["dstates"]["scans"], radius_m, max_range=max_range) \
-        if scan_match and recognise else None
+    visits = tableau.meta["dstates"]["scans"]
+    local = local_images(scans, visits, radius_m, max_range=max_range) if scan_match and recognise else None
+    reach = None if local is None else \
+        within_reach([s.odometry for s in tableau.steps], _driven(scans)[visits], radius_m)
     results.update(_slam_evaluation(results, images, poses, positions, truth, cmap, dead, radius_m, recognise,
-                                    max_range if scan_match else None, local))
+                                    max_range if scan_match else None, local, reach))
     lap("evaluate_s")
     return results, tableau, cmap
 
 
 def _slam_evaluation(r: dict, images, poses, positions, truth, cmap, dead, radius_m,
                      recognise_places: bool = True, scan_match_range: float | None = None,
-                     local: np.ndarray | None = None) -> dict:
+                     local: np.ndarray | None = None, reach: np.ndarray | None = None) -> dict:
     """The figures SLAM papers report, against the corrected poses: the map beside both baselines,
     loop closures (the map's and odometry alone's) and place recognition by each descriptor (and by
     scan matching images clipped at ``scan_match_range``, when given, and the visits' ``local`` maps
-    rendered all round). A loop closure joins dstates, judged where the truth places their visits
-    (``positions``: a turn's two ends at their middle, as the true places are made); place recognition
-    matches images, judged where they were taken (``poses``)."""
+    rendered all round, also among the pairs odometry allows alone, ``reach``). A loop closure joins
+    dstates, judged where the truth places their visits (``positions``: a turn's two ends at their middle,
+    as the true places are made); place recognition matches images, judged where they were taken
+    (``poses``)."""
     sectors = [sector_of_truth(t) for t in truth]
     odometry_alone = r["dead_reckoning"]["dstate_accuracy"]
     own = dstate_accuracy(truth, [str(i) for i in range(len(truth))])
@@ -205,8 +211,17 @@ def _slam_evaluation(r: dict, images, poses, positions, truth, cmap, dead, radiu
             if local is not None:
                 matcher = ScanMatcher(max_range=scan_match_range, place_radius_m=radius_m, n_jobs=SCAN_MATCH_JOBS,
                                       fov_deg=360.0, shortlist=SCAN_MATCH_SHORTLIST)
-                recognition[LOCAL_MAP] = place_recognition(matcher.scores(local), poses, radius_m)
+                scores = matcher.scores(local)
+                recognition[LOCAL_MAP] = place_recognition(scores, poses, radius_m)
+                if reach is not None:
+                    recognition[LOCAL_MAP_IN_REACH] = place_recognition(scores, poses, radius_m, reach)
     return {"baselines": baselines, "loop_closure": loops, "place_recognition": recognition}
+
+
+def _driven(scans) -> np.ndarray:
+    """The metres the robot had driven by each scan, by its odometry."""
+    xy = np.array([s.odometry[:2] for s in scans], dtype=float).reshape(-1, 2)
+    return np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))]) if len(xy) else np.zeros(0)
 
 
 def _perfect_odometry(scans, log, settings: dict) -> dict:
