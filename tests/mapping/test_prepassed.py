@@ -111,7 +111,7 @@ def test_a_resolution_gives_the_same_maps_whether_the_prepass_is_grounded_or_wor
     assert (a.stats.classes, a.stats.lower_bound) == (b.stats.classes, b.stats.lower_bound)
 
 
-@pytest.mark.parametrize("seed, steps, metrical", [(1, 100, True), (4, 100, True), (7, 40, False)])
+@pytest.mark.parametrize("seed, steps, metrical", [(4, 100, True), (7, 40, False)])
 def test_a_search_under_the_stock_axioms_is_given_the_class_keys_and_folds_none(seed, steps, metrical):
     # The layout of a search on classes worked out from the steps gives each time point's key
     # (class_key/2 with classes_given): partition.lp then grounds none of its folding, and the search
