@@ -112,7 +112,7 @@ def _on_tokens(args: argparse.Namespace, command: str, failing: str, act):
         print(error_line(command, f"bad setting: {_first_error(e)}", EXIT_BAD_INPUT), file=sys.stderr)
         return EXIT_BAD_INPUT, None, None
     try:
-        store = Store(settings.database_url)
+        store = Store(settings.database_url, settings.sqlite_busy_timeout_s)
         try:
             value = act(store)
         finally:

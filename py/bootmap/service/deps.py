@@ -44,7 +44,7 @@ class Services:
         """Open the store, start this server's heartbeat (:class:`Quotas`), snapshot the theory, start and
         warm the solvers (blocking: a second or two)."""
         settings.data_dir.mkdir(parents=True, exist_ok=True)
-        store = Store(settings.database_url)
+        store = Store(settings.database_url, settings.sqlite_busy_timeout_s)
         quotas = Quotas(store, settings.token_requests_per_minute, settings.token_max_solves,
                         settings.solve_time_limit_s + settings.solve_kill_grace_s)
         quotas.start()

@@ -32,7 +32,7 @@ from collections import Counter, deque
 from datetime import datetime, timezone
 from typing import Callable
 
-from .store import SQLITE_BUSY_TIMEOUT_MS, HeldLease, QuotaExceeded, SolvePlacesTaken, Store
+from .store import HeldLease, QuotaExceeded, SolvePlacesTaken, Store
 
 log = logging.getLogger("bootmap.service")
 
@@ -194,7 +194,7 @@ class Quotas:
         other servers stop counting them within STALE_S)."""
         self._stop.set()
         if self._thread is not None:
-            self._thread.join(BEAT_S + SQLITE_BUSY_TIMEOUT_MS / 1000 + 5)
+            self._thread.join(BEAT_S + self.store.busy_timeout_s + 5)
         try:
             self.store.remove_server(self.server_id)
         except Exception as e:

@@ -34,6 +34,8 @@ class Settings(BaseSettings):
                            description="Directory of the SQLite database and of the axiom snapshots.")
     db: str | None = Field(None, description="Database: a file path or an SQLAlchemy URL "
                                              "(e.g. postgresql+psycopg://...); default DATA_DIR/bootmap.sqlite3.")
+    sqlite_busy_timeout_s: float = Field(10.0, gt=0, le=600, description="SQLite: how long a write waits for "
+                                         "another connection's write lock before it fails (reads never wait).")
     # The same variable the library reads (BOOTMAP_AXIOMS), so `bootmap map` and the service agree.
     axioms: Path | None = Field(None, description="Axiom directory; default the shipped asp/.")
     host: str = "127.0.0.1"

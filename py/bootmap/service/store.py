@@ -42,7 +42,7 @@ from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column, sessionmaker
 
 from ..errors import BootmapError
 
-SQLITE_BUSY_TIMEOUT_MS = 10_000
+SQLITE_BUSY_TIMEOUT_S = 10.0  # the default of Settings.sqlite_busy_timeout_s
 
 
 class NotFound(BootmapError):
@@ -294,8 +294,9 @@ def _record(row: TableauRow) -> TableauRecord:
                          _utc(row.updated_at), row.owner_id, bool(row.public))
 
 
-def make_engine(url: str) -> Engine:
-    """An engine for ``url``; for SQLite, the file's directory is created and WAL is switched on."""
+def make_engine(url: str, busy_timeout_s: float = SQLITE_BUSY_TIMEOUT_S) -> Engine:
+    """An engine for ``url``; for SQLite, the file's directory is created, WAL is switched on, and a writer
+    waits up to ``busy_timeout_s`` for another connection's write lock."""
     if url.startswith("sqlite:///"):
         path = url.removeprefix("sqlite:///")
         if path and path != ":memory:":
@@ -303,7 +304,8 @@ def make_engine(url: str) -> Engine:
     # Streamed reads hold a connection while the client reads: room for as many as the thread pool runs.
     engine = create_engine(url, pool_pre_ping=not url.startswith("sqlite"), pool_size=10, max_overflow=30)
     if engine.dialect.name == "sqlite":
-        event.listen(engine, "connect", _sqlite_pragmas)
+        event.listen(engine, "connect",
+                     functools.partial(_sqlite_pragmas, busy_timeout_ms=int(busy_timeout_s * 1000)))
     return engine
 
 
@@ -338,10 +340,10 @@ def _never_reuse_ids(engine: Engine, table) -> None:
             conn.commit()
 
 
-def _sqlite_pragmas(dbapi_connection, _record) -> None:
+def _sqlite_pragmas(dbapi_connection, _record, busy_timeout_ms: int) -> None:
     cursor = dbapi_connection.cursor()
     cursor.execute("PRAGMA journal_mode=WAL")
-    cursor.execute(f"PRAGMA busy_timeout={SQLITE_BUSY_TIMEOUT_MS}")
+    cursor.execute(f"PRAGMA busy_timeout={int(busy_timeout_ms)}")
     cursor.execute("PRAGMA foreign_keys=ON")
     cursor.close()
 
@@ -355,8 +357,9 @@ STREAM_CHUNK = 2**18  # characters per chunk of a streamed read (documents are A
 class Store:
     """The repository: every method is one short transaction and returns plain records."""
 
-    def __init__(self, url: str):
-        self.engine = make_engine(url)
+    def __init__(self, url: str, busy_timeout_s: float = SQLITE_BUSY_TIMEOUT_S):
+        self.busy_timeout_s = busy_timeout_s  # (SQLite: how long a writer waits for the write lock)
+        self.engine = make_engine(url, busy_timeout_s)
         self._renew_server_tables()
         Base.metadata.create_all(self.engine)
         self._upgrade()
