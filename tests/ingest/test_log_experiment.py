@@ -1,6 +1,7 @@
 """The experiment on a log, end to end: library and `bootmap experiment --log`, judged by the log's poses."""
 
 import json
+import re
 
 import pytest
 
@@ -187,6 +188,40 @@ def test_places_the_laser_shows_are_revisited_lap_after_lap_and_scan_matching_re
     assert reached["recall_at_95_precision"] >= local["recall_at_95_precision"]
     # The raw scans of a corner's two visits, a few centimetres apart, are told apart less well.
     assert matched["average_precision"] >= max(r["place_recognition"][d]["average_precision"] for d in DESCRIPTORS)
+
+
+def test_why_on_a_logs_map_shows_what_the_laser_says_beside_odometry(tmp_path):
+    """`bootmap why` on a log's loop-closed map: a join proposed by odometry also shows the two scans'
+    match once aligned; so does a pair odometry keeps apart, where the laser would join them. A tableau
+    that does not say what laser took its images shows none."""
+    from dataclasses import replace
+
+    from bootmap.ingest.ingest import ingest
+    from bootmap.mapping.loops import LoopCloser
+    from bootmap.tableau import Tableau
+
+    log = write_drive_log(tmp_path / "ring.log", ring_walls(), ring_poses(laps=2))
+    tableau = ingest(log)
+    tableau = tableau.with_views(["corridor"] * len(tableau))  # views say nothing: odometry and the laser
+    closer = LoopCloser()
+    cmap = closer.resolve(tableau)
+    second = len(tableau) // 2  # the first corner again, on the second lap
+    assert cmap.dstate_of[0] == cmap.dstate_of[second]
+    same = closer.explain(tableau, 0, second)
+    (join,) = [j for j in same.joins if j.startswith(f"t0 = t{second}: proposed")]
+    score = float(re.search(r"their scans, aligned, score (\d\.\d\d)", join).group(1))
+    assert score > 0.9 and "0.0 m apart)" in join
+    # The second lap's odometry 30 m off: odometry keeps them apart, and the laser says what it would.
+    shifted = Tableau(tuple(s if t < second else replace(s, odometry=(s.odometry[0] + 30.0, *s.odometry[1:]))
+                            for t, s in enumerate(tableau.steps)), tableau.world, dict(tableau.meta))
+    apart = closer.explain(shifted, 0, second)
+    assert apart.verdict == "different" and "more than odometry may drift" in apart.sentence
+    assert re.search(r"their scans, aligned, score (0\.9\d|1\.00)", apart.sentence)
+    # Kept apart by their headings, the laser is not asked.
+    assert "scan" not in closer.explain(tableau, 0, 1).sentence
+    # Without the laser's description, no scan match is claimed.
+    bare = Tableau(tableau.steps, tableau.world, {k: v for k, v in tableau.meta.items() if k != "laser"})
+    assert not any("scan" in j for j in closer.explain(bare, 0, second).joins)
 
 
 def test_dstates_at_places_is_for_logs_only(capsys):

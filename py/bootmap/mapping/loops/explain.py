@@ -5,15 +5,23 @@ determinism, with the evidence for each. Different dstates: what keeps them apar
 asked (headings, the travels from them, odometry), or what joining them would make one that may not be,
 or the axioms that reject the map joining them (a subset-minimal set of constraints, cited by name and
 line), or else that nothing proposed them: loop closing joins only what odometry proposes.
+
+Where the tableau carries laser images and says what laser took them (a log's, ``meta.laser``), each join
+proposed by odometry, and each pair kept apart by odometry or for want of evidence, also shows how alike the two scans
+are once aligned (:class:`bootmap.scan_match.ScanMatcher`): what the laser says of the join, beside what
+odometry and the axioms say. Loop closing does not weigh it (a scan matches look-alike places too).
 """
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 from functools import partial
 from typing import TYPE_CHECKING, Callable
 
+from ...scan_match import ScanMatcher
+from ...tableau import Tableau
 from ..cogmap import CognitiveMap
 from ..grounding import Grounding
 from ..proof import rule_dict
@@ -92,12 +100,38 @@ def failing_rules(closing: Closing, dstate_of: list[int]) -> list[RuleRef]:
     return _Explaining(closing)._failing_rules(dstate_of)
 
 
+def scan_evidence(tableau: Tableau, x: int, y: int) -> str | None:
+    """How alike the laser images at time points ``x`` and ``y`` are once aligned, in words: the scan
+    match's score (the share of both scans' returns the other confirms, less those it refutes) and how far
+    apart the alignment puts the two robots. None where
+    either has no image or the tableau does not say what laser took them (``meta.laser``: its range and a
+    field of view symmetric about the heading)."""
+    laser = tableau.meta.get("laser") or {}
+    a, b = tableau.steps[x].image, tableau.steps[y].image
+    try:
+        low, high, reach = float(laser["angle_min"]), float(laser["angle_max"]), float(laser["range_max"])
+    except (KeyError, TypeError, ValueError):
+        return None
+    if a is None or b is None or len(a) != len(b) or not math.isclose(low, -high) or reach <= 0:
+        return None
+    match = ScanMatcher(max_range=reach, fov_deg=math.degrees(high - low)).match(a, b)
+    explained, returns = sum(match.inliers), sum(match.points)
+    apart = math.hypot(match.transform[0], match.transform[1])
+    return (f"their scans, aligned, score {match.score:.2f} (scan match: {explained} of {returns} returns "
+            f"confirmed, {sum(match.refuted)} refuted; taken {apart:.1f} m apart)")
+
+
 class _Explaining:
     """One explanation, read off a finished loop closing: its joins, and what it refuses or the axioms
     reject when asked to join two time points (every join made for the question is undone)."""
 
     def __init__(self, closing: Closing):
         self.closing = closing
+
+    def _scans(self, x: int, y: int) -> str:
+        """The scan match of x and y, as a clause to add ("" where the tableau has no laser images)."""
+        said = scan_evidence(self.closing.tableau, x, y)
+        return f"; {said}" if said else ""
 
     def explain(self, cmap: CognitiveMap, a: int, b: int) -> LoopExplanation:
         """Why a and b are one dstate of ``cmap`` (this closing's map), or not."""
@@ -119,8 +153,9 @@ class _Explaining:
             return f"a person prefers them one dstate ({closing.odometry(x, y)})"
         if closing.kinds.get((i, j)) == "retraced":
             return (f"the same {closing.agreeing(i, j)} actions around them, one view, and {closing.odometry(x, y)} "
-                    f"(within {closing.drift_bound(x, y, closer.drift_share):.1f} m)")
-        return f"{closing.odometry(x, y)} (within {closing.drift_bound(x, y, closer.near_share):.1f} m)"
+                    f"(within {closing.drift_bound(x, y, closer.drift_share):.1f} m){self._scans(x, y)}")
+        return (f"{closing.odometry(x, y)} (within {closing.drift_bound(x, y, closer.near_share):.1f} m)"
+                f"{self._scans(x, y)}")
 
     def _chain(self, a: int, b: int) -> list[Join]:
         """The joins that link a to b (a path in the forest of the joins standing)."""
@@ -149,7 +184,9 @@ class _Explaining:
         closing, closer = self.closing, self.closing.closer
         cause = closing.kept_apart(a, b)
         if cause:
-            return f"t{a} and t{b} are different dstates: {cause}.", []
+            # Kept apart by odometry alone, the laser may say otherwise (a drifted revisit): show it.
+            laser = self._scans(a, b) if cause.startswith(closing.odometry(a, b)) else ""
+            return f"t{a} and t{b} are different dstates: {cause}{laser}.", []
         proposed = closing.kinds.get((min(a, b), max(a, b)))
         mark = closing.dstates.mark()
         try:
@@ -168,8 +205,8 @@ class _Explaining:
                f"{closing.drift_bound(a, b, closer.near_share):.1f} m for visits proposed as near; "
                f"{closing.agreeing(min(a, b), max(a, b))} actions around them agree, where "
                f"{closer.context} and one view propose visits as retraced)")
-        return (f"t{a} and t{b} are different dstates only for want of evidence: {why}. Every axiom would accept "
-                f"them as one dstate; loop closing joins only what odometry proposes."), []
+        return (f"t{a} and t{b} are different dstates only for want of evidence: {why}{self._scans(a, b)}. Every "
+                f"axiom would accept them as one dstate; loop closing joins only what odometry proposes."), []
 
     def _failing_rules(self, dstate_of: list[int]) -> list[RuleRef]:
         """The constraints this partition breaks: a subset-minimal set that still rules it out (each switched
