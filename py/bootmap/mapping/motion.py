@@ -307,10 +307,12 @@ class MotionPrimitives:
                                                            few, scaled=not self.exact_.get("turn", True))
         grid, scale = self.grid_deg_, self.turn_scale_
         snapped = [quantise(_as_if(m, k == "turn", scale, grid), grid) for m, (k, _) in zip(means, clusters)]
-        angles = np.array([quantise(_as_if(m, turn, scale, grid), grid)  # the untrusted
-                           for m, turn in zip(measured, is_turn)], dtype=int)
+        angles = np.zeros(len(read), dtype=int)
+        typed = np.zeros(len(read), dtype=bool)
         for (_, idx), angle in zip(clusters, snapped):
-            angles[idx] = angle
+            angles[idx], typed[idx] = angle, True
+        for i in np.flatnonzero(~typed):  # the untrusted: each reading onto the grid angle nearest it
+            angles[i] = quantise(_as_if(float(measured[i]), bool(is_turn[i]), scale, grid), grid)
         self.angles_ = angles.tolist()
         self.types_ = _types(is_turn, read, angles, self.resolution_, self.exact_)
         return self
