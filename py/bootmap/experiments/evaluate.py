@@ -57,7 +57,7 @@ from ..paths import main_axis
 #: Descriptors :func:`nn_on_revisits` compares scans with.
 DESCRIPTORS = ("raw", "shift")
 #: How far odometry may drift per metre driven between two visits of one place: loop closing's bound.
-DRIFT_SHARE = LoopCloser.__dataclass_fields__["drift_share"].default
+DRIFT_SHARE = LoopCloser.drift_share
 #: Beams a shift-tolerant match may turn one scan against another (1 degree a beam: +-10 degrees).
 MAX_SHIFT = 10
 
@@ -268,9 +268,10 @@ def within_reach(odometry, driven, radius_m: float = 3.0, drift_share: float = D
     Parameters
     ----------
     odometry : array-like (n, 2 or 3)
-        Each visit's dead-reckoned pose (the learning's own evidence, never the truth).
+        Each visit's dead-reckoned position (the learning's own evidence, never the truth).
     driven : array-like (n,)
-        The metres the robot had driven by each visit, by its odometry.
+        The metres the robot had driven by each visit, by its odometry (both as loop closing reckons them:
+        :func:`bootmap.mapping.loops.dead_reckoning`).
 
     Examples
     --------

@@ -39,7 +39,7 @@ import numpy as np
 from ..errors import BadInput, LogError, SolveTimeout
 from .world import Laps, curves_figure, jsonable, recognition_section, views_figure
 from ..mapping.api import Mapper
-from ..mapping.loops import MAPPERS
+from ..mapping.loops import MAPPERS, dead_reckoning
 from ..metrics import dstate_accuracy
 from ..views import ViewClusterer, davies_bouldin_k, view_labels, view_table
 from ..ingest.calibrate import calibration_text
@@ -170,8 +170,8 @@ def _experiment(scans, log, lap, seed, k_max, time_limit, quantum_deg, view_crit
         "recognition": recognition, "nn_revisited": nn, "timings": timings}
     visits = tableau.meta["dstates"]["scans"]
     local = local_images(scans, visits, radius_m, max_range=max_range) if scan_match and recognise else None
-    reach = None if local is None else \
-        within_reach([s.odometry for s in tableau.steps], _driven(scans)[visits], radius_m)
+    # The pairs loop closing's own dead reckoning allows to be one place (its drift bound, on its numbers).
+    reach = None if local is None else within_reach(*dead_reckoning(tableau), radius_m)
     results.update(_slam_evaluation(results, images, poses, positions, truth, cmap, dead, radius_m, recognise,
                                     max_range if scan_match else None, local, reach))
     lap("evaluate_s")
@@ -216,12 +216,6 @@ def _slam_evaluation(r: dict, images, poses, positions, truth, cmap, dead, radiu
                 if reach is not None:
                     recognition[LOCAL_MAP_IN_REACH] = place_recognition(scores, poses, radius_m, reach)
     return {"baselines": baselines, "loop_closure": loops, "place_recognition": recognition}
-
-
-def _driven(scans) -> np.ndarray:
-    """The metres the robot had driven by each scan, by its odometry."""
-    xy = np.array([s.odometry[:2] for s in scans], dtype=float).reshape(-1, 2)
-    return np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))]) if len(xy) else np.zeros(0)
 
 
 def _perfect_odometry(scans, log, settings: dict) -> dict:

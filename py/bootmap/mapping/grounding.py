@@ -23,7 +23,7 @@ from .facts import add_facts
 from .mapcheck import SHOW_MAP
 from .theory import Theory
 from .trace import Instrumented, load_instrumented
-from .vocabulary import (AFTER, CLASS_KEY, CLASS_KEY_TERM, DSTATE_BOUND, FEATURE, FUTURE_DEPTH_CONST, CLASSES_GIVEN,
+from .vocabulary import (AFTER, CLASS_KEY, CLASS_KEY_TERM, CLASSES_GIVEN, DSTATE_BOUND, FEATURE, FUTURE_DEPTH_CONST,
                          PREPASS_PART, PREV_IN_CLASS, SEQUENCE, SHOWN_BY_ALL, SLOTS, TELLING, VIEW_FEATURE)
 
 
