@@ -41,7 +41,6 @@ always honoured.
 
 from __future__ import annotations
 
-import hashlib
 from collections import ChainMap
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -54,35 +53,9 @@ from ..tableau import Step, Turn
 from .cogmap import CognitiveMap, Reading
 from .grounding import Classes, PartialFeatures, apart_clique
 from .misreads import MIN_VISITS, SuspectWatch
-from .theory import Theory
+from .theory import STOCK_DIGESTS, Theory, covers, digest  # noqa: F401 (the replay's record, kept beside the files)
 from .vocabulary import (CLASS_KEY_TERM, DSTATE, HEADING_FEATURE, HEADING_OF, NEXT, NIL, VIEW_FEATURE, VIEW_OF,
                          Atoms, action_term)
-
-#: The axiom files the replay's argument is about (path in the axiom directory -> sha256). When one
-#: changes, check the argument above against it, then update its digest (tests/mapping/test_stream.py).
-STOCK_DIGESTS = {
-    "causal.lp": "c53ada773c9738d3654228e1c660ac260badc953658d8500509d83f0c2c4f473",
-    "metrical.lp": "4628513194f19408c98f56c8d15750bd6f1cb69f46904f76d5521ada01d6dbb5",
-    "topological.lp": "729a309a6a1c99d71f9769994c8d83671d5bdf02b740bfac88e3f71b7759cb71",
-    "core/ask.lp": "2e8adf403568adf1bc5e166b19bde32ba2fdaac7f873adef0930bb9071c939ca",
-    "core/partition.lp": "f02aad45d48ee30e03278067ded3427cc71ea3ac02fd7bd4e4d31b13351ca51a",
-    "core/assert.lp": "2c01befdceb28aa69c8a639e07b55dc2b96f6280fd2d7f052fe55fa211a76c17",
-    "core/prepass.lp": "7c0467733eb5c9806a227948479ee56cca2bf41d51a193d0f00b736594110478",
-}
-
-
-def digest(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()
-
-
-def covers(theory: Theory) -> bool:
-    """Every file of the theory is a stock axiom file, unchanged (a subset of the levels will do)."""
-    for f in theory.files:
-        name = f.relative_to(theory.directory).as_posix()
-        if STOCK_DIGESTS.get(name) != digest(f):
-            return False
-    return True
-
 
 def action_key(step: Step, angle: int) -> tuple:
     """The action from a step as causal.lp names it (``turn(A)`` or ``travel``), as a Python value."""

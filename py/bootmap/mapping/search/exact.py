@@ -42,7 +42,8 @@ CLIMB_STEPS, CLIMB_SHARE = 3, (0.6, 60.0)
 #: once allowed five times its grounding's time, 0.3 s there: what a search with the level costs is its
 #: solve, which its grounding does not tell.) A 257-step exploration with spare dstates (size 1,751), 2.5 s
 #: with the level against 0.03 s without, where the level rejects map after map (0.1-0.2 s to learn from
-#: each), is below the size that learns.
+#: each), is below the size that learns. Under the stock topological level, read in Python (:mod:`..topology`:
+#: a rejection and its reasons in about a millisecond), a search learns at any size.
 LEARN_MIN_SIZE, LEARN_SHARE = 5000, 0.5
 
 #: At most so many renamings of one rejected map's reasons are learned.
@@ -345,7 +346,7 @@ class ExactSearch:
         grounded at future depth 0 (what they would tell apart, determinism and the views still do)."""
         state = self.state
         slots, size = self._size(layout)
-        learning = self._learns(size)
+        learning = self._learns(size, defer)
         deferred = state.deferred_levels if defer or learning else ()
         if deferred:
             outcome = self._solve(layout, what, models, optimise, size, deferred, learning and not keep, keep,
@@ -365,10 +366,15 @@ class ExactSearch:
         # (only a search that weighs misreads has may_be facts among its facts: .abduction)
         return slots, grounding_size(slots, state.classes, state.facts if state.suspects else ())
 
-    def _learns(self, size: int | None) -> bool:
-        """Whether a search of this size learns from the maps the monotone levels reject (``LEARN_MIN_SIZE``)."""
+    def _learns(self, size: int | None, defer: bool = True) -> bool:
+        """Whether a search of this size learns from the maps the monotone levels reject: at least
+        ``LEARN_MIN_SIZE``; or, where their verdicts are read in Python (``MapCheck.fast``), any search
+        that would otherwise be made with them (not ``defer``: one with spare dstates). (A search that
+        asks them of each map found without learning costs less where they reject none: a 2,000-step
+        walk of a 4x4 grid, 0.23 s against 0.28 s learning.)"""
         check = self.state.map_check
-        return check is not None and check.monotone and (size or 0) >= LEARN_MIN_SIZE
+        return check is not None and check.monotone and (
+            (size or 0) >= LEARN_MIN_SIZE or (check.fast and not defer))
 
     def _solve(self, layout: list[Symbol], what: str, models: int | None, optimise: bool, size: int | None,
                deferred: tuple[str, ...], learning: bool, keep: bool = False, *, slots: dict[Symbol, int],
@@ -466,7 +472,7 @@ class ExactSearch:
         slots in the layout searched (the renamings then look up only the transitions they need);
         ``assumptions``: each solve's (a :class:`Held` grounding's spares held empty)."""
         check, control, deadline = self.state.map_check, grounding.control, self.budget.deadline
-        learned: list[list[Symbol]] = []
+        learned: list[list[int]] = []  # the nogoods learned, as program literals, to add again in a solve made again
         rejected, spent = 0, 0.0  # maps rejected; seconds checking maps and learning from the rejected ones
         left = self.budget.deadline.remaining()
         allowed = math.inf if left is None else LEARN_SHARE * left
@@ -495,7 +501,10 @@ class ExactSearch:
                 if not reasons:
                     reasonless = True
                     return
-                learned.append(reasons)
+                # (clingo drops atoms its solve proved false from the grounding: a nogood with one holds anyway)
+                atoms = control.symbolic_atoms if context is None else context.symbolic_atoms
+                if all(s in atoms for s in reasons):
+                    learned.append([atoms[s].literal for s in reasons])
                 if context is None:
                     return
                 context.add_nogood([(s, True) for s in reasons])
@@ -503,8 +512,9 @@ class ExactSearch:
                     renamings.append(Renamings(context.symbolic_atoms, slots))
                 for renaming in renamings[0](reasons):
                     if [s for s, _ in renaming] != reasons:
-                        context.add_nogood([lit for _, lit in renaming])
-                        learned.append([s for s, _ in renaming])
+                        literals = [lit for _, lit in renaming]
+                        context.add_nogood(literals)
+                        learned.append(literals)
 
             def on_model(m: clingo.Model) -> bool:
                 nonlocal rejected, spent
@@ -542,10 +552,7 @@ class ExactSearch:
                 return None
             if len(learned) == done:
                 return result, optimal, improving, rejected
-            atoms = control.symbolic_atoms
-            # (clingo drops atoms its solve proved false from the grounding: a nogood with one holds anyway)
-            _rule_out(control, [[atoms[s].literal for s in reasons] for reasons in learned[done:]
-                                if all(s in atoms for s in reasons)])
+            _rule_out(control, learned[done:])
 
 
 class Renamings:

@@ -1,0 +1,252 @@
+"""The stock topological level (``asp/topological.lp``) read in Python: whether it rejects a map, and why.
+
+A search that leaves the topological level out asks it of each map it finds (:mod:`.mapcheck`). Asked by
+clingo, a map costs a grounding of the level on its transitions (about 9 ms for a map of 93 dstates), and
+where the rest of the theory allows a thousand maps of which the level accepts two (a 256-step exploration
+of a 6x5 grid, one dstate over the last map's), the checks cost ten seconds. Read here, the same verdict
+takes a fraction of a millisecond: places are the components of the turns, paths the components of the
+travels and turn-arounds with the direction each dstate faces (a union-find with parity), and the order
+along paths and the sides of paths are sets of places (bit sets) grown to their fixpoint, each rule of the
+file one line below, named as the file names it.
+
+Only the verdict is read here, and only for the file as shipped (:func:`stock`, by its digest): a map the
+level accepts is still shown by clingo (its places, paths, order and sides, as the map reports them), and
+a changed file is asked of clingo alone. That the verdicts agree is tested on random maps
+(``tests/mapping/test_topology.py``).
+
+Example
+-------
+A corridor driven both ways, turning around at its ends: two places, one path, each dstate facing one way.
+A drive that travels on along one path and comes back to where it started without turning puts that place
+ahead of itself (``order_irreflexive``).
+
+>>> from clingo import Function, Number
+>>> d = [Function("d", [Number(i)]) for i in range(4)]
+>>> def nxt(a, action, b): return Function("next", [a, action, b])
+>>> travel, around = Function("travel"), Function("turn", [Number(180)])
+>>> corridor = [nxt(d[0], travel, d[1]), nxt(d[1], around, d[2]), nxt(d[2], travel, d[3]), nxt(d[3], around, d[0])]
+>>> rejected_rule(corridor) is None
+True
+>>> rejected_rule([nxt(d[0], travel, d[1]), nxt(d[1], travel, d[0])])
+'order_irreflexive'
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+from clingo import Symbol, SymbolType
+
+from .theory import STOCK_DIGESTS, Theory, digest
+
+#: The file read here, by its name among the shipped axioms (:data:`.theory.STOCK_DIGESTS`).
+TOPOLOGICAL_LP = "topological.lp"
+
+# A transition as the level reads it: (from, kind, angle, to), the dstates numbered.
+_TURN, _AROUND, _TRAVEL, _BEND, _OTHER = range(5)
+
+
+def stock(theory: Theory, levels: Sequence[str]) -> bool:
+    """Whether ``levels`` of ``theory`` are the stock topological level alone, unchanged: then its verdicts
+    may be read here."""
+    if tuple(levels) != ("topological",):
+        return False
+    path = theory.levels["topological"]
+    return STOCK_DIGESTS.get(TOPOLOGICAL_LP) == digest(path)
+
+
+class Reader:
+    """Reads a model's shown symbols: the map's transitions as the links the level reads, its dstates, and
+    the rest, remembering each symbol (the maps of one search share most of their symbols, and reading a
+    symbol's parts is a call into clingo each)."""
+
+    def __init__(self) -> None:
+        self._read: dict[Symbol, tuple | str] = {}
+
+    def split(self, model: Sequence[Symbol]) -> tuple[list[Symbol], list[Symbol], list[tuple[int, int, int, int]], int]:
+        """The symbols of ``model`` that are not the map's (``own``), those that are (``next/3``,
+        ``dstate/1``), the transitions' links and how many dstates they touch."""
+        ids: dict[Symbol, int] = {}
+        own, inputs, links = [], [], []
+        read = self._read
+        for s in model:
+            kind = read.get(s)
+            if kind is None:
+                name = s.name if s.type == SymbolType.Function else ""
+                kind = read[s] = (_link(s) if name == "next" and s.match("next", 3) else
+                                  _DSTATE if name == "dstate" and s.match("dstate", 1) else _OWN)
+            if kind is _OWN:
+                own.append(s)
+                continue
+            inputs.append(s)
+            if kind is not _DSTATE:
+                a, k, angle, b = kind
+                links.append((ids.setdefault(a, len(ids)), k, angle, ids.setdefault(b, len(ids))))
+        return own, inputs, links, len(ids)
+
+    def links(self, model: Sequence[Symbol]) -> tuple[list[tuple[int, int, int, int]], int]:
+        """The links of the ``next/3`` atoms among ``model``, and how many dstates they touch."""
+        _, _, links, n = self.split(model)
+        return links, n
+
+
+_OWN, _DSTATE = "own", "dstate"
+
+
+def _link(s: Symbol) -> tuple:
+    """A transition ``next(D, A, D2)`` as (D, kind, angle, D2)."""
+    a, action, b = s.arguments
+    name, args = action.name, action.arguments
+    if name == "turn" and len(args) == 1 and args[0].type == SymbolType.Number:
+        angle = args[0].number
+        return (a, _AROUND, 180, b) if angle == 180 else (a, _TURN, angle, b)
+    if name == "travel" and len(args) <= 1:
+        return (a, _TRAVEL, 0, b)
+    if name == "travel" and len(args) == 2 and args[1].type == SymbolType.Number:
+        return (a, _BEND, args[1].number, b)
+    return (a, _OTHER, 0, b)  # an action the level does not read (its dstates are dstates)
+
+
+def read_links(transitions: Sequence[Symbol]) -> tuple[list[tuple[int, int, int, int]], int]:
+    """The transitions (``next(D, A, D2)``) as numbered links, and how many dstates they touch."""
+    return Reader().links(transitions)
+
+
+def rejected_rule(transitions: Sequence[Symbol]) -> str | None:
+    """The first rule of the stock topological level that rejects the map made of ``transitions`` (its
+    dstates are theirs), or None where the level accepts it."""
+    return rejected_links(*read_links(transitions))
+
+
+def rejects(transitions: Sequence[Symbol]) -> bool:
+    """Whether the stock topological level rejects the map made of ``transitions``."""
+    return rejected_rule(transitions) is not None
+
+
+class _Parity:
+    """Union-find whose members carry their parity relative to their root (paths and directions)."""
+
+    def __init__(self, n: int):
+        self.parent, self.parity = list(range(n)), [0] * n
+
+    def find(self, x: int) -> tuple[int, int]:
+        parity = 0
+        path = []
+        while self.parent[x] != x:
+            path.append(x)
+            parity ^= self.parity[x]
+            x = self.parent[x]
+        # compress: each member on the way points at the root with its own parity
+        p = parity
+        for y in path:
+            self.parent[y], self.parity[y], p = x, p, p ^ self.parity[y]
+        return x, parity
+
+    def union(self, a: int, b: int, odd: int) -> bool:
+        """Put a and b on one path, b facing ``odd`` relative to a; False if they already face the other way."""
+        ra, pa = self.find(a)
+        rb, pb = self.find(b)
+        if ra == rb:
+            return pa ^ pb == odd
+        self.parent[rb], self.parity[rb] = ra, pa ^ pb ^ odd
+        return True
+
+
+def rejected_links(links: list[tuple[int, int, int, int]], n: int) -> str | None:
+    """The first rule of the level that rejects the map of ``links`` (:class:`Reader`) over ``n`` dstates,
+    by its label in the file, or None where the level accepts the map."""
+    # same_place: the components of the turns (turn_linked, around included)
+    place = list(range(n))
+
+    def root(x: int) -> int:
+        while place[x] != x:
+            place[x] = place[place[x]]
+            x = place[x]
+        return x
+
+    paths = _Parity(n)
+    travels, arounds, turns, bends = [], [], [], []
+    for a, kind, angle, b in links:
+        if kind == _TURN or kind == _AROUND:
+            ra, rb = root(a), root(b)
+            if ra != rb:
+                place[rb] = ra
+        if kind == _TRAVEL:
+            travels.append((a, b))
+            # same_path along a travel, facing the same way
+            if not paths.union(a, b, 0):
+                return "one_direction"
+        elif kind == _AROUND:
+            arounds.append((a, b))
+            arounds.append((b, a))
+            # a turn-around flips the direction
+            if not paths.union(a, b, 1):
+                return "one_direction"
+        elif kind == _TURN:
+            turns.append((a, angle, b))
+        elif kind == _BEND:
+            bends.append((a, angle, b))
+    # turn_leaves_path: a turn that is not a turn-around (nor by 0) leaves the path
+    for a, angle, b in turns:
+        if angle != 0 and paths.find(a)[0] == paths.find(b)[0]:
+            return "turn_leaves_path"
+    # one_dstate_per_place_and_direction
+    seen: set[tuple[int, int, int]] = set()
+    for d in range(n):
+        key = (root(d), *paths.find(d))
+        if key in seen:
+            return "one_dstate_per_place_and_direction"
+        seen.add(key)
+    # places as bits: bit[d] is d's place
+    bit = [1 << root(d) for d in range(n)]
+    ahead, behind = [0] * n, [0] * n
+    changed = True
+    while changed:  # order_by_travel, order_transitive, order_turn_around
+        changed = False
+        for a, b in travels:
+            x = ahead[a] | bit[b] | ahead[b]
+            if x != ahead[a]:
+                ahead[a], changed = x, True
+            y = behind[b] | bit[a] | behind[a]
+            if y != behind[b]:
+                behind[b], changed = y, True
+        for a, b in arounds:
+            x, y = ahead[b] | behind[a], behind[b] | ahead[a]
+            if x != ahead[b] or y != behind[b]:
+                ahead[b], behind[b], changed = x, y, True
+    for d in range(n):
+        if (ahead[d] | behind[d]) & bit[d]:
+            return "order_irreflexive"
+        if ahead[d] & behind[d]:
+            return "order_asymmetric"
+    right, left = [0] * n, [0] * n
+    for a, angle, b in turns:  # right_by_turn, left_by_turn
+        if angle < 0:
+            right[a] |= ahead[b]
+        elif angle > 0:
+            left[a] |= ahead[b]
+    for a, angle, b in bends:  # sides_by_bend
+        if angle < 0:
+            right[a] |= bit[b]
+        elif angle > 0 and angle != 180:
+            left[a] |= bit[b]
+    changed = True
+    while changed:  # sides_along_path, sides_turn_around
+        changed = False
+        for a, b in travels:
+            r, l_ = right[a] | right[b], left[a] | left[b]
+            if r != right[a] or r != right[b] or l_ != left[a] or l_ != left[b]:
+                right[a] = right[b] = r
+                left[a] = left[b] = l_
+                changed = True
+        for a, b in arounds:
+            x, y = left[b] | right[a], right[b] | left[a]
+            if x != left[b] or y != right[b]:
+                left[b], right[b], changed = x, y, True
+    for d in range(n):
+        on_path = bit[d] | ahead[d] | behind[d]
+        if (right[d] | left[d]) & on_path:
+            return "on_path_no_side"
+        if right[d] & left[d]:
+            return "one_side"
+    return None
