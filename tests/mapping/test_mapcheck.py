@@ -330,11 +330,35 @@ def test_a_bound_searched_with_its_spares_held_empty_gives_the_maps_of_a_search_
         assert said(deferred) == said(searched)
 
 
+@contextmanager
+def asked_of_clingo():
+    """The topological level's verdicts asked of clingo, as for a level a user changed (not read in Python)."""
+    from bootmap.mapping import mapcheck
+
+    real = mapcheck.MapCheck.__init__
+
+    def init(self, *args, **kwargs):
+        real(self, *args, **kwargs)
+        self.fast = False
+
+    with mock.patch.object(mapcheck.MapCheck, "__init__", init):
+        yield
+
+
 def test_where_learning_would_take_longer_than_grounding_the_level_the_search_grounds_it():
-    with learning(share=0.0):  # no time to learn: the first map rejected ends it
+    with learning(share=0.0), asked_of_clingo():  # no time to learn: the first map rejected ends it
         deferred, searched = both(grid(1))
     assert said(deferred) == said(searched)
     assert "unsettled" in results(deferred)
+
+
+def test_read_in_python_the_level_is_learned_from_to_the_end():
+    # Its verdicts cost a millisecond: learning is never given up for a grounding of the level (which the
+    # budget, having seen only searches without it, cannot foresee).
+    with learning(share=0.0):
+        deferred, searched = both(grid(1))
+    assert said(deferred) == said(searched)
+    assert "unsettled" not in results(deferred) and any(t.rejected for t in deferred.stats.bounds)
 
 
 @settings(max_examples=10, deadline=None)
