@@ -18,7 +18,7 @@ from bootmap.mapping.mapcheck import MapCheck
 from bootmap.mapping.resolver import Resolver
 from bootmap.mapping.stream import MapStream
 from bootmap.mapping.theory import load_theory
-from bootmap.mapping.topology import rejected_rule, rejects
+from bootmap.mapping.topology import read_links, rejected_links, rejected_rule, rejects
 from support.gridworld import random_world, walk
 
 ACTIONS = [Function("travel"), Function("turn", [Number(180)]), Function("turn", [Number(90)]),
@@ -59,6 +59,9 @@ def test_the_python_reading_rejects_exactly_the_maps_clingo_rejects(by_clingo, l
     # more maps, where every action mixed is mostly rejected)
     transitions = list(dict.fromkeys(nxt(dstate(a % 3, a), ACTIONS[k % n], dstate(b % 3, b)) for a, b, k, n in links))
     assert rejects(transitions) == clingo_rejects(by_clingo, transitions)
+    # read as a few links of a larger map (the reasons' search numbers their dstates afresh): the same rule
+    numbered, n = read_links(transitions)
+    assert rejected_links(numbered, n + 100) == rejected_rule(transitions)
 
 
 def walk_transitions(seed: int, steps: int = 120):

@@ -49,7 +49,7 @@ from clingo import Symbol
 
 from .facts import add_facts
 from .theory import MAP_INPUTS, Theory
-from .topology import Reader, read_links, rejected_links, stock
+from .topology import Reader, near_first, rejected_links, stock, violation
 from .vocabulary import NEXT
 
 #: What a search without the map's levels shows beside its own atoms: the map the levels judge.
@@ -139,7 +139,7 @@ class MapCheck:
         option's transitions are external atoms, assumed true for it and false for the others."""
         if self.fast:
             base = [s for s in inputs if NEXT.matches(s)]
-            verdicts = [rejected_links(*read_links(base + list(option))) for option in options]
+            verdicts = [rejected_links(*self._reader.links(base + list(option))) for option in options]
             if all(verdicts):
                 return [None] * len(options)
         extra = list(dict.fromkeys(s for option in options for s in option))
@@ -166,11 +166,7 @@ class MapCheck:
         its transitions alone (as they do any map they reject only for a dstate no transition reaches)."""
         transitions = [s for s in model if NEXT.matches(s)]
         if self.fast:
-            links, n = read_links(transitions)
-            if not rejected_links(links, n):
-                return []
-            order = _connected_order(transitions, list(range(len(transitions))))
-            return [transitions[i] for i in _fewest(order, lambda chosen: bool(rejected_links([links[i] for i in chosen], n)))]
+            return [transitions[i] for i in _fast_reasons(*self._reader.links(transitions))]
         control, literal = self._asking((), transitions)
 
         def rejected(chosen: Sequence[int]) -> bool:
@@ -188,6 +184,32 @@ class MapCheck:
         candidates = sorted({index[lit] for lit in core if lit in index}) or list(range(len(transitions)))
         candidates = _connected_order(transitions, candidates)
         return [transitions[i] for i in _fewest(candidates, rejected)]
+
+
+def _fast_reasons(links: list[tuple[int, int, int, int]], n: int) -> list[int]:
+    """The reasons (indices of ``links``) the stock topological level rejects the map for, read in Python
+    (:mod:`.topology`): the links in breadth-first order from where the level finds its first violation, the
+    shortest beginning of that order it rejects (a binary search: the reasons lie around the violation), and
+    QuickXplain over that beginning; none where the level accepts the map."""
+    found = violation(links, n)
+    if found is None:
+        return []
+    order = near_first(links, n, found[1])
+
+    def rejected(chosen: Sequence[int]) -> bool:
+        return violation([links[i] for i in chosen], n) is not None
+
+    # (galloping: the beginnings tried grow from the violation outwards, each check on a few links)
+    lo, hi = 1, 1
+    while hi < len(order) and not rejected(order[:hi]):
+        lo, hi = hi + 1, min(2 * hi, len(order))
+    while lo < hi:  # the shortest rejected beginning is order[:hi]
+        mid = (lo + hi) // 2
+        if rejected(order[:mid]):
+            hi = mid
+        else:
+            lo = mid + 1
+    return _fewest(order[:hi], rejected)
 
 
 def _fewest(candidates: list[int], rejected) -> list[int]:

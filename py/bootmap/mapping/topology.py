@@ -155,6 +155,48 @@ class _Parity:
 def rejected_links(links: list[tuple[int, int, int, int]], n: int) -> str | None:
     """The first rule of the level that rejects the map of ``links`` (:class:`Reader`) over ``n`` dstates,
     by its label in the file, or None where the level accepts the map."""
+    found = violation(links, n)
+    return None if found is None else found[0]
+
+
+def near_first(links: list[tuple[int, int, int, int]], n: int, start: int) -> list[int]:
+    """The links (their indices) in breadth-first order over the map from dstate ``start``: the links of
+    ``start`` first, then those of the dstates they reach, and so on (links no path reaches last)."""
+    touching: list[list[int]] = [[] for _ in range(n)]
+    for i, (a, _, _, b) in enumerate(links):
+        touching[a].append(i)
+        if b != a:
+            touching[b].append(i)
+    order, placed, seen = [], [False] * len(links), [False] * n
+    queue, seen[start] = [start], True
+    for d in queue:
+        for i in touching[d]:
+            if not placed[i]:
+                placed[i] = True
+                order.append(i)
+                a, _, _, b = links[i]
+                for e in (a, b):
+                    if not seen[e]:
+                        seen[e] = True
+                        queue.append(e)
+    return order + [i for i in range(len(links)) if not placed[i]]
+
+
+def violation(links: list[tuple[int, int, int, int]], n: int) -> tuple[str, int] | None:
+    """The first rule of the level that rejects the map of ``links`` over ``n`` dstates, and a dstate where
+    it does (its reasons lie around it), or None where the level accepts the map."""
+    if 2 * len(links) < n:  # a few links of a large map (the reasons' search): their own dstates only
+        ids: dict[int, int] = {}
+        own = [(ids.setdefault(a, len(ids)), k, angle, ids.setdefault(b, len(ids))) for a, k, angle, b in links]
+        found = _violation(own, len(ids))
+        if found is None:
+            return None
+        back = {i: d for d, i in ids.items()}
+        return found[0], back[found[1]]
+    return _violation(links, n)
+
+
+def _violation(links: list[tuple[int, int, int, int]], n: int) -> tuple[str, int] | None:
     # same_place: the components of the turns (turn_linked, around included)
     place = list(range(n))
 
@@ -175,13 +217,13 @@ def rejected_links(links: list[tuple[int, int, int, int]], n: int) -> str | None
             travels.append((a, b))
             # same_path along a travel, facing the same way
             if not paths.union(a, b, 0):
-                return "one_direction"
+                return "one_direction", a
         elif kind == _AROUND:
             arounds.append((a, b))
             arounds.append((b, a))
             # a turn-around flips the direction
             if not paths.union(a, b, 1):
-                return "one_direction"
+                return "one_direction", a
         elif kind == _TURN:
             turns.append((a, angle, b))
         elif kind == _BEND:
@@ -189,13 +231,13 @@ def rejected_links(links: list[tuple[int, int, int, int]], n: int) -> str | None
     # turn_leaves_path: a turn that is not a turn-around (nor by 0) leaves the path
     for a, angle, b in turns:
         if angle != 0 and paths.find(a)[0] == paths.find(b)[0]:
-            return "turn_leaves_path"
+            return "turn_leaves_path", a
     # one_dstate_per_place_and_direction
     seen: set[tuple[int, int, int]] = set()
     for d in range(n):
         key = (root(d), *paths.find(d))
         if key in seen:
-            return "one_dstate_per_place_and_direction"
+            return "one_dstate_per_place_and_direction", d
         seen.add(key)
     # places as bits: bit[d] is d's place
     bit = [1 << root(d) for d in range(n)]
@@ -216,9 +258,9 @@ def rejected_links(links: list[tuple[int, int, int, int]], n: int) -> str | None
                 ahead[b], behind[b], changed = x, y, True
     for d in range(n):
         if (ahead[d] | behind[d]) & bit[d]:
-            return "order_irreflexive"
+            return "order_irreflexive", d
         if ahead[d] & behind[d]:
-            return "order_asymmetric"
+            return "order_asymmetric", d
     right, left = [0] * n, [0] * n
     for a, angle, b in turns:  # right_by_turn, left_by_turn
         if angle < 0:
@@ -246,7 +288,7 @@ def rejected_links(links: list[tuple[int, int, int, int]], n: int) -> str | None
     for d in range(n):
         on_path = bit[d] | ahead[d] | behind[d]
         if (right[d] | left[d]) & on_path:
-            return "on_path_no_side"
+            return "on_path_no_side", d
         if right[d] & left[d]:
-            return "one_side"
+            return "one_side", d
     return None

@@ -46,8 +46,11 @@ CLIMB_STEPS, CLIMB_SHARE = 3, (0.6, 60.0)
 #: a rejection and its reasons in about a millisecond), a search learns at any size.
 LEARN_MIN_SIZE, LEARN_SHARE = 5000, 0.5
 
-#: At most so many renamings of one rejected map's reasons are learned.
-MAX_RENAMINGS = 5000
+#: At most so many renamings of one rejected map's reasons are learned; where the levels' verdicts and
+#: reasons are read in Python (``MapCheck.fast``), a rejected map met again costs a millisecond, and at most
+#: ``MAX_RENAMINGS_FAST`` (the stream's slowest steps, 5x5 and 6x6 worlds: 0.8 and 2.1 s with 5,000, 0.6
+#: and 1.2 s with 1,000 or 200).
+MAX_RENAMINGS, MAX_RENAMINGS_FAST = 5000, 1000
 
 #: So many maps a search that seeks no optimum rejects are set aside before it learns from them (its
 #: enumeration never finds a map twice; where few are rejected, the reasons cost more than they save).
@@ -353,6 +356,15 @@ class ExactSearch:
                                   slots=slots, futures=futures)
             if outcome is not None:
                 return outcome
+            check = state.map_check
+            if not learning and not keep and check is not None and check.fast and check.monotone:
+                # Read in Python, the levels are learned from rather than grounded (a 142-step exploration
+                # of a 6x6 grid: the next search, with them grounded, 1.55 s)
+                outcome = self._solve(layout, f"{what}, learning from the maps the {' and '.join(deferred)} "
+                                      "level rejects", models, optimise, size, deferred, True, keep,
+                                      slots=slots, futures=futures)
+                if outcome is not None:
+                    return outcome
             what = f"{what}, with the {' and '.join(deferred)} level in the search"
         return self._solve(layout, what, models, optimise, size, (), False, keep, slots=slots, futures=futures)
 
@@ -438,7 +450,8 @@ class ExactSearch:
             optimal = accepted if accepted is not None else optimal
         if unsettled:
             state.tries.append(Try(what, "unsettled", seconds))
-            state.deferred_levels = ()  # it will again: the rest of this resolution searches with them
+            if not (state.map_check is not None and state.map_check.fast):
+                state.deferred_levels = ()  # it will again: the rest of this resolution searches with them
             return None
         verdict = "timeout" if result is None else ("sat" if result.satisfiable and optimal else "unsat")
         state.tries.append(Try(what, verdict, seconds, rejected))
@@ -485,10 +498,14 @@ class ExactSearch:
             # here too, renamed into this layout's slots, and are ruled out before the solve starts (it would
             # find them first, learn the same, and restart).
             t0 = time.perf_counter()
-            index = Renamings(control.symbolic_atoms, slots)
+            most = MAX_RENAMINGS_FAST if check.fast else MAX_RENAMINGS
+            index = Renamings(control.symbolic_atoms, slots, most)
+            atoms = control.symbolic_atoms
             for reasons in filter(None, map(check.reasons, self.state.set_aside)):
-                # (the reasons themselves among their renamings)
-                _rule_out(control, [[lit for _, lit in renaming] for renaming in index(reasons)])
+                # the reasons themselves (where this layout has them: a renaming found within the cap may
+                # not be), and their renamings
+                own = [[atoms[s].literal for s in reasons]] if all(s in atoms for s in reasons) else []
+                _rule_out(control, own + [[lit for _, lit in renaming] for renaming in index(reasons)])
             self.state.set_aside = []
             spent += time.perf_counter() - t0
         while True:
@@ -512,7 +529,8 @@ class ExactSearch:
                     return
                 context.add_nogood([(s, True) for s in reasons])
                 if not renamings:
-                    renamings.append(Renamings(context.symbolic_atoms, slots))
+                    renamings.append(Renamings(context.symbolic_atoms, slots,
+                                               MAX_RENAMINGS_FAST if check.fast else MAX_RENAMINGS))
                 for renaming in renamings[0](reasons):
                     if [s for s, _ in renaming] != reasons:
                         literals = [lit for _, lit in renaming]
@@ -565,8 +583,9 @@ class Renamings:
     stock topological level's verdicts are tested so), so where they reject some transitions they reject
     every renaming of them that keeps each dstate in its class and tells different dstates apart."""
 
-    def __init__(self, atoms: clingo.SymbolicAtoms, slots: dict[Symbol, int]):
+    def __init__(self, atoms: clingo.SymbolicAtoms, slots: dict[Symbol, int], most: int = MAX_RENAMINGS):
         self.symbolic, self.slots = atoms, slots  # the grounding's atoms; each class's slots in its layout
+        self.most = most  # renamings of one set of reasons, at most
         self.atoms: dict[tuple, dict[tuple[int, int], tuple[Symbol, int]]] = {}  # by (class, action, class)
 
     def _table(self, key: tuple) -> dict[tuple[int, int], tuple[Symbol, int]]:
@@ -587,7 +606,7 @@ class Renamings:
 
     def __call__(self, reasons: list[Symbol]) -> list[list[tuple[Symbol, int]]]:
         """Every renaming of ``reasons`` whose transitions the grounding has, each transition with its
-        program literal (at most MAX_RENAMINGS); none where a dstate is not a slot of the layout."""
+        program literal (at most ``most``); none where a dstate is not a slot of the layout."""
         edges = [(s.arguments[0], s.arguments[1], s.arguments[2]) for s in reasons]
         if not all(CANDIDATE_DSTATE.matches(d) for a, _, b in edges for d in (a, b)):
             return []
@@ -601,7 +620,7 @@ class Renamings:
         found: list[list[tuple[Symbol, int]]] = []
 
         def extend(i: int, slot: dict[int, int], taken: set[tuple[int, int]], chosen: list) -> None:
-            if len(found) >= MAX_RENAMINGS:
+            if len(found) >= self.most:
                 return
             if i == len(edges):
                 found.append(list(chosen))
