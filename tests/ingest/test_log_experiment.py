@@ -246,3 +246,20 @@ def test_a_log_ingested_as_recorded_keeps_its_odometry(tmp_path, capsys):
     # the drive's odometry is exact: the laser finds no drift worth taking out
     assert calibrated["odometry"]["calibration"]["applied"] is False
     assert "calibrated by the laser" not in capsys.readouterr().err
+
+
+def test_place_recognition_is_judged_by_a_method_fixed_beforehand_not_by_the_best_descriptor():
+    from bootmap.experiments.log import RECOGNITION_PREFERENCE, best_place_recognition, place_recognition_method
+
+    def figures(recall):
+        return {"recall_at_95_precision": recall}
+
+    measured = {"place_recognition": {d: figures(1.0) for d in DESCRIPTORS}}
+    measured["place_recognition"][LOCAL_MAP_IN_REACH] = figures(0.2)
+    # The local maps within loop closing's reach are judged, though a scan descriptor did better here
+    assert place_recognition_method(measured) == (LOCAL_MAP_IN_REACH, figures(0.2))
+    assert best_place_recognition(measured)[1] == figures(1.0)
+    # Without scan matching, the first scan descriptor in the fixed order
+    scans_only = {"place_recognition": {d: figures(0.1 * i) for i, d in enumerate(DESCRIPTORS)}}
+    first = next(d for d in RECOGNITION_PREFERENCE if d in DESCRIPTORS)
+    assert place_recognition_method(scans_only)[0] == first
