@@ -189,7 +189,7 @@ class MapCheck:
 def _fast_reasons(links: list[tuple[int, int, int, int]], n: int) -> list[int]:
     """The reasons (indices of ``links``) the stock topological level rejects the map for, read in Python
     (:mod:`.topology`): the links in breadth-first order from where the level finds its first violation, the
-    shortest beginning of that order it rejects (a binary search: the reasons lie around the violation), and
+    shortest beginning of that order it rejects (a galloping search: the reasons lie around the violation), and
     QuickXplain over that beginning; none where the level accepts the map."""
     found = violation(links, n)
     if found is None:
