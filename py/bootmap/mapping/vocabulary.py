@@ -97,13 +97,19 @@ class Term(Functor):
 
 class Atoms:
     """A model's atoms grouped by predicate in one pass (reading a symbol's name and arguments is a call
-    into clingo each): ``atoms[IS]`` lists the arguments of every ``is/2`` atom."""
+    into clingo each): ``atoms[IS]`` lists the arguments of every ``is/2`` atom. The models of one search
+    share most of their atoms: a ``read`` dict given to each remembers every symbol read (a stream's
+    resolve with eleven minimal maps read them in 0.27 s, one at a time)."""
 
-    def __init__(self, symbols: Iterable[Symbol]):
+    def __init__(self, symbols: Iterable[Symbol], read: dict[Symbol, tuple] | None = None):
         self._args: dict[tuple[str, int], list[Sequence[Symbol]]] = {}
+        read = {} if read is None else read
         for s in symbols:
-            args = s.arguments
-            self._args.setdefault((s.name, len(args)), []).append(args)
+            known = read.get(s)
+            if known is None:
+                args = s.arguments
+                known = read[s] = ((s.name, len(args)), args)
+            self._args.setdefault(known[0], []).append(known[1])
 
     def __getitem__(self, p: Predicate) -> list[Sequence[Symbol]]:
         return self._args.get(p.signature, [])
