@@ -523,8 +523,9 @@ class ExactSearch:
                     return
                 # (clingo drops atoms its solve proved false from the grounding: a nogood with one holds anyway)
                 atoms = control.symbolic_atoms if context is None else context.symbolic_atoms
-                if all(s in atoms for s in reasons):
-                    learned.append([atoms[s].literal for s in reasons])
+                own = [atoms[s].literal for s in reasons] if all(s in atoms for s in reasons) else None
+                if own is not None:
+                    learned.append(own)
                 if context is None:
                     return
                 context.add_nogood([(s, True) for s in reasons])
@@ -532,8 +533,8 @@ class ExactSearch:
                     renamings.append(Renamings(context.symbolic_atoms, slots,
                                                MAX_RENAMINGS_FAST if check.fast else MAX_RENAMINGS))
                 for renaming in renamings[0](reasons):
-                    if [s for s, _ in renaming] != reasons:
-                        literals = [lit for _, lit in renaming]
+                    literals = [lit for _, lit in renaming]
+                    if literals != own:  # (compared as program literals: a symbol's comparison calls clingo)
                         context.add_nogood(literals)
                         learned.append(literals)
 
