@@ -55,17 +55,9 @@ from .vocabulary import NEXT
 #: What a search without the map's levels shows beside its own atoms: the map the levels judge.
 SHOW_MAP = "".join(f"#show {name}/{arity}. " for name, arity in sorted(MAP_INPUTS))
 
-_INPUT_NAMES = frozenset(name for name, _ in MAP_INPUTS)
-
 #: The check shows only what the levels ``#show`` (as beside the other files, which show atoms), not every
 #: atom, as a program without any ``#show`` would.
 SHOW_ONLY_SHOWN = "#show."
-
-
-def is_map_input(symbol: Symbol) -> bool:
-    """Whether a shown symbol is one of the map's transitions or dstates (shown only for the check)."""
-    return any(symbol.match(name, arity) for name, arity in MAP_INPUTS)
-
 
 #: How the search's reason for a rejection is asked: each transition of the map is an external atom the
 #: levels read, true only where assumed, and its dstates are dstates, so that a solve under some of them
@@ -117,14 +109,9 @@ class MapCheck:
         return control, literal
 
     def __call__(self, model: Sequence[Symbol]) -> list[Symbol] | None:
-        if self.fast:
-            own, inputs, links, n = self._reader.split(model)
-            if rejected_links(links, n):
-                return None
-        else:
-            own, inputs = [], []
-            for s in model:  # one call into clingo per symbol: a model lists every time point's dstate
-                (inputs if s.name in _INPUT_NAMES and is_map_input(s) else own).append(s)
+        own, inputs, links, n = self._reader.split(model)
+        if self.fast and rejected_links(links, n):
+            return None
         control = self._grounded(inputs)
         shown: list[list[Symbol]] = []
         result = control.solve(on_model=lambda m: shown.append(m.symbols(shown=True)))
@@ -182,7 +169,9 @@ class MapCheck:
         if control.solve(assumptions=literal, on_core=core.extend).satisfiable:
             return []
         candidates = sorted({index[lit] for lit in core if lit in index}) or list(range(len(transitions)))
-        candidates = _connected_order(transitions, candidates)
+        # (in breadth-first order over the map they draw: see near_first)
+        links, n = self._reader.links([transitions[i] for i in candidates])
+        candidates = [candidates[k] for k in near_first(links, n, links[0][0])]
         return [transitions[i] for i in _fewest(candidates, rejected)]
 
 
@@ -227,34 +216,3 @@ def _fewest(candidates: list[int], rejected) -> list[int]:
         return need_first + need_second
 
     return explain([], False, candidates) if candidates else []
-
-
-def _connected_order(transitions: Sequence[Symbol], candidates: list[int]) -> list[int]:
-    """The candidates (indices of ``transitions``) in breadth-first order over the map they draw, each
-    transition after those of the dstates reached before it: the few a level rejects together lie close in
-    the map (a place, a path), and QuickXplain finds a set that lies together in its order in fewer solves."""
-    ends = {i: (transitions[i].arguments[0], transitions[i].arguments[2]) for i in candidates}
-    touching: dict[Symbol, list[int]] = {}
-    for i, (a, b) in ends.items():
-        touching.setdefault(a, []).append(i)
-        if b != a:
-            touching.setdefault(b, []).append(i)
-    order: list[int] = []
-    placed: set[int] = set()
-    seen: set[Symbol] = set()
-    for start in candidates:
-        if start in placed:
-            continue
-        queue = [ends[start][0]]
-        seen.add(queue[0])
-        while queue:
-            d = queue.pop(0)
-            for i in touching[d]:
-                if i not in placed:
-                    placed.add(i)
-                    order.append(i)
-                for e in ends[i]:
-                    if e not in seen:
-                        seen.add(e)
-                        queue.append(e)
-    return order

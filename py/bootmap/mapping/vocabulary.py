@@ -103,12 +103,13 @@ class Atoms:
 
     def __init__(self, symbols: Iterable[Symbol], read: dict[Symbol, tuple] | None = None):
         self._args: dict[tuple[str, int], list[Sequence[Symbol]]] = {}
-        read = {} if read is None else read
         for s in symbols:
-            known = read.get(s)
+            known = None if read is None else read.get(s)
             if known is None:
                 args = s.arguments
-                known = read[s] = ((s.name, len(args)), args)
+                known = ((s.name, len(args)), args)
+                if read is not None:
+                    read[s] = known
             self._args.setdefault(known[0], []).append(known[1])
 
     def __getitem__(self, p: Predicate) -> list[Sequence[Symbol]]:

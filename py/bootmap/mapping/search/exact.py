@@ -492,20 +492,20 @@ class ExactSearch:
         # a search with them grounded, whose grounding the budget cannot foresee from the searches before it,
         # all made without them: 29 s for a 600-step search with misreads whose learning had taken 2 s)
         allowed = math.inf if left is None or check.fast else LEARN_SHARE * left
+        most = MAX_RENAMINGS_FAST if check.fast else MAX_RENAMINGS  # renamings of one map's reasons
         renamings: list[Renamings] = []  # indexed at the first map rejected (most searches reject none)
         if self.state.set_aside:
             # A search before this one (a bound below) set aside maps the levels reject: their reasons hold
             # here too, renamed into this layout's slots, and are ruled out before the solve starts (it would
             # find them first, learn the same, and restart).
             t0 = time.perf_counter()
-            most = MAX_RENAMINGS_FAST if check.fast else MAX_RENAMINGS
             index = Renamings(control.symbolic_atoms, slots, most)
-            atoms = control.symbolic_atoms
             for reasons in filter(None, map(check.reasons, self.state.set_aside)):
                 # the reasons themselves (where this layout has them: a renaming found within the cap may
                 # not be), and their renamings
-                own = [[atoms[s].literal for s in reasons]] if all(s in atoms for s in reasons) else []
-                _rule_out(control, own + [[lit for _, lit in renaming] for renaming in index(reasons)])
+                own = _literals(control.symbolic_atoms, reasons)
+                renamed = [[lit for _, lit in renaming] for renaming in index(reasons)]
+                _rule_out(control, ([own] if own else []) + renamed)
             self.state.set_aside = []
             spent += time.perf_counter() - t0
         while True:
@@ -521,17 +521,14 @@ class ExactSearch:
                 if not reasons:
                     reasonless = True
                     return
-                # (clingo drops atoms its solve proved false from the grounding: a nogood with one holds anyway)
-                atoms = control.symbolic_atoms if context is None else context.symbolic_atoms
-                own = [atoms[s].literal for s in reasons] if all(s in atoms for s in reasons) else None
+                own = _literals(control.symbolic_atoms if context is None else context.symbolic_atoms, reasons)
                 if own is not None:
                     learned.append(own)
                 if context is None:
                     return
                 context.add_nogood([(s, True) for s in reasons])
                 if not renamings:
-                    renamings.append(Renamings(context.symbolic_atoms, slots,
-                                               MAX_RENAMINGS_FAST if check.fast else MAX_RENAMINGS))
+                    renamings.append(Renamings(context.symbolic_atoms, slots, most))
                 for renaming in renamings[0](reasons):
                     literals = [lit for _, lit in renaming]
                     if literals != own:  # (compared as program literals: a symbol's comparison calls clingo)
@@ -643,6 +640,12 @@ class Renamings:
 
         extend(0, {}, set(), [])
         return found
+
+
+def _literals(atoms: clingo.SymbolicAtoms, symbols: list[Symbol]) -> list[int] | None:
+    """The program literals of ``symbols``, or None where the grounding lacks one (clingo drops atoms its
+    solve proved false from the grounding: a nogood with one holds anyway)."""
+    return [atoms[s].literal for s in symbols] if all(s in atoms for s in symbols) else None
 
 
 def _rule_out(control: clingo.Control, nogoods: list[list[int]]) -> None:
