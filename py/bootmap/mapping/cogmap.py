@@ -297,7 +297,7 @@ def build_map(tableau: Tableau, models: list[list[Symbol]], exhausted: bool, lev
     ``misread_costs``: what taking each suspect view as a misread cost; ``retyped_steps``: the actions
     taken as mistyped; ``length_types``: the travels' length types, when already learned
     (:func:`~bootmap.mapping.facts.length_types_of`)."""
-    read: dict[Symbol, tuple] = {}  # (the models share most of their atoms: each read once)
+    read: dict[Symbol, tuple] | None = {} if len(models) > 1 else None  # (models share most atoms: read once)
     readings = [Reading.of_model(Atoms(m, read), len(tableau)) for m in models]
     readings = [readings[k] for k in _canonical(models, readings)]
     return map_of(tableau, readings, exhausted, levels, stats, minimal, action_types, misread_costs, retyped_steps,
