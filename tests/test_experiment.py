@@ -262,6 +262,11 @@ def test_the_learner_named_is_the_one_drawn_beside_nearest_neighbour(capsys, tmp
                  "-o", str(tmp_path)]) in (0, 1)
     r = json.loads((tmp_path / "results.json").read_text())
     assert r["recognition"]["learner"] == "3-NN" and r["recognition"]["learner_cv_mean"]
+    # The learner's curve is measured at the sizes of its own list among nearest neighbour's, on the same folds.
+    from bootmap.experiments.world import LEARNER_CURVE_SIZES
+    rec = r["recognition"]
+    assert rec["learner_cv_sizes"] == [n for n in rec["cv_sizes"] if n in LEARNER_CURVE_SIZES]
+    assert len(rec["learner_cv_mean"]) == len(rec["learner_cv_sizes"]) < len(rec["cv_sizes"])
     # On a robot's log the learners are not what is measured: said, not ignored.
     assert main(["experiment", "--log", "killian", "--learner", "3-NN"]) == 2
     assert "--learner: for an experiment on a world" in capsys.readouterr().err

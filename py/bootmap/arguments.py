@@ -10,8 +10,9 @@ DSTATE_CHOICES = ("turns", "places")
 
 #: The learners an experiment can draw beside nearest neighbour (``--learner``): the names of
 #: :func:`bootmap.recognise.default_learners`, listed here so that the command line starts without scikit-learn.
-LEARNERS = ("1-NN", "3-NN", "logistic", "linear SVM", "RBF SVM", "MLP (32)", "despiked LDA", "aligned LDA")
-DEFAULT_LEARNER = "aligned LDA"
+LEARNERS = ("1-NN", "3-NN", "logistic", "linear SVM", "RBF SVM", "MLP (32)", "despiked LDA", "aligned LDA",
+            "aligned mean", "aligned by folds")
+DEFAULT_LEARNER = "aligned by folds"
 
 
 def learner(text: str) -> str:

@@ -54,6 +54,8 @@ from .views import label_means
 
 __all__ = [
     "AlignedDiscriminant",
+    "AlignedNearestMean",
+    "ChosenByFolds",
     "DespikedDiscriminant",
     "LearningCurve",
     "NoImages",
@@ -402,6 +404,9 @@ def default_learners(random_state: int = 0) -> dict[str, object]:
             {"mlpclassifier__alpha": [1e-3, 1e-2, 1e-1]}, cv=inner),
         "despiked LDA": DespikedDiscriminant(random_state=random_state),
         "aligned LDA": AlignedDiscriminant(random_state=random_state),
+        "aligned mean": AlignedNearestMean(),
+        "aligned by folds": ChosenByFolds([AlignedDiscriminant(random_state=random_state), AlignedNearestMean()],
+                                          random_state=random_state),
     }
 
 
@@ -745,6 +750,15 @@ class AlignedDiscriminant(ClassifierMixin, BaseEstimator):
         self.n_features_in_ = X.shape[1]
         return self
 
+    @property
+    def chosen_params_(self) -> dict:
+        """The settings this fit chose by its inner search (the number of components), as parameters: a
+        learner choosing between this and others in folds of the same images keeps them
+        (:class:`ChosenByFolds`)."""
+        check_is_fitted(self, "as_read_")
+        n = self.as_read_.n_components_
+        return {} if n is None else {"dimensions": (n,)}
+
     def predict(self, images) -> np.ndarray:
         """The dstate of each image."""
         check_is_fitted(self, "references_")
@@ -768,6 +782,173 @@ class AlignedDiscriminant(ClassifierMixin, BaseEstimator):
             aligned[mine], _, residual[mine] = own_without[1].align(X[rows[mine]], rows[mine])
         best = np.argmin(residual.reshape(nearest.shape), axis=1)
         return aligned.reshape(len(X), nearest.shape[1], -1)[np.arange(len(X)), best]
+
+
+class AlignedNearestMean(ClassifierMixin, BaseEstimator):
+    """Recognise dstates by the mean image an image fits best once the stop's motion is taken out.
+
+    Each dstate's mean of its despiked training images, refined once as :class:`AlignedDiscriminant`
+    refines it (the images aligned to their own mean, the mean taken again); a new image is aligned to
+    the dstate means nearest to it (:meth:`bootmap.alignment.Reference.align`) and goes to the one it fits
+    with the smallest residual, over the mean's usable beams.
+
+    Every beam counts as it is: no principal components are chosen, so a difference of a few beams (the
+    paper's notch) is never projected away, and the residual of a new image against its own dstate's
+    mean is the sensor's noise alone once aligned. That is the right measure where a dstate's stops lie
+    within the alignment's reach of each other (a corner, walls all round); where they scatter along a
+    corridor further than a stop's prior allows, what varies within a dstate outweighs what tells them
+    apart, and the discriminant, which learns those directions, is better (:class:`ChosenByFolds` picks
+    between them by measurement).
+
+    Parameters
+    ----------
+    width : int
+        Beams in the despiking median (1: none).
+    candidates : int
+        The dstate means, nearest to the image as read first, it is aligned to (the others differ by
+        more than a stop's motion).
+    fov_deg : float
+        The images' field of view.
+
+    Attributes
+    ----------
+    references_ : bootmap.alignment.Reference
+        Each dstate's mean image, in the order of ``classes_``.
+    classes_ : ndarray
+
+    Examples
+    --------
+    >>> from bootmap.surfaces import beam_angles
+    >>> rng = np.random.default_rng(0)
+    >>> room = np.minimum(2.0 / np.abs(np.cos(beam_angles(60))), 6.0)  # a wall 2 m ahead
+    >>> notch = room + np.where(np.arange(60) == 40, 0.1, 0.0)
+    >>> y = np.repeat(["S0", "S1"], 20)
+    >>> X = np.where(y[:, None] == "S0", room, notch) + 0.01 * rng.standard_normal((40, 60))
+    >>> AlignedNearestMean().fit(X[::2], y[::2]).score(X[1::2], y[1::2])
+    1.0
+    """
+
+    def __init__(self, width: int = 3, candidates: int = 3, fov_deg: float = 180.0):
+        self.width = width
+        self.candidates = candidates
+        self.fov_deg = fov_deg
+
+    def fit(self, images, dstates):
+        X = despike(images, self.width)
+        y = _as_labels(dstates, len(X))
+        self.classes_ = np.unique(y)
+        self.range_max_ = float(X.max())
+        own, means = label_means(X, y)
+        aligned = Reference(means, self.fov_deg, self.range_max_).align(X, own)[0]
+        self.references_ = Reference(label_means(aligned, own)[1], self.fov_deg, self.range_max_)
+        self.n_features_in_ = X.shape[1]
+        return self
+
+    def predict(self, images) -> np.ndarray:
+        """The dstate of each image."""
+        check_is_fitted(self, "references_")
+        return self.classes_[np.argmin(self.residuals(images), axis=1)]
+
+    def residuals(self, images) -> np.ndarray:
+        """Each image's residual (m, root mean square over the usable beams) aligned to each of the
+        ``candidates`` dstate means nearest to it as read, one column per dstate in the order of
+        ``classes_`` (infinite for the others)."""
+        X = despike(images, self.width)
+        means = self.references_.means
+        k = min(self.candidates, len(means))
+        nearest = np.argsort(((X[:, None, :] - means[None]) ** 2).sum(axis=2), axis=1, kind="stable")[:, :k]
+        out = np.full((len(X), len(means)), np.inf)
+        residual = self.references_.align(np.repeat(X, k, axis=0), nearest.ravel())[2]
+        np.put_along_axis(out, nearest, residual.reshape(len(X), k), axis=1)
+        return out
+
+
+class ChosenByFolds(ClassifierMixin, BaseEstimator):
+    """Of several learners, the one that recognises its own training images best by inner folds, refitted
+    on them all: model selection by measurement, inside every fit, so a test fold never takes part.
+
+    The learners are tried on the same ``n_splits`` shuffled folds of the training images (scikit-learn's
+    :class:`~sklearn.model_selection.GridSearchCV` over the choice of learner); on a tie the first one
+    listed is kept. Where the training images are too few to fold (fewer than ``3 * n_splits``), the first
+    learner is used as it is.
+
+    Parameters
+    ----------
+    learners : sequence of estimators
+        The candidates, the default first (unfitted; each is cloned).
+    n_splits : int
+        Inner folds.
+    random_state : int
+        Seeds the inner folds.
+
+    Attributes
+    ----------
+    chosen_ : estimator
+        The learner chosen, fitted on every training image.
+    scores_ : ndarray
+        Each candidate's mean accuracy on the inner folds (empty where none were made).
+    classes_ : ndarray
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> y = np.repeat(["S0", "S1"], 30)
+    >>> X = rng.standard_normal((60, 4)) + np.where(y == "S0", 0.0, 3.0)[:, None]
+    >>> chosen = ChosenByFolds([KNeighborsClassifier(1), LinearDiscriminantAnalysis()]).fit(X, y)
+    >>> type(chosen.chosen_).__name__, chosen.score(X, y) > 0.9
+    ('LinearDiscriminantAnalysis', True)
+    """
+
+    def __init__(self, learners: Sequence[object] = (), n_splits: int = 3, random_state: int = 0):
+        self.learners = learners
+        self.n_splits = n_splits
+        self.random_state = random_state
+
+    def fit(self, images, dstates):
+        if not self.learners:
+            raise ValueError("ChosenByFolds needs at least one learner")
+        X = as_images(images)
+        y = _as_labels(dstates, len(X))
+        first = clone(self.learners[0]).fit(X, y)
+        self.chosen_, self.scores_ = first, np.zeros(0)
+        if len(self.learners) > 1 and len(X) >= 3 * self.n_splits:
+            # The first learner's own settings, where it searched for them on these images (its
+            # ``chosen_params_``), are kept in the inner folds: a search nested in every fold would mostly
+            # choose them again, at several times the cost.
+            candidates = [clone(self.learners[0]).set_params(**getattr(first, "chosen_params_", {}))]
+            candidates += [clone(m) for m in self.learners[1:]]
+            inner = KFold(n_splits=self.n_splits, shuffle=True, random_state=self.random_state)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # folds without some dstate, collinear directions
+                search = GridSearchCV(_Choice(), {"learner": candidates}, cv=inner, error_score=0.0,
+                                      refit=False).fit(X, y)
+            self.scores_ = np.asarray(search.cv_results_["mean_test_score"])
+            best = int(np.argmax(self.scores_))  # the first of the best, on a tie
+            if best:
+                self.chosen_ = clone(self.learners[best]).fit(X, y)
+        self.classes_ = self.chosen_.classes_
+        self.n_features_in_ = X.shape[1]
+        return self
+
+    def predict(self, images) -> np.ndarray:
+        """The dstate of each image, by the learner chosen."""
+        check_is_fitted(self, "chosen_")
+        return self.chosen_.predict(as_images(images))
+
+
+class _Choice(ClassifierMixin, BaseEstimator):
+    """One learner as a parameter, for :class:`~sklearn.model_selection.GridSearchCV` to choose among."""
+
+    def __init__(self, learner=None):
+        self.learner = learner
+
+    def fit(self, X, y):
+        self.learner_ = clone(self.learner).fit(X, y)
+        self.classes_ = self.learner_.classes_
+        return self
+
+    def predict(self, X):
+        return self.learner_.predict(X)
 
 
 class NoImages(BootmapError):

@@ -106,6 +106,7 @@ def experiment_row(cell: Cell, r: dict) -> dict:
     row["settings"] = dict(cell.noise.settings)
     if rec:
         row["curve"] = {"sizes": rec["cv_sizes"], "nn": [round(x, 6) for x in rec["cv_mean"]],
+                        "learner_sizes": rec.get("learner_cv_sizes", rec["cv_sizes"]),
                         "learner": [round(x, 6) for x in rec["learner_cv_mean"]]}
     return row
 

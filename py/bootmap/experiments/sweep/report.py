@@ -148,8 +148,12 @@ def _learner_curves(ax, table, ok, worlds, noises) -> None:
         curves = [r["curve"] for r in rows if r.get("curve")]
         if not curves:
             continue
-        sizes = curves[0]["sizes"]
-        ys = np.array([c["nn" if learner == "1-NN" else "learner"] for c in curves if c["sizes"] == sizes])
+        # The learner's curve is drawn at fewer sizes than nearest neighbour's (rows stored before that
+        # hold one list of sizes for both).
+        at = "sizes" if learner == "1-NN" else "learner_sizes"
+        sizes = curves[0].get(at, curves[0]["sizes"])
+        ys = np.array([c["nn" if learner == "1-NN" else "learner"] for c in curves
+                       if c.get(at, c["sizes"]) == sizes])
         label = f"{world}, {learner}" + (f", {noise}" if len(noises) > 1 else "")
         ax.errorbar(sizes, ys.mean(axis=0), yerr=ys.std(axis=0), fmt="o-", capsize=2, label=label)
     ax.set_xlabel("images (training set size)")
