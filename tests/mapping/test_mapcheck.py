@@ -352,6 +352,39 @@ def test_where_learning_would_take_longer_than_grounding_the_level_the_search_gr
     assert "unsettled" in results(deferred)
 
 
+def test_why_the_level_rejected_maps_at_one_bound_is_ruled_out_at_every_later_one():
+    """A stream's resolve that climbs three bounds (a 6x5 exploration's 265th step: 100 and 101 dstates
+    refuted, 102 found): the transitions the level rejected a map for at one bound reject any map they are
+    in, so every later search rules them out before it solves, and no map it finds holds them again."""
+    from bootmap.mapping import mapcheck
+
+    rng = np.random.default_rng(71)
+    tableau = walk(random_world(rng, 6, 5, extra_edges=4, landmarks=0.4), 2000, rng, policy="explore").prefix(265)
+    learned: list[tuple[int, frozenset]] = []  # (the grounding searched, the transitions a rejection was learned for)
+    met_again = []
+    solved = []
+    real_reasons, real_solve = mapcheck.MapCheck.reasons, Grounding.solve
+
+    def reasons(self, model):
+        found = real_reasons(self, model)
+        transitions, now = {str(x) for x in model if x.match("next", 3)}, id(solved[-1])
+        met_again.extend(r for where, r in learned if where != now and r <= transitions)
+        learned.append((now, frozenset(str(x) for x in found)))
+        return found
+
+    def solve(self, *args, **kwargs):
+        solved.append(self)
+        return real_solve(self, *args, **kwargs)
+
+    with mock.patch.object(mapcheck.MapCheck, "reasons", reasons), mock.patch.object(Grounding, "solve", solve):
+        cmap = Resolver(time_limit=120).resolve(tableau, at_least=100)
+    tries = [(t.dstates, t.result, t.rejected > 0) for t in cmap.stats.bounds]
+    assert tries == [("at most 100 dstates", "unsat", True), ("at most 101 dstates", "unsat", True),
+                     ("at most 102 dstates", "sat", True)], tries
+    assert not met_again and len({where for where, _ in learned}) >= 2
+    assert cmap.n_dstates == 102 and cmap.minimal
+
+
 def test_read_in_python_the_level_is_learned_from_to_the_end():
     # Its verdicts cost a millisecond: learning is never given up for a grounding of the level (which the
     # budget, having seen only searches without it, cannot foresee).

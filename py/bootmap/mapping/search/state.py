@@ -67,6 +67,9 @@ class SearchState:
         # maps a search set aside, rejected by those levels but not learned from (.exact): the next search
         # that learns learns from them before it solves
         self.set_aside: list[list[Symbol]] = []
+        # the transitions those levels rejected together, in any search of this resolution: every later
+        # search rules them out (renamed into its layout) before it solves, as they reject any map they are in
+        self.rejected_reasons: list[list[Symbol]] = []
 
     @property
     def facts(self) -> list[Symbol]:
