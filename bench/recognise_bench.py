@@ -13,10 +13,10 @@ printed beside the measured figure; the exit status is 1 if any is missed.
 
 ``--laser``: recognition under a noisier laser instead. Both worlds on seeds 3000-3009 (no setting was
 chosen on them; ``--seeds A-B`` for others) with the laser's range noise and drop-outs as shipped, doubled
-and quadrupled; the despiked discriminant (:class:`bootmap.recognise.DespikedDiscriminant`), the aligned
-one (:class:`bootmap.recognise.AlignedDiscriminant`), the nearest aligned mean
-(:class:`bootmap.recognise.AlignedNearestMean`) and the experiment's learner, which chooses between the last
-two by inner folds (:class:`bootmap.recognise.ChosenByFolds`), beside the paper's 1-NN, each by 10-fold CV at
+and quadrupled; the despiked discriminant (:class:`bootmap.learners.DespikedDiscriminant`), the aligned
+one (:class:`bootmap.learners.AlignedDiscriminant`), the nearest aligned mean
+(:class:`bootmap.learners.AlignedNearestMean`) and the experiment's learner, which chooses between the last
+two by inner folds (:class:`bootmap.learners.ChosenByFolds`), beside the paper's 1-NN, each by 10-fold CV at
 90 images, true labels. Targets for the experiment's learner: at least 85% at twice the noise and 75% at
 four times, in the mean over seeds, on both worlds. A run whose control law gets stuck is counted and left out.
 """

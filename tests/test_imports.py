@@ -29,7 +29,7 @@ STAGES: list[tuple[str, tuple[str, ...]]] = [
                  "bootmap.ingest.ingest")),
     ("views", ("bootmap.views", "bootmap.scan_match")),
     ("map", ("bootmap.mapping", "bootmap.layout")),
-    ("recognition", ("bootmap.recognise", "bootmap.alignment")),
+    ("recognition", ("bootmap.recognise", "bootmap.learners", "bootmap.alignment")),
     ("agent", ("bootmap.agent",)),
     ("experiments", ("bootmap.experiments",)),
     ("service", ("bootmap.service",)),

@@ -9,9 +9,9 @@ from sklearn.discriminant_analysis import LinearDiscriminantAnalysis
 from sklearn.model_selection import KFold
 from sklearn.neighbors import KNeighborsClassifier, NearestCentroid
 
-from bootmap.recognise import (AlignedDiscriminant, AlignedNearestMean, ChosenByFolds, DespikedDiscriminant,
-                               Recogniser, compare_clusterers,
-                               compare_learners, default_learners, learning_curve_cv, online_curve, online_hits)
+from bootmap.learners import AlignedDiscriminant, AlignedNearestMean, ChosenByFolds, DespikedDiscriminant
+from bootmap.recognise import (Recogniser, compare_clusterers, compare_learners, default_learners, learning_curve_cv,
+                               online_curve, online_hits)
 
 
 def blobs(n_per=30, n_states=8, dim=180, spread=1.0, seed=0, order="circuits"):

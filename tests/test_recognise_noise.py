@@ -12,8 +12,9 @@ from sklearn.model_selection import GridSearchCV, KFold
 from sklearn.pipeline import make_pipeline
 from threadpoolctl import threadpool_limits
 
-from bootmap.recognise import (AlignedDiscriminant, AlignedNearestMean, DespikedDiscriminant, components_by_folds,
-                               default_learners, despike, learning_curve_cv)
+from bootmap.learners import (AlignedDiscriminant, AlignedNearestMean, DespikedDiscriminant, components_by_folds,
+                              despike)
+from bootmap.recognise import default_learners, learning_curve_cv
 from bootmap.sim import simulate
 from bootmap.sim.world import load_world
 

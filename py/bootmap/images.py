@@ -1,4 +1,4 @@
-"""Images as the learners take them: one place that reads laser scans into an array.
+"""Images as the learners take them: one place that reads laser scans (and their dstates) into arrays.
 
 An image is a point in R^n (the paper's 180 ranges); the learners are not told it is a range scan.
 Non-finite readings (``inf``: a beam that returned nothing) are read as drop-outs at the largest finite
@@ -26,3 +26,15 @@ def as_images(images) -> np.ndarray:
         finite = X[np.isfinite(X)]
         X = np.where(np.isinf(X), finite.max() if finite.size else 0.0, X)
     return X
+
+
+def as_labels(dstates, n: int) -> np.ndarray:
+    """The dstate of each of ``n`` images as an array, checked to be one per image.
+
+    >>> as_labels(["S0", "S1"], 2).tolist()
+    ['S0', 'S1']
+    """
+    y = np.asarray(dstates)
+    if y.shape != (n,):
+        raise ValueError(f"dstates must have shape ({n},), got {y.shape}")
+    return y
