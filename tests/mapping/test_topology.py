@@ -117,6 +117,19 @@ def test_the_reasons_are_rejected_alone_and_none_can_be_left_out(links):
         assert not rejects(reasons[:i] + reasons[i + 1:])
 
 
+@settings(max_examples=100, deadline=None)
+@given(maps, maps)
+def test_the_reasons_for_the_map_just_judged_are_those_of_a_fresh_reading(first, second):
+    # A search asks for the reasons right after the verdict, on the same model: its transitions are read
+    # once. Judged one map, then asked of another, the reasons are the other's, as a fresh check gives them.
+    models = [[Function("dstate", [dstate(0, 9)])] + list(dict.fromkeys(
+        nxt(dstate(0, a), ACTIONS[k % n], dstate(0, b)) for a, b, k, n in links)) for links in (first, second)]
+    check = MapCheck(load_theory(), ("topological",))
+    for judged, asked in ((0, 0), (0, 1), (1, 1)):
+        check(models[judged])
+        assert check.reasons(models[asked]) == MapCheck(load_theory(), ("topological",)).reasons(models[asked])
+
+
 def test_a_changed_topological_file_is_asked_of_clingo(axioms_copy):
     copy = axioms_copy
     path = copy / "topological.lp"

@@ -151,9 +151,10 @@ class MapCheck:
         assumption of one small grounding: a few dozen solves (under the stock topological level, a few dozen
         of its Python verdicts: :mod:`.topology`). Empty if the levels accept the map made of
         its transitions alone (as they do any map they reject only for a dstate no transition reaches)."""
-        transitions = [s for s in model if NEXT.matches(s)]
         if self.fast:
-            return [transitions[i] for i in _fast_reasons(*self._reader.links(transitions))]
+            transitions, links, n = self._reader.transitions(model)
+            return [transitions[i] for i in _fast_reasons(links, n)]
+        transitions = [s for s in model if NEXT.matches(s)]
         control, literal = self._asking((), transitions)
 
         def rejected(chosen: Sequence[int]) -> bool:

@@ -62,12 +62,13 @@ class Reader:
 
     def __init__(self) -> None:
         self._read: dict[Symbol, tuple | str] = {}
+        self._last: tuple | None = None  # the last model split, its transitions, links and dstates
 
     def split(self, model: Sequence[Symbol]) -> tuple[list[Symbol], list[Symbol], list[tuple[int, int, int, int]], int]:
         """The symbols of ``model`` that are not the map's (``own``), those that are (``next/3``,
         ``dstate/1``), the transitions' links and how many dstates they touch."""
         ids: dict[Symbol, int] = {}
-        own, inputs, links = [], [], []
+        own, inputs, transitions, links = [], [], [], []
         read = self._read
         for s in model:
             kind = read.get(s)
@@ -81,13 +82,23 @@ class Reader:
             inputs.append(s)
             if kind is not _DSTATE:
                 a, k, angle, b = kind
+                transitions.append(s)
                 links.append((ids.setdefault(a, len(ids)), k, angle, ids.setdefault(b, len(ids))))
+        self._last = (model, transitions, links, len(ids))
         return own, inputs, links, len(ids)
 
     def links(self, model: Sequence[Symbol]) -> tuple[list[tuple[int, int, int, int]], int]:
         """The links of the ``next/3`` atoms among ``model``, and how many dstates they touch."""
         _, _, links, n = self.split(model)
         return links, n
+
+    def transitions(self, model: Sequence[Symbol]) -> tuple[list[Symbol], list[tuple[int, int, int, int]], int]:
+        """The ``next/3`` atoms among ``model``, their links (one each, in the same order) and how many dstates
+        they touch; read again only where ``model`` is not the one last split (a search asks why the level
+        rejected the map it has just judged)."""
+        if self._last is None or self._last[0] is not model:
+            self.split(model)
+        return self._last[1], self._last[2], self._last[3]
 
 
 _OWN, _DSTATE = "own", "dstate"
