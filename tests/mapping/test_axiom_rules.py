@@ -231,7 +231,7 @@ CASES = {
     "misread": "misreads",                      # no view is taken as a misread
     "misread_joins_held": "odd_views_at_one_place",  # X and Y open a dstate with no view: no map to read
     "fewest_misreads": "first_view_either_way",  # a misread that saves nothing is free: five maps, not one
-    "dstate_bound": "walk2",                    # a bound the search proved is not kept: a larger map
+    "dstate_bound": "odd_views_at_one_place",   # a bound the misread search sets is not kept: another map
     "fewest_dstates": "paper_without_headings",  # nothing is minimised
     "time_point": "paper",
     "view_is_feature": "corridor",

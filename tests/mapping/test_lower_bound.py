@@ -60,7 +60,8 @@ def brute_force_minimal_maps(tableau, levels) -> tuple[int, int]:
 
 
 # Walks whose classes' lower bound (what the views seen later tell apart) falls short of the truth: the
-# resolver refutes the bounds below the minimum one by one (their tries say "at most N dstates: unsat").
+# resolver refutes bounds below the minimum (their tries say "at most N dstates: unsat"); above the lower
+# bound its searches optimise, so the last two bounds may be answered by one search of the higher.
 @pytest.mark.parametrize("seed", [42, 51])
 def test_the_proved_lower_bound_is_the_brute_force_minimum_where_bounds_are_refuted(seed):
     tableau = grid_walk(seed)
@@ -68,9 +69,9 @@ def test_the_proved_lower_bound_is_the_brute_force_minimum_where_bounds_are_refu
     m = Resolver(levels=CT, time_limit=60).resolve(tableau)
     refuted = [int(b.dstates.split()[2]) for b in m.stats.bounds
                if b.dstates.startswith("at most") and b.result == "unsat"]
-    assert refuted and max(refuted) == fewest - 1  # the case this test is about
+    assert refuted and max(refuted) in (fewest - 2, fewest - 1)  # the case this test is about
     assert m.n_dstates == fewest and m.n_models == n_minimal and m.minimal
-    assert m.stats.lower_bound == fewest  # proving "not fewest - 1" proves fewest
+    assert m.stats.lower_bound == fewest  # refuted below, or the optimum of the search above: proved
 
 
 def test_a_time_out_reports_what_its_stage_proved_and_no_more_than_brute_force_needs():

@@ -242,9 +242,15 @@ class ExactSearch:
                                        futures=spare), bound)
 
     def _answer(self, outcome: Outcome, bound: int) -> CognitiveMap | None:
-        """The minimal maps a bounded search found, or None with the bound refuted (proved one more)."""
+        """The minimal maps a bounded search found, or None with the bound refuted (proved one more). Above
+        the classes' lower bound the search optimised over a layout that holds every map within the bound:
+        the fewest dstates it found are proved (as a refuted bound below them would prove them)."""
         if outcome.models:
-            return self._map(outcome)
+            cmap = self._map(outcome)
+            if bound > self.state.classes.lower_bound and cmap.n_dstates > self.state.proved:
+                self.state.proved = cmap.n_dstates
+                cmap = replace(cmap, stats=replace(cmap.stats, lower_bound=self.state.proved))
+            return cmap
         self.state.proved = max(self.state.proved, bound + 1)
         return None
 
@@ -274,7 +280,14 @@ class ExactSearch:
         quicker than any map with a spare dstate per class and its minimisation (a 257-step exploration,
         93 dstates over a bound of 91: 37 s against 250 s)."""
         start = max(self.state.proved, self.state.at_least)  # the fewest dstates not refuted yet
-        for bound in range(start, start + CLIMB_STEPS):
+        # Above the lower bound a bounded search optimises: the bound one up answers for both (its optimum
+        # is the first bound that has maps), and a search less is made where the first would be refuted (a
+        # stream's resolve that climbed 100, 101, 102 dstates: 0.72 s, and 0.46 s with 101 and 102 in one).
+        # Not where the search below left its grounding for this bound (:meth:`_hold`): that costs no
+        # grounding at all.
+        bounds = range(start, start + CLIMB_STEPS)
+        held = self.held is not None and self.held.bound == start
+        for bound in (bounds[1:] if start > self.state.classes.lower_bound and not held else bounds):
             found = self.bounded(bound)
             if found:
                 return found
