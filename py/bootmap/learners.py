@@ -214,10 +214,8 @@ class AlignedDiscriminant(ClassifierMixin, BaseEstimator):
         self.range_max_ = float(X.max())
         self.as_read_ = DespikedDiscriminant(1, self.dimensions, self.random_state).fit(X, y)
         self.classes_ = self.as_read_.classes_
-        own, means = label_means(X, y)  # own[i]: image i's dstate, an index into classes_ (both sorted)
-        aligned = Reference(means, self.fov_deg, self.range_max_).align(X, own)[0]
-        means = label_means(aligned, own)[1]
-        self.references_ = Reference(means, self.fov_deg, self.range_max_)
+        own, aligned, self.references_ = _refined_means(X, y, self.fov_deg, self.range_max_)
+        means = self.references_.means
         # A training image is aligned as a new one would be, but to its own dstate's mean without it: with
         # it, the mean leans towards the image (by a fifth at five images a dstate), the aligned images of a
         # dstate lie closer together than new ones will, and the aligned discriminant is overconfident.
@@ -254,8 +252,7 @@ class AlignedDiscriminant(ClassifierMixin, BaseEstimator):
         """Each image aligned to whichever of its ``candidates`` nearest dstate means it fits best; for
         training images (``own_without``: each one's dstate, and its dstate's mean without it, image i's
         at row i), their own dstate's mean taken without them."""
-        means = self.references_.means
-        nearest = np.argsort(((X[:, None, :] - means[None]) ** 2).sum(axis=2), axis=1)[:, :self.candidates]
+        nearest = _nearest_means(X, self.references_.means, self.candidates)
         rows, to = np.repeat(np.arange(len(X)), nearest.shape[1]), nearest.ravel()
         aligned, residual = np.empty((len(rows), X.shape[1])), np.empty(len(rows))
         mine = np.zeros(len(rows), dtype=bool) if own_without is None else to == own_without[0][rows]
@@ -320,9 +317,7 @@ class AlignedNearestMean(ClassifierMixin, BaseEstimator):
         y = as_labels(dstates, len(X))
         self.classes_ = np.unique(y)
         self.range_max_ = float(X.max())
-        own, means = label_means(X, y)
-        aligned = Reference(means, self.fov_deg, self.range_max_).align(X, own)[0]
-        self.references_ = Reference(label_means(aligned, own)[1], self.fov_deg, self.range_max_)
+        self.references_ = _refined_means(X, y, self.fov_deg, self.range_max_)[2]
         self.n_features_in_ = X.shape[1]
         return self
 
@@ -337,8 +332,8 @@ class AlignedNearestMean(ClassifierMixin, BaseEstimator):
         ``classes_`` (infinite for the others)."""
         X = despike(images, self.width)
         means = self.references_.means
-        k = min(self.candidates, len(means))
-        nearest = np.argsort(((X[:, None, :] - means[None]) ** 2).sum(axis=2), axis=1, kind="stable")[:, :k]
+        nearest = _nearest_means(X, means, self.candidates)
+        k = nearest.shape[1]
         out = np.full((len(X), len(means)), np.inf)
         residual = self.references_.align(np.repeat(X, k, axis=0), nearest.ravel())[2]
         np.put_along_axis(out, nearest, residual.reshape(len(X), k), axis=1)
@@ -431,3 +426,18 @@ class _Choice(ClassifierMixin, BaseEstimator):
 
     def predict(self, X):
         return self.learner_.predict(X)
+
+
+def _refined_means(X: np.ndarray, y: np.ndarray, fov_deg: float, range_max: float
+                   ) -> tuple[np.ndarray, np.ndarray, Reference]:
+    """Each dstate's mean image, refined once: the images aligned to their own dstate's mean, and the mean
+    taken again from them. Returns each image's dstate (an index into the sorted labels), the images so
+    aligned, and the refined means ready to align to."""
+    own, means = label_means(X, y)
+    aligned = Reference(means, fov_deg, range_max).align(X, own)[0]
+    return own, aligned, Reference(label_means(aligned, own)[1], fov_deg, range_max)
+
+
+def _nearest_means(X: np.ndarray, means: np.ndarray, k: int) -> np.ndarray:
+    """For each image, the indices of the ``k`` means nearest to it as read (Euclidean), nearest first."""
+    return np.argsort(((X[:, None, :] - means[None]) ** 2).sum(axis=2), axis=1, kind="stable")[:, :k]

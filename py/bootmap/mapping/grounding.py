@@ -96,6 +96,8 @@ class Grounding:
                 self.control.add("base", [], SHOW_MAP)
         add_facts(self.control, facts)
         self.grounded = False
+        # how many of its resolution's carried reasons (SearchState.rejected_reasons) are ruled out in it
+        self.reasons_ruled_out = 0
         self.ground_s = 0.0
         self.ground_cpu_s = 0.0  # the process's CPU time grounding: what another process's load leaves alone
         self.solve_s = 0.0

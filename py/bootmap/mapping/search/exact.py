@@ -513,7 +513,7 @@ class ExactSearch:
             # carried with those the searches before learned.
             carried += [r for r in map(check.reasons, self.state.set_aside) if r]
             self.state.set_aside = []
-        ruled = getattr(grounding, "reasons_ruled_out", 0)
+        ruled = grounding.reasons_ruled_out
         if len(carried) > ruled:
             # The searches before this one (bounds below; this bound before the misreads were weighed) found
             # why the levels rejected maps: those transitions reject any map they are in, and are ruled out

@@ -68,7 +68,7 @@ class SearchState:
         # that learns learns from them before it solves
         self.set_aside: list[list[Symbol]] = []
         # the transitions those levels rejected together, in any search of this resolution: every later
-        # search rules them out (renamed into its layout) before it solves, as they reject any map they are in
+        # search rules them out (as themselves) before it solves, as they reject any map they are in
         self.rejected_reasons: list[list[Symbol]] = []
 
     @property
