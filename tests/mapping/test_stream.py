@@ -261,6 +261,28 @@ def test_a_resolve_in_a_stream_starts_at_the_dstates_the_last_map_proved():
     assert tried(after)[0] == f"at most {before.n_dstates + 1} dstates"
 
 
+def test_what_an_earlier_resolve_learned_is_ruled_out_and_the_maps_are_the_same():
+    # Resolving the stream bench's first 255 steps, the search learns why the topological level rejects
+    # some maps: transitions that reject any map they are in, whatever its tableau (the level is
+    # monotone). Given them, a resolve of 256 steps rules them out before it solves: it meets fewer
+    # rejected maps than a fresh resolve and finds the same maps.
+    from bootmap.mapping.mapcheck import MapCheck
+    rng = np.random.default_rng(3)
+    tableau = walk(random_world(rng, 6, 5, extra_edges=4, landmarks=0.4), 2000, rng, policy="explore").prefix(256)
+    resolver = Resolver(time_limit=60)
+    learned = []
+    resolver.resolve(tableau.prefix(255), rejected=learned)
+    assert learned
+    check = MapCheck(resolver.theory, resolver.theory.map_levels)
+    assert all(check.each(reasons) == [None] for reasons in learned)  # each rejected on its own
+    kept = list(learned)
+    fresh, carried = resolver.resolve(tableau), resolver.resolve(tableau, rejected=learned)
+    assert same_map(carried, fresh)
+    rejected = lambda cmap: sum(t.rejected for t in cmap.stats.bounds)
+    assert rejected(carried) < rejected(fresh)
+    assert learned[:len(kept)] == kept  # the caller's list is added to, never changed
+
+
 def test_a_last_map_that_does_not_extend_proves_a_dstate_more():
     # After 104 steps the unique minimal map has 53 dstates; the 105th step's action leads, by determinism,
     # where the axioms refuse it: no map has 53 dstates any more, and the resolve starts at 54.

@@ -64,6 +64,37 @@ def test_the_python_reading_rejects_exactly_the_maps_clingo_rejects(by_clingo, l
     assert rejected_links(numbered, n + 100) == rejected_rule(transitions)
 
 
+@pytest.fixture(scope="module")
+def by_python() -> MapCheck:
+    return MapCheck(load_theory(), ("topological",))
+
+
+@settings(max_examples=400, deadline=None)
+@given(maps, st.booleans())
+def test_what_the_python_reading_shows_is_what_clingo_shows(by_clingo, by_python, links, lone):
+    # A map the level accepts is shown (places, paths and their directions, the order along paths, the
+    # sides), each place and path named by its least dstate in clingo's order of terms: here dstates of
+    # three kinds of term, and a dstate no transition touches.
+    transitions = list(dict.fromkeys(nxt(dstate(a % 3, a), ACTIONS[k % n], dstate(b % 3, b)) for a, b, k, n in links))
+    dstates = {d for s in transitions for d in (s.arguments[0], s.arguments[2])}
+    if lone:
+        dstates.add(Number(7))
+    model = [Function("dstate", [d]) for d in dstates] + transitions + [Function("view_of", [Number(1), Number(2)])]
+    shown, expected = by_python(model), by_clingo(model)
+    assert (shown is None) == (expected is None)
+    if shown is not None:
+        assert sorted(map(str, shown)) == sorted(map(str, expected))
+        assert any(s.name == "ahead" for s in shown) or not any(s.name == "ahead" for s in expected)
+    # asked as a map and its ways to extend, one option at a time (a stream's new transitions)
+    if len(transitions) > 1:
+        base = [Function("dstate", [d]) for d in dstates] + transitions[:-1]
+        options = [[transitions[-1]], []]
+        for got, want in zip(by_python.each(base, options), by_clingo.each(base, options)):
+            assert (got is None) == (want is None)
+            if got is not None:
+                assert sorted(map(str, got)) == sorted(map(str, want))
+
+
 def walk_transitions(seed: int, steps: int = 120):
     """The true map of a grid walk, as transitions between its true dstates (place and heading)."""
     rng = np.random.default_rng(seed)
@@ -91,6 +122,10 @@ def test_on_grid_walks_with_two_dstates_joined_the_verdicts_agree(by_clingo, see
         return [nxt(dstate(0, merge.get(a, a)), action, dstate(0, merge.get(b, b))) for a, action, b in links]
 
     assert not rejects(as_symbols({})) and not clingo_rejects(by_clingo, as_symbols({}))
+    # the true map is shown as clingo shows it, places, paths, order and sides
+    whole = as_symbols({})
+    model = whole + [Function("dstate", [d]) for d in {x for s in whole for x in (s.arguments[0], s.arguments[2])}]
+    assert sorted(map(str, MapCheck(load_theory(), ("topological",))(model))) == sorted(map(str, by_clingo(model)))
     # two dstates of one view joined: what a search with a dstate too few tries
     same_view = [(number[x], number[y]) for x in names for y in names if x < y and view[x] == view[y]]
     verdicts = []

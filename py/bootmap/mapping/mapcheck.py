@@ -32,10 +32,9 @@ transitions it rejects on their own (:meth:`MapCheck.reasons`). A search then ru
 those transitions, renamed any way (:mod:`.search.exact`), and may leave the level out whatever its bound:
 on 2,000 steps with a person's apart, 104 dstates over a bound of 103, 2.8 s instead of 9 s.
 
-Under the stock topological level (the file as shipped: :func:`.topology.stock`) the verdict and the reasons
-are read in Python (:mod:`.topology`): a map the level rejects costs no grounding, and its reasons no solve
-(QuickXplain over the Python verdict). Only a map the level accepts is grounded, for what the level shows
-of it. A search then leaves the level out and learns from the maps it rejects at any size (not only above
+Under the stock topological level (the file as shipped: :func:`.topology.stock`) the verdict, the reasons
+and what the level shows of a map it accepts are read in Python (:mod:`.topology`): no map costs a
+grounding, and no reasons a solve (QuickXplain over the Python verdict). A search then leaves the level out and learns from the maps it rejects at any size (not only above
 ``LEARN_MIN_SIZE``): the slowest step of a 2,000-step stream of a 6x5 grid, 93 dstates with a spare slot per
 class, 1.6 s with the level grounded over every candidate dstate, 0.3 s learning from 11 rejected maps.
 """
@@ -49,7 +48,7 @@ from clingo import Symbol
 
 from .facts import add_facts
 from .theory import MAP_INPUTS, Theory
-from .topology import Reader, near_first, rejected_links, stock, violation
+from .topology import Reader, near_first, stock, violation
 from .vocabulary import NEXT
 
 #: What a search without the map's levels shows beside its own atoms: the map the levels judge.
@@ -110,8 +109,9 @@ class MapCheck:
 
     def __call__(self, model: Sequence[Symbol]) -> list[Symbol] | None:
         own, inputs, links, n = self._reader.split(model)
-        if self.fast and rejected_links(links, n):
-            return None
+        if self.fast and self._reader.covers(model):
+            shown = self._reader.shown(model)
+            return None if shown is None else own + shown
         control = self._grounded(inputs)
         shown: list[list[Symbol]] = []
         result = control.solve(on_model=lambda m: shown.append(m.symbols(shown=True)))
@@ -125,17 +125,11 @@ class MapCheck:
         they reject: a map and the ways a new step could extend it (:mod:`.stream`). One grounding: each
         option's transitions are external atoms, assumed true for it and false for the others."""
         if self.fast:
-            base = [s for s in inputs if NEXT.matches(s)]
-            verdicts = [rejected_links(*self._reader.links(base + list(option))) for option in options]
-            if all(verdicts):
-                return [None] * len(options)
+            return [self._reader.shown(list(inputs) + list(option)) for option in options]
         extra = list(dict.fromkeys(s for option in options for s in option))
         control, literal = self._asking(inputs, extra)
         out: list[list[Symbol] | None] = []
-        for k, option in enumerate(options):
-            if self.fast and verdicts[k]:
-                out.append(None)
-                continue
+        for option in options:
             own = set(option)
             shown: list[list[Symbol]] = []
             control.solve(assumptions=[lit if s in own else -lit for s, lit in zip(extra, literal)],

@@ -43,6 +43,8 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Sequence
 
+from clingo import Symbol
+
 from ..errors import InconsistentTableau
 from ..tableau import Tableau
 from .assertions import Assertion
@@ -137,12 +139,18 @@ class Resolver:
         return replace(self, axioms=self.theory.directory, levels=tuple(levels), diagnose=False)
 
     def resolve(self, tableau: Tableau, deadline: Deadline | None = None,
-                assertions: Sequence[Assertion] = (), at_least: int = 0) -> CognitiveMap:
+                assertions: Sequence[Assertion] = (), at_least: int = 0,
+                rejected: list[list[Symbol]] | None = None) -> CognitiveMap:
         """The minimal map(s) of the tableau, by ``deadline`` (default: ``time_limit`` from now); with a
         person's ``assertions`` (:mod:`.assertions`), the minimal maps that honour the hard ones and keep
         the soft ones unless breaking them saves more than they cost. ``at_least``: dstates the caller has
         proved every map of the tableau needs, reading every view as seen (a stream knows it from the
         map before the last step, :mod:`.stream`); the search for the exact minimal maps starts there.
+        ``rejected``: transitions the levels that judge the map alone rejected together in earlier
+        resolutions by this resolver (a stream keeps them). Those levels are monotone (a map they reject
+        stays rejected with more dstates and transitions, under any names), so such transitions reject
+        any map they are in, whatever its tableau: every search rules them out before it solves, and
+        this resolution adds to the list what it learns. The maps found are the same, found sooner.
 
         Raises
         ------
@@ -155,7 +163,7 @@ class Resolver:
         """
         deadline = deadline or Deadline.after(self.time_limit)
         try:
-            return Search(self, tableau, deadline, assertions, at_least).run()
+            return Search(self, tableau, deadline, assertions, at_least, rejected).run()
         except InconsistentTableau as e:
             if not self.diagnose or any(not x.soft for x in assertions):
                 raise

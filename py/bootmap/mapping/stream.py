@@ -67,9 +67,13 @@ from .motion import ActionType
 from .mapcheck import MapCheck
 from .replay import Partition, Replay, action_symbol_of, length_labels
 from .resolver import Resolver
-from .vocabulary import FIXED, NEXT, Atoms, fixed_dstate
+from .topology import link_kind, shape
+from .vocabulary import AHEAD, FIXED, LEFT, NEXT, PATH_OF, PLACE_OF, RIGHT, Atoms, fixed_dstate
 
 __all__ = ["MapStream"]
+
+#: The stream keeps so many of the latest rejected transitions for its resolves.
+MAX_REJECTED = 5000
 
 
 class MapStream:
@@ -107,7 +111,13 @@ class MapStream:
         self._replays = self.resolver.stock
         self._replay: Replay | None = None
         self._map_check: MapCheck | None = None
+        self._kinds: dict[tuple, tuple[int, int]] = {}  # a replayed action as the topological level reads it
+        self._terms: list[Symbol] = []  # Number(d), made once
         self._images = False  # every step so far has an image (misreads.rare_clustered_views)
+        # transitions the levels that judge the map alone rejected together in earlier resolves: they reject
+        # any map they are in, whatever the tableau (Resolver.resolve's ``rejected``), so each resolve rules
+        # them out before it solves rather than find such maps again as the map grows
+        self._rejected: list[list[Symbol]] = []
 
     def update(self, tableau: Tableau, deadline: Deadline | None = None) -> CognitiveMap:
         """The map of ``tableau``, which usually extends the last one given by a few steps."""
@@ -130,10 +140,16 @@ class MapStream:
             # fresh one: there the stream resolves as a fresh resolve does (where every minimal map is
             # listed, their order is canonical whatever the path: cogmap.canonical_order). A last map
             # with too many to list says the next likely has too.
+            # So does a search that rules out what the levels rejected in earlier resolves (below).
             capped = self.map_ is not None and self.map_.models_capped
-            cmap = self.resolver.resolve(tableau, deadline, at_least=0 if capped else self._at_least)
-            if cmap.models_capped and self._at_least and not capped:
+            if capped:
                 cmap = self.resolver.resolve(tableau, deadline)
+            else:
+                carried = bool(self._rejected)
+                cmap = self.resolver.resolve(tableau, deadline, at_least=self._at_least, rejected=self._rejected)
+                del self._rejected[:-MAX_REJECTED]
+                if cmap.models_capped and (self._at_least or carried):
+                    cmap = self.resolver.resolve(tableau, deadline)
             self.resolved_ += 1
             self._replay = None
             self._images = has_images(tableau)
@@ -259,6 +275,8 @@ class MapStream:
             return maps
         check = self._map_check or MapCheck(self.resolver.theory, levels)
         self._map_check = check
+        if check.fast:  # the stock topological level, read in Python from the partitions themselves
+            return [m for m in maps if self._shaped(m)]
         groups: dict[int, list[Partition]] = {}  # by the map they were extended from: its transitions and more
         for m in maps:
             if m.shown is None or m.added:
@@ -274,6 +292,27 @@ class MapStream:
                 else:
                     m.shown, m.added, m.origin = Atoms(shown), [], object()
         return [m for m in maps if id(m) not in rejected]
+
+    def _shaped(self, m: Partition) -> bool:
+        """Whether the stock topological level accepts the map ``m``; if it does, what it shows of it is
+        kept in ``m`` (:func:`.topology.shape`, read from its transitions without a clingo symbol)."""
+        if m.shown is not None and not m.added:
+            return True
+        dstates = sorted(m.view_of)
+        index = {d: i for i, d in enumerate(dstates)}
+        kinds = self._kinds
+        for _, a in m.led:
+            if a not in kinds:
+                kinds[a] = link_kind(action_symbol_of(a))
+        found = shape([(index[d], *kinds[a], index[d2]) for (d, a), d2 in m.led.items()], len(dstates))
+        if found is None:
+            return False
+        terms = self._terms
+        terms.extend(Number(i) for i in range(len(terms), dstates[-1] + 1))
+        atoms = found.atoms([terms[d] for d in dstates])
+        m.shown = Atoms(()).plus({p: atoms[p.name] for p in (PLACE_OF, PATH_OF, AHEAD, RIGHT, LEFT)})
+        m.added = []
+        return True
 
     def _join(self, tableau: Tableau, facts: list[Symbol], types, placed: list[str], deadline: Deadline,
               start: float) -> CognitiveMap | None:

@@ -15,6 +15,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Sequence
 
+from clingo import Symbol
+
 from ...tableau import Tableau
 from ..assertions import Assertion
 from ..cogmap import CognitiveMap
@@ -35,8 +37,9 @@ class Search:
     """One resolution: the search state and budget it shares, and the concerns that work on them."""
 
     def __init__(self, resolver: Resolver, tableau: Tableau, deadline: Deadline,
-                 assertions: Sequence[Assertion] = (), at_least: int = 0):
-        self.state = SearchState(resolver, tableau, assertions, at_least)
+                 assertions: Sequence[Assertion] = (), at_least: int = 0,
+                 rejected: list[list[Symbol]] | None = None):
+        self.state = SearchState(resolver, tableau, assertions, at_least, rejected)
         self.budget = Budget(deadline, self.state.timed_out)
         self.retyping = Retyping(self.state, self.budget)
         self.exact = ExactSearch(self.state, self.budget)

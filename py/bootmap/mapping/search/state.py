@@ -35,7 +35,7 @@ class SearchState:
     """One resolution: the tableau as facts, its classes, the figures, the best map so far."""
 
     def __init__(self, resolver: Resolver, tableau: Tableau, assertions: Sequence[Assertion] = (),
-                 at_least: int = 0):
+                 at_least: int = 0, rejected: list[list[Symbol]] | None = None):
         self.resolver, self.tableau = resolver, tableau
         self.at_least = at_least  # dstates the caller proved necessary, reading every view as seen
         self.assertions = list(assertions)  # a person's word (.assertions): facts beside the experience
@@ -67,9 +67,10 @@ class SearchState:
         # maps a search set aside, rejected by those levels but not learned from (.exact): the next search
         # that learns learns from them before it solves
         self.set_aside: list[list[Symbol]] = []
-        # the transitions those levels rejected together, in any search of this resolution: every later
-        # search rules them out (as themselves) before it solves, as they reject any map they are in
-        self.rejected_reasons: list[list[Symbol]] = []
+        # the transitions those levels rejected together, in any search of this resolution or of the
+        # earlier ones the caller kept them from (Resolver.resolve's ``rejected``): every later search rules
+        # them out (as themselves) before it solves, as they reject any map they are in
+        self.rejected_reasons: list[list[Symbol]] = rejected if rejected is not None else []
 
     @property
     def facts(self) -> list[Symbol]:
