@@ -168,9 +168,14 @@ class Replay:
         for t in range(len(steps)):
             replay._observe(t, steps, angles, lengths, watch=False)
         replay.watch = SuspectWatch.of(replay.views, replay.actions)
-        replay.maps = [replay._partition([int(d[1:]) for d in names])
-                       for names in [cmap.dstate_of] + list(cmap.alternatives)]
-        return replay
+        return replay.rebased(cmap)
+
+    def rebased(self, cmap: CognitiveMap) -> "Replay":
+        """This replay with the minimal maps of ``cmap`` (the map and its alternatives), a map of the steps
+        it has observed (a resolve of them, where the maps it kept did not extend)."""
+        self.maps = [self._partition([int(d[1:]) for d in names]) for names in [cmap.dstate_of] + list(cmap.alternatives)]
+        self.refuted = False
+        return self
 
     def _partition(self, dstate_of: list[int]) -> Partition:
         """The map that puts each time point at ``dstate_of[t]``."""

@@ -184,9 +184,20 @@ class MisreadAbduction:
             if misread is None:  # each dstate more is a slot more for every class, and each suspect's
                 self._allow_misreads(exact_facts, chosen)  # other classes' slots with it: too many
                 state.classes.lower, state.proved = planned, proved
+        cheapest = min((s.cost for s in state.suspects.values()), default=0)
         while misread is None and fewest < ceiling:
             fewest += 1
             state.proved = max(state.proved, fewest)
+            if DSTATE_COST * (state.as_seen - fewest) <= cheapest:
+                # A map with misreads and this many dstates saves too few against reading every view as
+                # seen (at least as_seen dstates) to pay for a misread, and so does every map with more.
+                # Where the exact map is in hand (the ceiling below it), none is looked for; else only a
+                # map at the ceiling can be one reading every view as seen, and one search there finds
+                # the cheapest map within it, where the bounds one by one took a search each (a stream's
+                # misread resolves, 5x5 grid: 78 to 82 dstates in six searches).
+                if ceiling < state.as_seen:
+                    return None
+                fewest = ceiling
             misread = search.optimise(None, fewest)
         return misread
 
