@@ -260,7 +260,8 @@ class Replay:
             return True
         for key, times in self.members.items():
             if key not in self._lower:
-                self._lower[key] = apart_clique(times, self.partial, exact=True, at_most=self._dstates_in(key))
+                self._lower[key] = apart_clique(times, _telling(times, self.partial), exact=True,
+                                                at_most=self._dstates_in(key))
         bound = sum(self._lower.values())
         if bound != n_dstates:
             return False
@@ -270,7 +271,8 @@ class Replay:
         without = self.without(clear)
         for key, times in self.members.items():
             if key not in self._without:
-                self._without[key] = apart_clique([t for t in times if t not in clear], without, exact=True,
+                self._without[key] = apart_clique([t for t in times if t not in clear],
+                                                  _telling(times, without, self.partial), exact=True,
                                                   at_most=self._dstates_in(key))
         return bound - sum(self._without.values()) < len(clear)
 
@@ -335,6 +337,21 @@ class Replay:
         self.partial[t][key] = value
         self._lower.pop(self.class_of[t], None)
         self._without.pop(self.class_of[t], None)
+
+
+def _telling(times: Sequence[int], features, among=None) -> dict[int, dict]:
+    """The features of ``times`` (one class's time points) that tell some of them apart: those the class
+    shows two values of, in ``among`` (default ``features`` itself), as a prepass keeps them
+    (:class:`.grounding.PartialFeatures`). The lower bounds' greedy sets try the time points that show
+    most such features first: with every feature counted, their order, and at times the bound (a class of
+    64 time points: 3 dstates where the resolver proves 4), were not the resolver's."""
+    among = features if among is None else among
+    values: dict = {}
+    for t in times:
+        for k, v in among[t].items():
+            values.setdefault(k, set()).add(v)
+    telling = {k for k, vs in values.items() if len(vs) > 1}
+    return {t: {k: v for k, v in features[t].items() if k in telling} for t in times}
 
 
 class Prepassed:

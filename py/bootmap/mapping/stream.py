@@ -17,9 +17,14 @@ as their minimal maps; one with as many restricts to one of them, and puts the n
 So the minimal maps of the longer experience are the extensions of the last ones that the axioms accept,
 where any is accepted: the same maps as a fresh resolve finds, shown in the same (canonical) order, which
 the tests check on every prefix of long walks. Where none is accepted, every map of the longer experience
-has a dstate more than the last ones, and the resolve starts there; where more are accepted than the
-resolver lists, or the last maps were more than it lists, the stream resolves as a fresh resolve does
-(which of them are listed depends on the search's path).
+has a dstate more than the last ones, and the resolve starts there.
+
+Where the experience leaves more minimal maps than the resolver lists (``models_capped``), the last maps
+are some of them: those that extend are minimal maps of the longer experience, and the stream lists them
+(still capped); where none extends, another might, and the stream resolves. Which minimal maps are listed
+then depends on the search's path, so a fresh resolve may list others: the stream's are minimal maps with
+as many dstates, which the tests check. (Resolving afresh after every such step, to list what a fresh
+resolve lists, made 70 of a 6x6 grid's 2,000 steps wait 0.2-0.3 s each.)
 
 Anything else (a changed action type, a view that may be a misread) is resolved again from scratch,
 from the dstates the last map proved necessary: a minimal map read as seen has as many as any map of the
@@ -136,21 +141,9 @@ class MapStream:
         if cmap is None:
             if not retyping:
                 self._at_least = max(self._at_least, self._proved(tableau, angles))
-            # Where the minimal maps are more than the resolver lists, which ones it lists depends on the
-            # search's path, and a search from the bounds the last map proved takes another path than a
-            # fresh one: there the stream resolves as a fresh resolve does (where every minimal map is
-            # listed, their order is canonical whatever the path: cogmap.canonical_order). A last map
-            # with too many to list says the next likely has too.
-            # So does a search that rules out what the levels rejected in earlier resolves (below).
-            capped = self.map_ is not None and self.map_.models_capped
-            if capped:
-                cmap = self.resolver.resolve(tableau, deadline)
-            else:
-                carried = bool(self._rejected)
-                cmap = self.resolver.resolve(tableau, deadline, at_least=self._at_least, rejected=self._rejected)
-                del self._rejected[:-MAX_REJECTED]
-                if cmap.models_capped and (self._at_least or carried):
-                    cmap = self.resolver.resolve(tableau, deadline)
+            # (what the levels rejected in earlier resolves is ruled out before the search: see _rejected)
+            cmap = self.resolver.resolve(tableau, deadline, at_least=self._at_least, rejected=self._rejected)
+            del self._rejected[:-MAX_REJECTED]
             self.resolved_ += 1
             self._replay = self._observed.rebased(cmap) if self._observed is not None else None
             self._images = has_images(tableau)
@@ -166,9 +159,11 @@ class MapStream:
         """The last map extended by determinism to the new steps, if it is still the unique minimal map;
         else None."""
         old, cmap = self._tableau, self.map_
-        if old is None or cmap is None or not cmap.minimal or cmap.models_capped or cmap.suspect_steps \
+        if old is None or cmap is None or not cmap.minimal or cmap.suspect_steps \
                 or cmap.retyped_steps:  # its actions were typed against the whole experience: resolve anew
             return None
+        if cmap.models_capped and not self._replays:
+            return None  # clingo checks one map extended (a theory a user changed)
         if not cmap.unique and not self._replays:
             return None  # clingo checks one map extended (a theory a user changed): several need a search
         n = len(old)
@@ -229,11 +224,16 @@ class MapStream:
         self._replay = None  # stale unless all below holds
         lengths, length_types = travel_length_types(tableau)
         unique = len(replay.maps) == 1
-        maps = replay.extend(tableau.steps, angles, length_labels(lengths), self.resolver.max_models)
+        # Where the last maps were some of the minimal maps (more than the resolver lists), those that
+        # extend are minimal maps of the longer experience, and some of them; where none does, another
+        # might: no dstate more is proved.
+        some = cmap.models_capped
+        at_most = max(self.resolver.max_models, len(replay.maps)) if some else self.resolver.max_models
+        maps = replay.extend(tableau.steps, angles, length_labels(lengths), at_most)
         # Where it observed every step, a resolve of them gives it its maps (update), rather than a replay
         # made anew observing every step again (0.05 s a step at 330 steps: a stream's misread resolves)
         self._observed = replay if maps is not None and len(replay.views) == len(tableau.steps) else None
-        if replay.refuted:
+        if replay.refuted and not some:
             self._one_more()
         if not maps:
             return None
@@ -248,7 +248,8 @@ class MapStream:
                 return None
             maps = self._judged(maps)
             if not maps:  # the levels reject every way to extend: no map has as few dstates
-                self._one_more()
+                if not some:
+                    self._one_more()
                 return None
             replay.maps = maps
         self._replay, self._joined = replay, joined
@@ -265,7 +266,7 @@ class MapStream:
             return replace(cmap, steps=rows, dstate_of=[f"S{d}" for d in maps[0].dstate_of], action_types=types,
                            length_types=length_types, stats=stats)
         readings = sorted((m.reading(replay.metrical) for m in maps), key=lambda r: r.seq)
-        return map_of(tableau, readings, True, self.resolver.theory.levels, stats, action_types=types,
+        return map_of(tableau, readings, not some, self.resolver.theory.levels, stats, action_types=types,
                       length_types=length_types)
 
     def _judged(self, maps: list[Partition]) -> list[Partition]:
