@@ -162,9 +162,7 @@ class MapStream:
         if old is None or cmap is None or not cmap.minimal or cmap.suspect_steps \
                 or cmap.retyped_steps:  # its actions were typed against the whole experience: resolve anew
             return None
-        if cmap.models_capped and not self._replays:
-            return None  # clingo checks one map extended (a theory a user changed)
-        if not cmap.unique and not self._replays:
+        if (cmap.models_capped or not cmap.unique) and not self._replays:
             return None  # clingo checks one map extended (a theory a user changed): several need a search
         n = len(old)
         if not self._continues(tableau, angles):
