@@ -198,6 +198,29 @@ def test_the_replay_keeps_the_exact_map_where_the_resolver_would(seed, size):
     assert replay.exact_stands(n_dstates) == (bound == n_dstates and bound - without < len(clear))
 
 
+def test_the_replays_class_bounds_are_the_resolvers_on_classes_too_large_for_the_exact_bound():
+    # A class of more than EXACT_CLIQUE_UP_TO time points keeps the greedy bound, whose order (the time
+    # points showing most telling features first) must be the resolver's: on the 1,895-step prefix of a
+    # 6x6 grid's exploration a class of 64 time points had 3 dstates in the replay, 4 in the resolver,
+    # and the stream resolved every step from there on.
+    from bootmap.mapping.facts import read_actions, travel_lengths
+    from bootmap.mapping.grounding import EXACT_CLIQUE_UP_TO
+    from bootmap.mapping.replay import Prepassed, length_labels
+    rng = np.random.default_rng(92)
+    tableau = walk(random_world(rng, 6, 6, extra_edges=4, landmarks=0.4), 1895, rng, policy="explore")
+    resolver = Resolver(time_limit=60)
+    _, _, _, replay = _prepass_and_replay(tableau, resolver, True)
+    replay.exact_stands(len(replay.maps[0].view_of))  # (works out each class's bound)
+    angles, _ = read_actions(tableau)
+    stock = Prepassed(tableau.steps, angles, length_labels(travel_lengths(tableau)), True, resolver.future_depth)
+    bounds = stock.features.lower_bounds(stock.classes)
+    members = {tuple(t for t, c in zip(stock.classes.times, stock.classes.of_time) if c == k): bounds[k]
+               for k in range(len(bounds))}
+    large = [times for times in replay.members.values() if len(times) > EXACT_CLIQUE_UP_TO]
+    assert large
+    assert all(replay._lower[key] == members[tuple(times)] for key, times in replay.members.items())
+
+
 def _prepass_and_replay(tableau, resolver, metrical):
     from bootmap.mapping.facts import read_actions, tableau_facts, travel_lengths
     from bootmap.mapping.grounding import prepass
