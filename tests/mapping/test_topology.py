@@ -69,7 +69,7 @@ def by_python() -> MapCheck:
     return MapCheck(load_theory(), ("topological",))
 
 
-@settings(max_examples=400, deadline=None)
+@settings(max_examples=200, deadline=None)
 @given(maps, st.booleans())
 def test_what_the_python_reading_shows_is_what_clingo_shows(by_clingo, by_python, links, lone):
     # A map the level accepts is shown (places, paths and their directions, the order along paths, the
