@@ -219,3 +219,20 @@ def test_short_walks_resolve_to_the_same_maps_whether_the_first_try_is_grounded_
     b = Resolver(axioms=copied_axioms, levels=levels, time_limit=60).resolve(tableau)
     assert a.stats.bounds[0].result == b.stats.bounds[0].result
     assert _without_timings(a) == _without_timings(b)
+
+
+@settings(max_examples=10, deadline=None)
+@given(seed=st.integers(0, 10_000), spare=st.integers(0, 3))
+def test_a_layouts_slots_are_read_from_its_lead_as_from_all_its_facts(seed, spare):
+    # The search reads each class's slots from the layout before every grounding (its size, the renamings):
+    # from the slots/2 facts that lead it, not from the thousands after them; the same as reading all.
+    from bootmap.mapping.search.budget import layout_slots
+    from bootmap.mapping.vocabulary import MINIMISE_DSTATES, SLOTS
+    rng = np.random.default_rng(seed)
+    tableau = walk(random_world(rng, 4, 3, extra_edges=2, landmarks=0.4), 120, rng, policy="explore")
+    angles, _ = read_actions(tableau)
+    classes = Prepassed(tableau.steps, angles, {}, True, 3).classes
+    classes.lower = [1] * len(classes.sizes)
+    layout = classes.layout(classes.lower_bound + spare) + [MINIMISE_DSTATES()]
+    assert layout_slots(layout) == {key: m.number for key, m in SLOTS.args(layout)}
+    assert len(layout_slots(layout)) == len(classes.sizes)

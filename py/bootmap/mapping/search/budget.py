@@ -18,7 +18,7 @@ from clingo import Symbol
 
 from ...errors import SolveTimeout
 from ..grounding import Classes, Deadline
-from ..vocabulary import MAY_BE, SLOTS
+from ..vocabulary import DSTATE_BOUND, MAY_BE, SLOTS
 
 #: A search's grounding time grows faster than its size (:func:`grounding_size`): the places
 #: and paths of the topological level pair up candidate dstates (600 steps: 2.8 s for a layout, 18.5 s
@@ -110,16 +110,32 @@ class Budget:
 
 
 def layout_slots(layout: list[Symbol]) -> dict[Symbol, int]:
-    """Each class's slots in a layout (its ``slots/2`` facts), by class key."""
+    """Each class's slots in a layout (its ``slots/2`` facts), by class key. A layout of
+    :meth:`.Classes.layout` gives them first, after its bound: read there, not among the thousands of
+    facts after them (reading a symbol is a call into clingo)."""
+    if layout and DSTATE_BOUND.matches(layout[0]):
+        slots = {}
+        for s in layout[1:]:
+            if not SLOTS.matches(s):
+                break
+            key, m = s.arguments
+            slots[key] = m.number
+        return slots
     return {key: m.number for key, m in SLOTS.args(layout)}
 
 
-def grounding_size(slots: dict[Symbol, int], classes: Classes, facts: Sequence[Symbol]) -> int:
+def may_be(facts: Sequence[Symbol]) -> list[tuple[int, Symbol]]:
+    """The classes each suspect may have been misread from (the ``may_be/2`` facts), as (time point, class)."""
+    return [(t.number, key) for t, key in MAY_BE.args(facts)]
+
+
+def grounding_size(slots: dict[Symbol, int], classes: Classes, misread_from: Sequence[tuple[int, Symbol]]) -> int:
     """How large a search's grounding will be, before it is made: the candidate dstates of each
     time point (its class's ``slots`` in the layout, and those of the classes a suspect may be misread
-    from) times those of the next (what experience/next and determinism are grounded over)."""
+    from, ``misread_from``: :func:`may_be`) times those of the next (what experience/next and determinism
+    are grounded over)."""
     keys, of_time = classes.keys, classes.of_time
     cand = [slots.get(keys[c], 0) for c in of_time]
-    for t, key in MAY_BE.args(facts):
-        cand[t.number] += slots.get(key, 0)
+    for t, key in misread_from:
+        cand[t] += slots.get(key, 0)
     return sum(a * b for a, b in zip(cand, cand[1:])) + len(cand)

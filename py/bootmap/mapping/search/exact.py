@@ -23,7 +23,7 @@ from ..cogmap import CognitiveMap, Try
 from ..grounding import Grounding, prepass
 from ..replay import Prepassed
 from ..vocabulary import CANDIDATE_DSTATE, DSTATE, DSTATE_COST, MINIMISE_DSTATES, NEXT, ONE_PER_CLASS, Atoms
-from .budget import PREPARE_FACTOR, grounding_size, layout_slots
+from .budget import PREPARE_FACTOR, grounding_size, layout_slots, may_be
 
 if TYPE_CHECKING:
     from .budget import Budget
@@ -89,6 +89,7 @@ class ExactSearch:
     def __init__(self, state: SearchState, budget: Budget):
         self.state, self.budget = state, budget
         self.held: Held | None = None  # kept for the search one dstate above a refuted bound (.bounded)
+        self._may_be: tuple = (None, [])  # the facts in force and their may_be/2 facts, read (._size)
 
     def minimal_maps(self) -> CognitiveMap:
         """The minimal maps reading every view as seen, once the classes' lower bounds are known (from the
@@ -388,8 +389,13 @@ class ExactSearch:
         slots = layout_slots(layout)
         if state.classes is None:
             return slots, None
-        # (only a search that weighs misreads has may_be facts among its facts: .abduction)
-        return slots, grounding_size(slots, state.classes, state.facts if state.suspects else ())
+        # (only a search that weighs misreads has may_be facts among its facts: .abduction; read once for
+        # each set of facts)
+        if not state.suspects:
+            return slots, grounding_size(slots, state.classes, ())
+        if self._may_be[0] is not state.facts:
+            self._may_be = (state.facts, may_be(state.facts))
+        return slots, grounding_size(slots, state.classes, self._may_be[1])
 
     def _learns(self, size: int | None, defer: bool = True) -> bool:
         """Whether a search of this size learns from the maps the monotone levels reject: at least
