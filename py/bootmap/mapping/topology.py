@@ -102,35 +102,36 @@ class Reader:
         """The ``next/3`` atoms among ``model``, their links (one each, in the same order) and how many dstates
         they touch; read again only where ``model`` is not the one last split (a search asks why the level
         rejected the map it has just judged)."""
-        if self._last is None or self._last[0] is not model:
-            self.split(model)
-        return self._last[1], self._last[2], self._last[3]
+        _, transitions, links, n, _, _ = self._split_once(model)
+        return transitions, links, n
 
     def shown(self, model: Sequence[Symbol]) -> list[Symbol] | None:
         """What the level shows of the map among ``model`` (its ``next/3`` and ``dstate/1``), as clingo would
         show it (``place_of/2``, ``path_of/3``, ``ahead/2``, ``right/2``, ``left/2``; a place or path named
         by its least dstate in clingo's order of terms), or None where the level rejects the map."""
-        if self._last is None or self._last[0] is not model:
-            self.split(model)
-        _, _, links, n, ids, inputs = self._last
+        _, _, links, n, ids, inputs = self._split_once(model)
         found, shape = _read(links, n)
         if found is not None:
             return None
-        dstates = list(ids)  # (by index: ids were given in order)
-        for d in self._dstates(inputs):  # a dstate no transition touches is a place and a path of its own
-            if d not in ids:
-                ids[d] = len(dstates)
-                dstates.append(d)
+        # the links' dstates by index (ids were given in order), then those no transition touches: each a
+        # place and a path of its own
+        dstates = list(ids) + [d for d in dict.fromkeys(self._dstates(inputs)) if d not in ids]
         return shape.shown(dstates)
 
     def covers(self, model: Sequence[Symbol]) -> bool:
         """Whether ``model`` says of every dstate its transitions touch that it is one (``dstate/1``): as the
         theory's own rules do; the level derives nothing of a dstate that is not (a theory whose rule
         for ``dstate/1`` a user deleted is asked of clingo)."""
+        _, _, _, _, ids, inputs = self._split_once(model)
+        return len(ids) == 0 or set(ids) <= set(self._dstates(inputs))
+
+    def _split_once(self, model: Sequence[Symbol]) -> tuple:
+        """The last split (model, transitions, links, dstates, their ids, the map's inputs), split again only
+        where ``model`` is not the one last split: a search asks for the verdict, what is shown and why, of
+        one model after another."""
         if self._last is None or self._last[0] is not model:
             self.split(model)
-        ids, inputs = self._last[4], self._last[5]
-        return len(ids) == 0 or set(ids) <= set(self._dstates(inputs))
+        return self._last
 
     def _dstates(self, inputs: Sequence[Symbol]) -> list[Symbol]:
         """The dstates named by the ``dstate/1`` atoms among ``inputs``."""
