@@ -118,6 +118,25 @@ def test_score_in_unit_interval_and_matching_symmetric(pa, pb, noise):
     assert math.hypot(x + c * u - s * v, y + s * u + c * v) < 1e-6 and angle_error(t + w, 0.0) < 1e-6
 
 
+@settings(max_examples=12, deadline=None)
+@given(pa=poses, pb=poses, radius=st.sampled_from([1.0, 2.0, 3.0]))
+def test_a_match_never_puts_its_visits_farther_apart_than_a_place(pa, pb, radius):
+    # A match says the two visits are one place: its motion stays within the place radius, or it is no match.
+    m = ScanMatcher(place_radius_m=radius).match(cast(ROOM, pa), cast(ROOM, pb))
+    assert math.hypot(*m.transform[:2]) <= radius + 1e-9 or m.score == 0.0
+
+
+def test_the_room_seen_from_beyond_the_place_radius_is_no_match():
+    # The same walls from 1.7 m away: one place within a 3 m radius; within 1 m, ICP (first reach 1 m)
+    # slides the search's best shift on to the true motion, beyond that radius: no match.
+    pa, pb = (2.0, 2.5, 0.3), (3.6, 3.0, 0.5)
+    a, b = cast(ROOM, pa), cast(ROOM, pb)
+    wide = ScanMatcher(place_radius_m=3.0).match(a, b)
+    assert wide.score > 0.5 and math.dist(wide.transform[:2], relative(pa, pb)[:2]) < 0.05
+    narrow = ScanMatcher(place_radius_m=1.0).match(a, b)
+    assert narrow.score == 0.0
+
+
 @pytest.mark.parametrize("turn_deg", [150.0, -100.0, 180.0])
 def test_images_all_round_match_from_any_heading(turn_deg):
     """Images of 360 beams (a place's local map is rendered so): the room seen from a pose turned half
@@ -178,3 +197,24 @@ def test_a_shortlist_is_the_full_scores_of_at_least_k_partners_per_image(k, orde
     # A score is the full match's or 0 (not verified); symmetric; every image has k partners verified.
     assert (verified | (short == 0)).all() and np.allclose(short, short.T)
     assert ((verified & ~np.eye(6, dtype=bool)).sum(axis=1) >= k).all()
+
+
+@settings(max_examples=8, deadline=None)
+@given(mask=st.lists(st.booleans(), min_size=36, max_size=36), k=st.sampled_from([None, 2]))
+def test_only_the_allowed_pairs_are_scored_and_they_as_in_full(mask, k):
+    images = _places()
+    allowed = np.array(mask).reshape(6, 6)
+    either = (allowed | allowed.T) & ~np.eye(6, dtype=bool)
+    matcher = ScanMatcher(shortlist=k)
+    full, some = matcher.scores(images), matcher.scores(images, allowed=allowed)
+    # A pair neither way allowed scores 0; an allowed one its full match's score, or 0 off a shortlist.
+    assert (some[~either & ~np.eye(6, dtype=bool)] == 0).all()
+    exact = ScanMatcher().scores(images)
+    assert (np.isclose(some, exact) | (some == 0))[either].all()
+    if k is None:
+        assert np.allclose(some[either], full[either])
+
+
+def test_allowed_pairs_must_be_one_per_pair_of_images():
+    with pytest.raises(ValueError, match="allowed has shape"):
+        MATCHER.scores(_places(), allowed=np.ones((5, 5), dtype=bool))

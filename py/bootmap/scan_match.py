@@ -22,7 +22,9 @@ Method
    best candidates are refined by point-to-point ICP (``small_gicp``, Koide's library; the 2-D points lie
    at z = 0) of ``b``'s returns onto ``a``'s surface, with correspondences reaching ``coarse_m``, then
    ``fine_m``, then ``inlier_m`` (which drops returns the other scan never saw). The candidate of highest
-   score wins.
+   score wins, among those ICP leaves within ``place_radius_m``: a match says the two visits are one place,
+   so an alignment that only fits with them farther apart (ICP slid along a corridor, or onto a room
+   beside) is no match of it. No candidate left: the score is 0.
 4. **Score.** Once aligned, a return *is explained* when it lies within ``inlier_m`` of the other scan's
    surface, and *refuted* when it is not explained but lies nearer than what the other scan's beam towards
    it (and both neighbouring beams) saw: the other visit's laser passed through that spot, so no wall can
@@ -212,7 +214,8 @@ class ScanMatcher:
         How far ICP looks for a return's counterpart (m) in its first two stages (the third uses
         ``inlier_m``): about a third of a place's 3 m radius, then three inlier distances.
     place_radius_m : float
-        Two visits of one place stand at most this far apart (m): the reach of the search's shifts.
+        Two visits of one place stand at most this far apart (m): the reach of the search's shifts, and of
+        a match's motion after ICP (an alignment farther apart is not one place).
     search_step_m : float
         Shift step of the correlative search (m), and the width of its likelihood field: half of it is
         well within ICP's first reach.
@@ -324,34 +327,49 @@ class ScanMatcher:
                 T = small_gicp.align(a.surface_cloud, source, a.surface_tree, init_T_target_source=T,
                                      registration_type="ICP", max_correspondence_distance=reach,
                                      max_iterations=self.max_iterations).T_target_source
+            if math.hypot(T[0, 3], T[1, 3]) > self.place_radius_m:
+                continue  # aligned only farther apart than a place's radius: not a match of one place
             Ti = np.linalg.inv(T)
             exp_b, ref_b = a.judge(b.points3 @ T[:3, :3].T + T[:3, 3], self.inlier_m)
             exp_a, ref_a = b.judge(a.points3 @ Ti[:3, :3].T + Ti[:3, 3], self.inlier_m)
             net = max(0, exp_a + exp_b - ref_a - ref_b) / (na + nb)
             if best is None or net > best[0]:
                 best = (net, T, (exp_a, exp_b), (ref_a, ref_b))
+        if best is None:
+            return Match(0.0, (0.0, 0.0, 0.0), (0, 0), (na, nb))
         net, T, explained, refuted = best
         return Match(net, planar(T), explained, (na, nb), refuted)
 
-    def scores(self, images) -> np.ndarray:
+    def scores(self, images, allowed=None) -> np.ndarray:
         """Scores of all pairs of images (of the shortlisted pairs, with ``shortlist``).
 
         Parameters
         ----------
         images : array-like of shape (n_images, n_beams)
+        allowed : array-like of shape (n_images, n_images) of bool, optional
+            Only the pairs ``i, j`` with ``allowed[i, j]`` or ``allowed[j, i]`` are searched and scored
+            (and shortlisted among themselves), e.g. those odometry allows to be one place
+            (:func:`bootmap.experiments.evaluate.within_reach`); the others score 0. Every pair when None.
 
         Returns
         -------
         ndarray of shape (n_images, n_images)
             ``scores[i, j]``: the score of :meth:`match` of images ``i`` and ``j`` (symmetric; higher is
-            more alike), or 0 for a pair not on either image's shortlist. The diagonal is 1 where an image
-            has returns, else 0, and means nothing.
+            more alike), or 0 for a pair not allowed or not on either image's shortlist. The diagonal is 1
+            where an image has returns, else 0, and means nothing.
         """
         X = np.asarray(images, dtype=float)
         if X.ndim != 2:
             raise ValueError(f"images must be a 2-D array (n_images, n_beams), got shape {X.shape}")
         n = len(X)
-        pairs = [(i, j) for i in range(n) for j in range(i + 1, n)]
+        if allowed is None:
+            pairs = [(i, j) for i in range(n) for j in range(i + 1, n)]
+        else:
+            allowed = np.asarray(allowed, dtype=bool)
+            if allowed.shape != (n, n):
+                raise ValueError(f"allowed has shape {allowed.shape}, for {n} images it must be ({n}, {n})")
+            i, j = np.nonzero(np.triu(allowed | allowed.T, 1))
+            pairs = list(zip(i.tolist(), j.tolist()))
         coarse = None  # each pair's candidate motions, where the shortlist's search found them
         if self.shortlist is not None and self.shortlist < n - 1:
             pairs, coarse = self._shortlisted(X, pairs)

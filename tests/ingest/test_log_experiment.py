@@ -3,12 +3,17 @@
 import json
 import re
 
+import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from bootmap.cli import main
 from bootmap.errors import BadInput, LogError
 from bootmap.experiments.evaluate import DESCRIPTORS
-from bootmap.experiments.log import LOCAL_MAP, LOCAL_MAP_IN_REACH, SCAN_MATCH, run_log_experiment
+from bootmap.experiments.log import (LOCAL_MAP, LOCAL_MAP_IN_REACH, SCAN_MATCH, place_recognition_along,
+                                     run_log_experiment, visits_along)
+from bootmap.ingest.ingest import read_log
 from bootmap.ingest.places import PlaceDetector
 
 from log_data import EXCERPT
@@ -263,3 +268,43 @@ def test_place_recognition_is_judged_by_a_method_fixed_beforehand_not_by_the_bes
     scans_only = {"place_recognition": {d: figures(0.1 * i) for i, d in enumerate(DESCRIPTORS)}}
     first = next(d for d in RECOGNITION_PREFERENCE if d in DESCRIPTORS)
     assert place_recognition_method(scans_only)[0] == first
+
+
+def test_place_recognition_along_the_drive_finds_the_second_lap_where_it_was_on_the_first(tmp_path):
+    """Two laps of the ring corridor, a visit every 2 m: every visit of the second lap revisits the first,
+    odometry (exact here) allows its true match, and scan matching the local maps puts most at the right
+    place; the first lap has nothing earlier to revisit."""
+    log = write_drive_log(tmp_path / "ring.log", ring_walls(), ring_poses(laps=2))
+    r = place_recognition_along(log)
+    scans = read_log(log)
+    visits = visits_along(scans)
+    assert r["visits"] == len(visits) and r["every_m"] == 2.0
+    lap = len(visits) // 2
+    assert lap - 3 <= r["revisits"] <= r["queries"] <= len(visits)
+    assert r["best_correct"] >= 0.75 * r["revisits"]
+    assert 0.0 <= r["recall_at_99_precision"] <= r["recall_at_95_precision"] <= r["best_correct"] / r["revisits"]
+
+
+@settings(max_examples=25, deadline=None)
+@given(steps=st.lists(st.floats(0.0, 3.0), min_size=1, max_size=60), every=st.sampled_from([0.5, 2.0, 5.0]))
+def test_visits_along_are_every_so_many_metres_of_the_drive(steps, every):
+    from bootmap.ingest.scans import Scan
+
+    x = np.concatenate([[0.0], np.cumsum(steps)])
+    scans = [Scan(float(k), np.full(3, 5.0), -1.0, 1.0, 20.0, (float(v), 0.0, 0.0)) for k, v in enumerate(x)]
+    taken = visits_along(scans, every)
+    assert taken[0] == 0 and taken == sorted(set(taken))
+    gaps = np.diff(x[taken])
+    assert (gaps >= every - 1e-9).all()
+    # None is skipped: between two taken scans, every scan before the second was under every_m on.
+    for a, b in zip(taken, taken[1:]):
+        assert (x[a:b] - x[a] < every - 1e-9).all()
+
+
+def test_place_recognition_along_refuses_what_it_cannot_judge(tmp_path, square):
+    with pytest.raises(BadInput, match="every_m > 0"):
+        place_recognition_along(square, every_m=0.0)
+    bare = tmp_path / "bare.log"
+    bare.write_text("".join(line + "\n" for line in square.read_text().splitlines() if not line.startswith("TRUEPOS")))
+    with pytest.raises(LogError, match="bare.log: the log has no true poses"):
+        place_recognition_along(bare)

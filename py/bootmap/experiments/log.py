@@ -298,6 +298,68 @@ def evaluation_figures(r: dict) -> dict:
             "perfect_odometry_map_accuracy": None if perfect is None else perfect["map"].get("dstate_accuracy")}
 
 
+#: Place recognition along the drive: a visit every so many metres of odometry's path (two place radii
+#: apart: each true revisit has an earlier visit within a radius of it).
+ALONG_EVERY_M = 2.0
+
+
+def visits_along(scans, every_m: float = ALONG_EVERY_M) -> list[int]:
+    """The scans a drive is sampled at for place recognition along it: the first, then each first scan at
+    least ``every_m`` further along odometry's path than the last one taken."""
+    if not every_m > 0:
+        raise BadInput(f"place recognition along the drive needs every_m > 0, got {every_m}")
+    xy = np.array([s.odometry[:2] for s in scans], dtype=float).reshape(-1, 2)
+    travelled = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))]) if len(xy) else xy[:, 0]
+    taken, due = [], 0.0
+    for k, d in enumerate(travelled):
+        if d >= due - 1e-9:
+            taken.append(k)
+            due = d + every_m
+    return taken
+
+
+def place_recognition_along(log: str | Path, every_m: float = ALONG_EVERY_M, radius_m: float = 3.0,
+                            max_range: float = 20.0, calibrate: bool = True) -> dict:
+    """Place recognition judged along the whole drive, not only at the map's dstates: many more queries
+    (a log's few dstate revisits make a precision-recall curve of a handful of points).
+
+    The log (any of :func:`~bootmap.ingest.ingest.read_log`'s formats) is sampled at a visit every
+    ``every_m`` of odometry's path (:func:`visits_along`), each described by its local map
+    (:mod:`bootmap.ingest.local_maps`) on the odometry calibrated by the laser (as the experiment's map is
+    made), matched by :class:`~bootmap.scan_match.ScanMatcher` among the earlier visits odometry allows to be
+    one place (:func:`~bootmap.experiments.evaluate.within_reach`, the method the experiment is judged by:
+    ``LOCAL_MAP_IN_REACH``), judged against the corrected poses by
+    :func:`~bootmap.experiments.evaluate.place_recognition`.
+
+    Returns
+    -------
+    dict
+        ``every_m`` and :func:`~bootmap.experiments.evaluate.place_recognition`'s figures.
+
+    Raises
+    ------
+    LogError
+        The log cannot be read, or a scan has no true pose.
+    """
+    from ..ingest.calibrate import OdometryCalibration
+    from ..scan_match import ScanMatcher
+
+    scans = read_log(log)
+    if any(s.truth is None for s in scans):
+        raise LogError("the log has no true poses: nothing to judge place recognition against", str(log))
+    if calibrate:
+        scans = OdometryCalibration().fit(scans).transform(scans)
+    visits = visits_along(scans, every_m)
+    xy = np.array([scans[k].odometry[:2] for k in visits], dtype=float).reshape(-1, 2)
+    driven = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))]) if len(xy) else xy[:, 0]
+    reach = within_reach(xy, driven, radius_m)
+    matcher = ScanMatcher(max_range=max_range, place_radius_m=radius_m, n_jobs=SCAN_MATCH_JOBS, fov_deg=360.0,
+                          shortlist=SCAN_MATCH_SHORTLIST)
+    scores = matcher.scores(local_images(scans, visits, radius_m, max_range=max_range), allowed=reach)
+    poses = [scans[k].truth for k in visits]
+    return {"every_m": every_m, **place_recognition(scores, poses, radius_m, reach)}
+
+
 def place_recognition_method(r: dict) -> tuple[str, dict]:
     """Place recognition as the experiment judges it: the first of ``RECOGNITION_PREFERENCE`` it measured,
     and its figures. The order is fixed before any log is looked at (never the descriptor that did best on
