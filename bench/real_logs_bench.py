@@ -62,6 +62,10 @@ def row(name: str, r: dict, seconds: float) -> list[str]:
             f"{at95}, {pr['revisits']} revisits", _pct(perfect), f"{seconds:.1f}"]
 
 
+def _at95(pr: dict) -> str:
+    return "-" if pr["recall_at_95_precision"] is None else f"{pr['recall_at_95_precision']:.2f}"
+
+
 def table(rows: list[list[str]]) -> str:
     """The rows as a Markdown table."""
     lines = ["| " + " | ".join(COLUMNS) + " |", "|" + "---|" * len(COLUMNS)]
@@ -100,10 +104,10 @@ def main(argv=None) -> int:
         print(f"{name}: {seconds:.1f} s", file=sys.stderr, flush=True)
     print(table(rows))
     print()
-    print("revisits whose best earlier match is right, by descriptor:")
+    print("revisits whose best earlier match is right, and recall at 95% precision, by descriptor:")
     for name, r, _ in runs:
         pr = r["place_recognition"]
-        counts = ", ".join(f"{d} {p['best_correct']}" for d, p in pr.items())
+        counts = ", ".join(f"{d} {p['best_correct']} ({_at95(p)})" for d, p in pr.items())
         print(f"  {name}: {counts} (of {next(iter(pr.values()))['revisits']})")
     print()
     print("\n".join(f"anchor, {a}" for a in ANCHORS))

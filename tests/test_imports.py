@@ -27,7 +27,7 @@ STAGES: list[tuple[str, tuple[str, ...]]] = [
     ("sources", ("bootmap.sim", "bootmap.ingest", "bootmap.ingest.scans", "bootmap.ingest.carmen", "bootmap.ingest.g2o",
                  "bootmap.ingest.rosbag", "bootmap.ingest.dstates", "bootmap.ingest.places", "bootmap.ingest.truth",
                  "bootmap.ingest.ingest")),
-    ("views", ("bootmap.views", "bootmap.scan_match")),
+    ("views", ("bootmap.views", "bootmap.scan_match", "bootmap.surroundings")),
     ("map", ("bootmap.mapping", "bootmap.layout")),
     ("recognition", ("bootmap.recognise", "bootmap.learners", "bootmap.alignment")),
     ("agent", ("bootmap.agent",)),

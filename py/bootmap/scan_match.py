@@ -289,6 +289,13 @@ class ScanMatcher:
             return Match(m.score, _inverse(m.transform), m.inliers[::-1], m.points[::-1], m.refuted[::-1])
         return self._match(self.prepare(a), self.prepare(b))
 
+    def match_prepared(self, a: _Scan, b: _Scan, start: tuple[float, float, float] | None = None) -> Match:
+        """:meth:`match` of two images already :meth:`prepare`-d (``b`` onto ``a``, in that order), to match
+        each many times. Given ``start`` (``b``'s pose in ``a``'s frame, as :attr:`Match.transform`), ICP
+        refines that motion alone, with no search: where another source (odometry, an earlier match) says
+        how the two visits lie."""
+        return self._match(a, b, None if start is None else [se2(*start)])
+
     def _search(self, a: _Scan, b: _Scan) -> tuple[float, list[np.ndarray]]:
         """The correlative search of ``b``'s (thinned) returns over ``a``'s likelihood field, every
         ``search_step_deg`` of heading and every ``search_step_m`` of shift within a place's radius: its best

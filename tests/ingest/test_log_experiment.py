@@ -11,8 +11,9 @@ from hypothesis import strategies as st
 from bootmap.cli import main
 from bootmap.errors import BadInput, LogError
 from bootmap.experiments.evaluate import DESCRIPTORS
-from bootmap.experiments.log import (LOCAL_MAP, LOCAL_MAP_IN_REACH, SCAN_MATCH, place_recognition_along,
-                                     run_log_experiment, visits_along)
+from bootmap.experiments.log import (LOCAL_MAP, LOCAL_MAP_IN_REACH, LOCAL_MAP_VERIFIED, SCAN_MATCH,
+                                     place_recognition_along, place_recognition_method, run_log_experiment,
+                                     visits_along)
 from bootmap.ingest.ingest import read_log
 from bootmap.ingest.places import PlaceDetector
 
@@ -191,6 +192,11 @@ def test_places_the_laser_shows_are_revisited_lap_after_lap_and_scan_matching_re
     reached = r["place_recognition"][LOCAL_MAP_IN_REACH]
     assert (reached["revisits"], reached["queries"]) == (8, local["queries"])
     assert reached["recall_at_95_precision"] >= local["recall_at_95_precision"]
+    # Verified by their surroundings (the method judged), the same revisits, each found.
+    verified = r["place_recognition"][LOCAL_MAP_VERIFIED]
+    assert place_recognition_method(r)[0] == LOCAL_MAP_VERIFIED
+    assert (verified["revisits"], verified["queries"]) == (8, local["queries"])
+    assert verified["best_correct"] == 8 and verified["recall_at_95_precision"] >= 0.75
     # The raw scans of a corner's two visits, a few centimetres apart, are told apart less well.
     assert matched["average_precision"] >= max(r["place_recognition"][d]["average_precision"] for d in DESCRIPTORS)
 
@@ -271,11 +277,18 @@ def test_place_recognition_is_judged_by_a_method_fixed_beforehand_not_by_the_bes
 
 
 def test_place_recognition_along_the_drive_finds_the_second_lap_where_it_was_on_the_first(tmp_path):
-    """Two laps of the ring corridor, a visit every 2 m: every visit of the second lap revisits the first,
-    odometry (exact here) allows its true match, and scan matching the local maps puts most at the right
-    place; the first lap has nothing earlier to revisit."""
+    """Two laps of the ring corridor, a visit every 2 m: the visits of the second lap revisit the first,
+    odometry (exact here) allows the true match, and scan matching the local maps, verified by their
+    surroundings, puts each at the right place; the first lap has nothing earlier to revisit."""
     log = write_drive_log(tmp_path / "ring.log", ring_walls(), ring_poses(laps=2))
     r = place_recognition_along(log)
+    assert r["verified"]
+    # A corridor of one width looks alike all along it: matched place by place, a visit's look-alikes a few
+    # metres on outscore it; verified by its surroundings (the corners 6 m on), every revisit is found.
+    plain = place_recognition_along(log, verify=False)
+    assert (plain["revisits"], plain["queries"]) == (r["revisits"], r["queries"])
+    assert r["best_correct"] == r["revisits"] > plain["best_correct"]
+    assert r["recall_at_95_precision"] >= 0.9 > plain["recall_at_95_precision"] + 0.5
     scans = read_log(log)
     visits = visits_along(scans)
     assert r["visits"] == len(visits) and r["every_m"] == 2.0

@@ -51,6 +51,8 @@ from .evaluate import (DESCRIPTORS, against_baselines, dead_reckoned_dstates, de
 from ..ingest.ingest import log_tableau, read_log, travel_ends, turn_ends
 from ..ingest.truth import visit_positions
 from ..ingest.local_maps import local_images
+from ..ingest.calibrate import OdometryCalibration
+from ..surroundings import SurroundingsCheck
 
 #: How k is chosen for the map's views: "auto" takes M's k unless M degenerates (k <= 2), then
 #: Davies-Bouldin's.
@@ -62,10 +64,14 @@ LOCAL_MAP = "local map"
 #: ... and by scan matching the local maps of the visits odometry allows to be one place only
 #: (:func:`~bootmap.experiments.evaluate.within_reach`): as a loop closer searches.
 LOCAL_MAP_IN_REACH = "local map in reach"
+#: ... and those matches, each visit's likeliest three, verified by the places around them
+#: (:class:`~bootmap.surroundings.SurroundingsCheck`).
+LOCAL_MAP_VERIFIED = "local map verified"
 #: Which place recognition the experiment is judged by: the first of these it measured (scan matching is
-#: optional; the scan descriptors always run). The local maps searched within loop closing's reach first: the
-#: hybrid SSH's description of a place, verified geometrically, among the candidates a loop closer would weigh.
-RECOGNITION_PREFERENCE = (LOCAL_MAP_IN_REACH, LOCAL_MAP, SCAN_MATCH, *DESCRIPTORS)
+#: optional; the scan descriptors always run). The local maps searched within loop closing's reach and
+#: verified by their surroundings first: the hybrid SSH's description of a place, verified geometrically,
+#: among the candidates a loop closer would weigh, and checked against more of the experience than one place.
+RECOGNITION_PREFERENCE = (LOCAL_MAP_VERIFIED, LOCAL_MAP_IN_REACH, LOCAL_MAP, SCAN_MATCH, *DESCRIPTORS)
 #: Processes scan matching runs in (its pairs are independent; the result does not depend on how many).
 SCAN_MATCH_JOBS = 2
 #: Each visit's so many likeliest matches by the correlative search alone are aligned and scored in full
@@ -132,8 +138,9 @@ def _experiment(scans, log, lap, seed, k_max, time_limit, quantum_deg, view_crit
     """The experiment on scans already read: results (without targets), the tableau and the map. Without
     ``recognise``, recognition (the learners, nearest neighbour, place recognition) is left out: None."""
     timings = lap.timings
+    calibration = OdometryCalibration().fit(scans) if calibrate else None
     tableau = log_tableau(scans, detector, max_range=max_range, radius_m=radius_m, source=str(log),
-                          junctions=junctions, places=places, calibrate=calibrate)
+                          junctions=junctions, places=places, calibrate=calibrate, calibration=calibration)
     if any(s.truth is None for s in tableau.steps):
         raise LogError("the log has no true poses (g2o vertices, CARMEN robot poses or a ROS --truth-topic): "
                        "nothing to evaluate the map against", str(log))
@@ -173,22 +180,25 @@ def _experiment(scans, log, lap, seed, k_max, time_limit, quantum_deg, view_crit
         "dead_reckoning": {"dstates": len(set(dead)), "dstate_accuracy": dstate_accuracy(truth, dead)},
         "recognition": recognition, "nn_revisited": nn, "timings": timings}
     visits = tableau.meta["dstates"]["scans"]
-    local = local_images(scans, visits, radius_m, max_range=max_range) if scan_match and recognise else None
+    seen = calibration.transform(scans) if calibration is not None else scans  # the odometry the learning reads
+    local = local_images(seen, visits, radius_m, max_range=max_range) if scan_match and recognise else None
     # The pairs loop closing's own dead reckoning allows to be one place (its drift bound, on its numbers).
     reach = None if local is None else within_reach(*dead_reckoning(tableau), radius_m)
     results.update(_slam_evaluation(results, images, poses, positions, truth, cmap, dead, radius_m, recognise,
-                                    max_range if scan_match else None, local, reach))
+                                    max_range if scan_match else None, local, reach, (seen, visits)))
     lap("evaluate_s")
     return results, tableau, cmap
 
 
 def _slam_evaluation(r: dict, images, poses, positions, truth, cmap, dead, radius_m,
                      recognise_places: bool = True, scan_match_range: float | None = None,
-                     local: np.ndarray | None = None, reach: np.ndarray | None = None) -> dict:
+                     local: np.ndarray | None = None, reach: np.ndarray | None = None,
+                     drive: tuple | None = None) -> dict:
     """The figures SLAM papers report, against the corrected poses: the map beside both baselines,
     loop closures (the map's and odometry alone's) and place recognition by each descriptor (and by
     scan matching images clipped at ``scan_match_range``, when given, and the visits' ``local`` maps
-    rendered all round, also among the pairs odometry allows alone, ``reach``). A loop closure joins
+    rendered all round, also among the pairs odometry allows alone, ``reach``, and those verified by their
+    surroundings on the ``drive``: its scans and the visits' scan indices). A loop closure joins
     dstates, judged where the truth places their visits (``positions``: a turn's two ends at their middle,
     as the true places are made); place recognition matches images, judged where they were taken
     (``poses``)."""
@@ -219,6 +229,9 @@ def _slam_evaluation(r: dict, images, poses, positions, truth, cmap, dead, radiu
                 recognition[LOCAL_MAP] = place_recognition(scores, poses, radius_m)
                 if reach is not None:
                     recognition[LOCAL_MAP_IN_REACH] = place_recognition(scores, poses, radius_m, reach)
+                    if drive is not None:
+                        verified = SurroundingsCheck(matcher).verify(*drive, scores, reach)
+                        recognition[LOCAL_MAP_VERIFIED] = place_recognition(verified, poses, radius_m, reach)
     return {"baselines": baselines, "loop_closure": loops, "place_recognition": recognition}
 
 
@@ -319,7 +332,7 @@ def visits_along(scans, every_m: float = ALONG_EVERY_M) -> list[int]:
 
 
 def place_recognition_along(log: str | Path, every_m: float = ALONG_EVERY_M, radius_m: float = 3.0,
-                            max_range: float = 20.0, calibrate: bool = True) -> dict:
+                            max_range: float = 20.0, calibrate: bool = True, verify: bool = True) -> dict:
     """Place recognition judged along the whole drive, not only at the map's dstates: many more queries
     (a log's few dstate revisits make a precision-recall curve of a handful of points).
 
@@ -327,21 +340,21 @@ def place_recognition_along(log: str | Path, every_m: float = ALONG_EVERY_M, rad
     ``every_m`` of odometry's path (:func:`visits_along`), each described by its local map
     (:mod:`bootmap.ingest.local_maps`) on the odometry calibrated by the laser (as the experiment's map is
     made), matched by :class:`~bootmap.scan_match.ScanMatcher` among the earlier visits odometry allows to be
-    one place (:func:`~bootmap.experiments.evaluate.within_reach`, the method the experiment is judged by:
-    ``LOCAL_MAP_IN_REACH``), judged against the corrected poses by
-    :func:`~bootmap.experiments.evaluate.place_recognition`.
+    one place (:func:`~bootmap.experiments.evaluate.within_reach`) and, with ``verify``, each visit's likeliest
+    three verified by their surroundings (:class:`~bootmap.surroundings.SurroundingsCheck`; the method the
+    experiment is judged by: ``LOCAL_MAP_VERIFIED``, else ``LOCAL_MAP_IN_REACH``), judged against the
+    corrected poses by :func:`~bootmap.experiments.evaluate.place_recognition`.
 
     Returns
     -------
     dict
-        ``every_m`` and :func:`~bootmap.experiments.evaluate.place_recognition`'s figures.
+        ``every_m``, ``verified`` and :func:`~bootmap.experiments.evaluate.place_recognition`'s figures.
 
     Raises
     ------
     LogError
         The log cannot be read, or a scan has no true pose.
     """
-    from ..ingest.calibrate import OdometryCalibration
     from ..scan_match import ScanMatcher
 
     scans = read_log(log)
@@ -356,8 +369,10 @@ def place_recognition_along(log: str | Path, every_m: float = ALONG_EVERY_M, rad
     matcher = ScanMatcher(max_range=max_range, place_radius_m=radius_m, n_jobs=SCAN_MATCH_JOBS, fov_deg=360.0,
                           shortlist=SCAN_MATCH_SHORTLIST)
     scores = matcher.scores(local_images(scans, visits, radius_m, max_range=max_range), allowed=reach)
+    if verify:
+        scores = SurroundingsCheck(matcher).verify(scans, visits, scores, reach)
     poses = [scans[k].truth for k in visits]
-    return {"every_m": every_m, **place_recognition(scores, poses, radius_m, reach)}
+    return {"every_m": every_m, "verified": verify, **place_recognition(scores, poses, radius_m, reach)}
 
 
 def place_recognition_method(r: dict) -> tuple[str, dict]:

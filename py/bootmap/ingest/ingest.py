@@ -75,7 +75,8 @@ def _shown(scans: Iterable[Scan], progress: bool) -> Iterator[Scan]:
 
 def log_tableau(scans: list[Scan], detector: TurnDetector = TurnDetector(), max_range: float = 20.0,
                 radius_m: float = 3.0, source: str = "log", junctions: JunctionDetector | None = None,
-                places: PlaceDetector | None = None, calibrate: bool = True) -> Tableau:
+                places: PlaceDetector | None = None, calibrate: bool = True,
+                calibration: OdometryCalibration | None = None) -> Tableau:
     """The tableau of a log: one step per dstate (see the module docstring).
 
     Parameters
@@ -101,11 +102,17 @@ def log_tableau(scans: list[Scan], detector: TurnDetector = TurnDetector(), max_
         Calibrate odometry's heading by the laser where it drifts (:mod:`bootmap.ingest.calibrate`): the
         dstates are chosen, and their odometry recorded, on the calibrated track; ``meta.odometry`` says
         what was found and whether it was applied.
+    calibration : OdometryCalibration, optional
+        One already fitted to these scans (a caller that needs the calibrated scans too), used when
+        ``calibrate``; else one is fitted here.
     """
     if len(scans) < 2:
         raise LogError(f"{len(scans)} scan{'' if len(scans) == 1 else 's'}: a log needs at least 2 to have any "
                        "motion", source)
-    calibration = OdometryCalibration().fit(scans) if calibrate else None
+    if calibration is None and calibrate:
+        calibration = OdometryCalibration().fit(scans)
+    elif not calibrate:
+        calibration = None
     if calibration is not None:
         scans = calibration.transform(scans)
     distance, heading = odometry_track([s.odometry for s in scans])
