@@ -18,13 +18,13 @@ too, wherever both drives saw them. So a match of visit ``j`` onto an earlier vi
 The verified score is the mean of the match's own score and its surroundings' scores: a look-alike whose
 surroundings differ loses, a revisit whose surroundings agree keeps its score. Only each visit's ``top``
 likeliest earlier visits are checked (by the scores given), among those odometry says the robot has left
-since (a visit beyond a place radius of them between the two), as place recognition verifies what it
-retrieves; every other pair scores 0. Only the scans' odometry and ranges are read, never their true poses.
+since (a scan between the two lies beyond a place radius of the earlier), as place recognition verifies
+what it retrieves; every other pair scores 0. Only the scans' odometry and ranges are read, never their true poses.
 
 Example
 -------
-Two laps of a corridor that looks alike everywhere but for a pillar at one end; the second lap's visits
-matched onto the first: a match's surroundings confirm it (the ``scores`` given here say every pair alike):
+A corridor driven twice from its start, a scan every 0.5 m: the second drive's visit at 5 m matched onto
+the first's (the ``scores`` given here say the pair alike), and the places 6 m before and after it agree:
 
 >>> import numpy as np
 >>> from bootmap.ingest.scans import Scan
