@@ -12,8 +12,8 @@ from bootmap.cli import main
 from bootmap.errors import BadInput, LogError
 from bootmap.experiments.evaluate import DESCRIPTORS
 from bootmap.experiments.log import (LOCAL_MAP, LOCAL_MAP_IN_REACH, LOCAL_MAP_VERIFIED, SCAN_MATCH,
-                                     place_recognition_along, place_recognition_method, run_log_experiment,
-                                     visits_along)
+                                     headline, place_recognition_along, place_recognition_method,
+                                     run_log_experiment, visits_along)
 from bootmap.ingest.ingest import read_log
 from bootmap.ingest.places import PlaceDetector
 
@@ -197,6 +197,10 @@ def test_places_the_laser_shows_are_revisited_lap_after_lap_and_scan_matching_re
     assert place_recognition_method(r)[0] == LOCAL_MAP_VERIFIED
     assert (verified["revisits"], verified["queries"]) == (8, local["queries"])
     assert verified["best_correct"] == 8 and verified["recall_at_95_precision"] >= 0.75
+    # The headline names each method as it is, the judged one as such; only the raw descriptors are scans.
+    lines = "\n".join(headline(r))
+    assert "place recognition (local map verified, the one judged;" in lines
+    assert "place recognition (raw scans;" in lines and "local map in reach;" in lines
     # The raw scans of a corner's two visits, a few centimetres apart, are told apart less well.
     assert matched["average_precision"] >= max(r["place_recognition"][d]["average_precision"] for d in DESCRIPTORS)
 

@@ -461,7 +461,7 @@ def evaluation_lines(r: dict) -> list[str]:
                          f"{_joins(loops[who]['places'])}")
     method = place_recognition_method(r)[0] if r["place_recognition"] else None
     for d, p in r["place_recognition"].items():
-        what = d if d in (SCAN_MATCH, LOCAL_MAP, LOCAL_MAP_IN_REACH) else f"{d} scans"
+        what = f"{d} scans" if d in DESCRIPTORS else d
         judged = ", the one judged" if d == method else ""
         lines.append(f"  place recognition ({what}{judged}; each visit's best earlier match, {p['revisits']} of "
                      f"{p['queries']} visits with a true revisit): recall {_pct(p['recall_at_95_precision'])} at "
