@@ -48,6 +48,7 @@ from typing import Sequence
 import numpy as np
 
 from .errors import BadInput
+from .ingest.dstates import odometry_track
 from .ingest.local_maps import LOCAL_REACH_M, local_images
 from .ingest.scans import Scan, between, compose
 from .scan_match import ScanMatcher
@@ -168,8 +169,7 @@ def _verified(check: SurroundingsCheck, scans: list[Scan], visits: list[int], pa
     m = check.matcher
     radius = m.place_radius_m
     odometry = np.array([s.odometry[:3] for s in scans], dtype=float).reshape(-1, 3)
-    step = np.hypot(*np.diff(odometry[:, :2], axis=0).T) if len(scans) > 1 else np.zeros(0)
-    travelled = np.concatenate([[0.0], np.cumsum(step)])
+    travelled, _ = odometry_track(odometry)
     prepared: dict[int, object] = {}
 
     def local(k: int):

@@ -43,7 +43,7 @@ from ..mapping.loops import MAPPERS, dead_reckoning
 from ..metrics import dstate_accuracy
 from ..views import ViewClusterer, davies_bouldin_k, view_labels, view_table
 from ..ingest.calibrate import calibration_text
-from ..ingest.dstates import JunctionDetector, TurnDetector
+from ..ingest.dstates import JunctionDetector, TurnDetector, odometry_track
 from ..ingest.places import PlaceDetector
 from .evaluate import (DESCRIPTORS, against_baselines, dead_reckoned_dstates, descriptor_scores, loop_closure,
                        map_against_truth, nn_on_revisits, place_of_truth, place_recognition, sector_of_truth,
@@ -52,6 +52,7 @@ from ..ingest.ingest import log_tableau, read_log, travel_ends, turn_ends
 from ..ingest.truth import visit_positions
 from ..ingest.local_maps import local_images
 from ..ingest.calibrate import OdometryCalibration
+from ..scan_match import ScanMatcher
 from ..surroundings import SurroundingsCheck
 
 #: How k is chosen for the map's views: "auto" takes M's k unless M degenerates (k <= 2), then
@@ -217,14 +218,10 @@ def _slam_evaluation(r: dict, images, poses, positions, truth, cmap, dead, radiu
     if recognise_places:
         recognition = {d: place_recognition(descriptor_scores(images, d), poses, radius_m) for d in DESCRIPTORS}
         if scan_match_range is not None:
-            from ..scan_match import ScanMatcher
-
-            matcher = ScanMatcher(max_range=scan_match_range, place_radius_m=radius_m, n_jobs=SCAN_MATCH_JOBS,
-                                  shortlist=SCAN_MATCH_SHORTLIST)
-            recognition[SCAN_MATCH] = place_recognition(matcher.scores(images), poses, radius_m)
+            scores = _matcher(scan_match_range, radius_m).scores(images)
+            recognition[SCAN_MATCH] = place_recognition(scores, poses, radius_m)
             if local is not None:
-                matcher = ScanMatcher(max_range=scan_match_range, place_radius_m=radius_m, n_jobs=SCAN_MATCH_JOBS,
-                                      fov_deg=360.0, shortlist=SCAN_MATCH_SHORTLIST)
+                matcher = _matcher(scan_match_range, radius_m, fov_deg=360.0)
                 scores = matcher.scores(local)
                 recognition[LOCAL_MAP] = place_recognition(scores, poses, radius_m)
                 if reach is not None:
@@ -233,6 +230,13 @@ def _slam_evaluation(r: dict, images, poses, positions, truth, cmap, dead, radiu
                         verified = SurroundingsCheck(matcher).verify(*drive, scores, reach)
                         recognition[LOCAL_MAP_VERIFIED] = place_recognition(verified, poses, radius_m, reach)
     return {"baselines": baselines, "loop_closure": loops, "place_recognition": recognition}
+
+
+def _matcher(max_range: float, radius_m: float, fov_deg: float = 180.0) -> ScanMatcher:
+    """The scan matcher place recognition uses: images clipped at ``max_range``, a place's radius, the
+    processes and the shortlist fixed above; ``fov_deg=360`` for local maps drawn all round."""
+    return ScanMatcher(max_range=max_range, place_radius_m=radius_m, n_jobs=SCAN_MATCH_JOBS, fov_deg=fov_deg,
+                       shortlist=SCAN_MATCH_SHORTLIST)
 
 
 def _perfect_odometry(scans, log, settings: dict) -> dict:
@@ -321,8 +325,7 @@ def visits_along(scans, every_m: float = ALONG_EVERY_M) -> list[int]:
     least ``every_m`` further along odometry's path than the last one taken."""
     if not every_m > 0:
         raise BadInput(f"place recognition along the drive needs every_m > 0, got {every_m}")
-    xy = np.array([s.odometry[:2] for s in scans], dtype=float).reshape(-1, 2)
-    travelled = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))]) if len(xy) else xy[:, 0]
+    travelled, _ = odometry_track([s.odometry[:3] for s in scans])
     taken, due = [], 0.0
     for k, d in enumerate(travelled):
         if d >= due - 1e-9:
@@ -355,19 +358,16 @@ def place_recognition_along(log: str | Path, every_m: float = ALONG_EVERY_M, rad
     LogError
         The log cannot be read, or a scan has no true pose.
     """
-    from ..scan_match import ScanMatcher
-
     scans = read_log(log)
     if any(s.truth is None for s in scans):
         raise LogError("the log has no true poses: nothing to judge place recognition against", str(log))
     if calibrate:
         scans = OdometryCalibration().fit(scans).transform(scans)
     visits = visits_along(scans, every_m)
-    xy = np.array([scans[k].odometry[:2] for k in visits], dtype=float).reshape(-1, 2)
-    driven = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))]) if len(xy) else xy[:, 0]
-    reach = within_reach(xy, driven, radius_m)
-    matcher = ScanMatcher(max_range=max_range, place_radius_m=radius_m, n_jobs=SCAN_MATCH_JOBS, fov_deg=360.0,
-                          shortlist=SCAN_MATCH_SHORTLIST)
+    odometry = [scans[k].odometry[:3] for k in visits]
+    driven, _ = odometry_track(odometry)  # metres driven, summed from visit to visit
+    reach = within_reach(odometry, driven, radius_m)
+    matcher = _matcher(max_range, radius_m, fov_deg=360.0)
     scores = matcher.scores(local_images(scans, visits, radius_m, max_range=max_range), allowed=reach)
     if verify:
         scores = SurroundingsCheck(matcher).verify(scans, visits, scores, reach)

@@ -106,6 +106,8 @@ def odometry_track(poses: list[Pose] | np.ndarray) -> tuple[np.ndarray, np.ndarr
     a spin, is not read as a jump of 2 pi.
     """
     p = np.asarray(poses, dtype=float).reshape(-1, 3)
+    if not len(p):
+        return np.zeros(0), np.zeros(0)
     steps = np.hypot(np.diff(p[:, 0]), np.diff(p[:, 1]))
     distance = np.concatenate([[0.0], np.cumsum(steps)])
     heading = p[0, 2] + np.concatenate([[0.0], np.cumsum(wrap(np.diff(p[:, 2])))])

@@ -39,6 +39,7 @@ import numpy as np
 
 from ..errors import BadInput
 from ..surfaces import returns
+from .dstates import odometry_track
 from .scans import Scan, between
 
 #: Bearings of a local map's image: one a degree, all round.
@@ -71,8 +72,7 @@ def local_images(scans: Sequence[Scan], visits: Sequence[int], reach_m: float = 
     if not reach_m >= 0 or beams < 1:
         raise BadInput(f"a local map needs reach_m >= 0 and beams >= 1, got reach_m={reach_m}, beams={beams}")
     odometry = np.array([s.odometry[:3] for s in scans], dtype=float).reshape(-1, 3)
-    step = np.hypot(*np.diff(odometry[:, :2], axis=0).T) if len(scans) > 1 else np.zeros(0)
-    travelled = np.concatenate([[0.0], np.cumsum(step)])  # odometry's path length up to each scan
+    travelled, _ = odometry_track(odometry)  # odometry's path length up to each scan
     seen: dict[int, np.ndarray] = {}  # each scan's returns, in its robot's frame
     out = np.full((len(visits), beams), float(max_range))
     for row, k in enumerate(visits):
