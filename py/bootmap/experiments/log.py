@@ -227,7 +227,7 @@ def _slam_evaluation(r: dict, images, poses, positions, truth, cmap, dead, radiu
                 if reach is not None:
                     recognition[LOCAL_MAP_IN_REACH] = place_recognition(scores, poses, radius_m, reach)
                     if drive is not None:
-                        verified = SurroundingsCheck(matcher).verify(*drive, scores, reach)
+                        verified = SurroundingsCheck(matcher, reach_m=radius_m).verify(*drive, scores, reach)
                         recognition[LOCAL_MAP_VERIFIED] = place_recognition(verified, poses, radius_m, reach)
     return {"baselines": baselines, "loop_closure": loops, "place_recognition": recognition}
 
@@ -370,7 +370,7 @@ def place_recognition_along(log: str | Path, every_m: float = ALONG_EVERY_M, rad
     matcher = _matcher(max_range, radius_m, fov_deg=360.0)
     scores = matcher.scores(local_images(scans, visits, radius_m, max_range=max_range), allowed=reach)
     if verify:
-        scores = SurroundingsCheck(matcher).verify(scans, visits, scores, reach)
+        scores = SurroundingsCheck(matcher, reach_m=radius_m).verify(scans, visits, scores, reach)
     poses = [scans[k].truth for k in visits]
     return {"every_m": every_m, "verified": verify, **place_recognition(scores, poses, radius_m, reach)}
 
