@@ -1,5 +1,5 @@
 """Helper processes forked from a forkserver that preloaded their modules, and how they tell that the
-process that started them is gone."""
+process that started them is gone; independent work shared among processes."""
 
 import multiprocessing
 import os
@@ -7,7 +7,9 @@ import subprocess
 import sys
 import time
 
-from bootmap.proc import parent_gone, preloaded_context
+import pytest
+
+from bootmap.proc import in_processes, parent_gone, preloaded_context
 
 
 def _modules_and_parent(_):
@@ -74,3 +76,17 @@ def test_a_ctrl_c_in_the_child_during_its_work_is_the_works_outcome():
     finally:
         sig.signal(sig.SIGINT, previous)
     assert outcome[0] == "failed" and outcome[1].startswith("KeyboardInterrupt")
+
+
+def _scaled(factor, items, offsets=None):
+    return [factor * x + (0 if offsets is None else o) for x, o in zip(items, offsets or [None] * len(items))]
+
+
+@pytest.mark.parametrize("jobs", [1, 2])
+@pytest.mark.parametrize("n", [0, 1, 7, 20])
+def test_work_in_processes_gives_each_items_value_in_order(jobs, n):
+    items, offsets = list(range(n)), [10 * k for k in range(n)]
+    # One value per item, in the items' order, as the work done here gives them.
+    assert in_processes(_scaled, jobs, (3,), items) == _scaled(3, items)
+    assert in_processes(_scaled, jobs, (3,), items, offsets) == _scaled(3, items, offsets)
+    assert in_processes(_scaled, jobs, (3,), items, None) == _scaled(3, items)

@@ -118,6 +118,30 @@ def _read_until(fd: int, deadline: float) -> tuple[bytes, bool]:
         chunks.append(chunk)
 
 
+def in_processes(work: Callable[..., list], jobs: int, shared: tuple, items: list, *per_item: list | None) -> list:
+    """``work(*shared, items, *per_item)``, one value per item, in ``jobs`` processes: the items (and each
+    ``per_item`` list beside them, or None) cut into ``4 * jobs`` strided chunks, each chunk's values put back
+    in the items' order. In this process where ``jobs`` is 1 or there are fewer than two items. (Many
+    independent pieces of work alike in cost, such as pairs of scans to match.)"""
+    if jobs == 1 or len(items) < 2:
+        return work(*shared, items, *per_item)
+    from concurrent.futures import ProcessPoolExecutor
+
+    parts = jobs * 4
+    chunks = [[items[k::parts]] + [None if extra is None else extra[k::parts] for extra in per_item]
+              for k in range(parts)]
+    with ProcessPoolExecutor(jobs) as pool:
+        done = list(pool.map(_unpacked, [work] * parts, [shared] * parts, chunks))
+    values: list = [None] * len(items)
+    for k, part in enumerate(done):
+        values[k::parts] = part
+    return values
+
+
+def _unpacked(work: Callable[..., list], shared: tuple, chunk: list) -> list:
+    return work(*shared, *chunk)
+
+
 def preloaded_context(modules: Sequence[str]):
     """A multiprocessing context whose processes start with ``modules`` already imported.
 

@@ -75,6 +75,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .proc import in_processes
 from .surfaces import beam_step, image_points, in_3d, planar, se2, surface_points
 
 __all__ = ["Match", "ScanMatcher", "image_points", "surface_points"]
@@ -405,20 +406,8 @@ class ScanMatcher:
 
     def _in_parallel(self, work, X: np.ndarray, pairs: list[tuple[int, int]], given: list | None = None) -> list:
         """``work(self, X, pairs, given)`` (one value per pair; ``given``: something per pair, or None), in
-        ``n_jobs`` processes."""
-        if self.n_jobs == 1 or len(pairs) < 2:
-            return work(self, X, pairs, given)
-        from concurrent.futures import ProcessPoolExecutor
-
-        parts = self.n_jobs * 4
-        chunks = [pairs[k::parts] for k in range(parts)]
-        extras = [None if given is None else given[k::parts] for k in range(parts)]
-        with ProcessPoolExecutor(self.n_jobs) as pool:
-            done = list(pool.map(work, [self] * parts, [X] * parts, chunks, extras))
-        values: list = [None] * len(pairs)
-        for k, part in enumerate(done):
-            values[k::parts] = part
-        return values
+        ``n_jobs`` processes (:func:`bootmap.proc.in_processes`)."""
+        return in_processes(work, self.n_jobs, (self, X), pairs, given)
 
 
 def _canonical_first(a: np.ndarray, b: np.ndarray) -> bool:

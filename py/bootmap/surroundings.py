@@ -51,6 +51,7 @@ from .errors import BadInput
 from .ingest.dstates import odometry_track
 from .ingest.local_maps import LOCAL_REACH_M, local_images
 from .ingest.scans import Scan, between, compose
+from .proc import in_processes
 from .scan_match import ScanMatcher
 
 __all__ = ["SurroundingsCheck"]
@@ -130,7 +131,7 @@ class SurroundingsCheck:
             pairs += [(j, i) for i in earlier[:self.top]]
         V = np.zeros((n, n))
         if pairs:
-            values = _in_parallel(self, list(scans), list(visits), pairs)
+            values = in_processes(_verified, self.matcher.n_jobs, (self, list(scans), list(visits)), pairs)
             for (j, i), v in zip(pairs, values):
                 V[j, i] = v
         return V
@@ -145,23 +146,6 @@ class SurroundingsCheck:
             if len(far):
                 out[v] = k + 1 + far[0]
         return out
-
-
-def _in_parallel(check: SurroundingsCheck, scans: list[Scan], visits: list[int], pairs: list) -> list[float]:
-    """Each pair's verified score, in the matcher's ``n_jobs`` processes."""
-    jobs = check.matcher.n_jobs
-    if jobs == 1 or len(pairs) < 2:
-        return _verified(check, scans, visits, pairs)
-    from concurrent.futures import ProcessPoolExecutor
-
-    parts = jobs * 4
-    chunks = [pairs[k::parts] for k in range(parts)]
-    with ProcessPoolExecutor(jobs) as pool:
-        done = list(pool.map(_verified, [check] * parts, [scans] * parts, [visits] * parts, chunks))
-    values: list = [None] * len(pairs)
-    for k, part in enumerate(done):
-        values[k::parts] = part
-    return values
 
 
 def _verified(check: SurroundingsCheck, scans: list[Scan], visits: list[int], pairs: list) -> list[float]:
