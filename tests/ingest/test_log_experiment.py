@@ -139,9 +139,15 @@ def test_bad_input_exits_2_naming_it(argv, message, capsys):
     assert message in capsys.readouterr().err
 
 
-def test_a_log_without_true_poses_has_nothing_to_evaluate(tmp_path, square):
-    bare = tmp_path / "bare.log"
-    bare.write_text("".join(line + "\n" for line in square.read_text().splitlines() if not line.startswith("TRUEPOS")))
+@pytest.fixture
+def bare(tmp_path, square):
+    """The square's log without its true poses."""
+    path = tmp_path / "bare.log"
+    path.write_text("".join(line + "\n" for line in square.read_text().splitlines() if not line.startswith("TRUEPOS")))
+    return path
+
+
+def test_a_log_without_true_poses_has_nothing_to_evaluate(bare):
     with pytest.raises(LogError, match="no true poses"):
         run_log_experiment(bare)
 
@@ -318,10 +324,8 @@ def test_visits_along_are_every_so_many_metres_of_the_drive(steps, every):
         assert (x[a:b] - x[a] < every - 1e-9).all()
 
 
-def test_place_recognition_along_refuses_what_it_cannot_judge(tmp_path, square):
+def test_place_recognition_along_refuses_what_it_cannot_judge(square, bare):
     with pytest.raises(BadInput, match="every_m > 0"):
         place_recognition_along(square, every_m=0.0)
-    bare = tmp_path / "bare.log"
-    bare.write_text("".join(line + "\n" for line in square.read_text().splitlines() if not line.startswith("TRUEPOS")))
     with pytest.raises(LogError, match="bare.log: the log has no true poses"):
         place_recognition_along(bare)
