@@ -34,9 +34,10 @@ on 2,000 steps with a person's apart, 104 dstates over a bound of 103, 2.8 s ins
 
 Under the stock topological level (the file as shipped: :func:`.topology.stock`) the verdict, the reasons
 and what the level shows of a map it accepts are read in Python (:mod:`.topology`): no map costs a
-grounding, and no reasons a solve (QuickXplain over the Python verdict). A search then leaves the level out and learns from the maps it rejects at any size (not only above
-``LEARN_MIN_SIZE``): the slowest step of a 2,000-step stream of a 6x5 grid, 93 dstates with a spare slot per
-class, 1.6 s with the level grounded over every candidate dstate, 0.3 s learning from 11 rejected maps.
+grounding, and no reasons a solve (QuickXplain over the Python verdict). A search then leaves the level
+out and learns from the maps it rejects at any size (not only above ``LEARN_MIN_SIZE``): the slowest step
+of a 2,000-step stream of a 6x5 grid, 93 dstates with a spare slot per class, 1.6 s with the level
+grounded over every candidate dstate, 0.3 s learning from 11 rejected maps.
 """
 
 from __future__ import annotations

@@ -173,7 +173,8 @@ class Replay:
     def rebased(self, cmap: CognitiveMap) -> "Replay":
         """This replay with the minimal maps of ``cmap`` (the map and its alternatives), a map of the steps
         it has observed (a resolve of them, where the maps it kept did not extend)."""
-        self.maps = [self._partition([int(d[1:]) for d in names]) for names in [cmap.dstate_of] + list(cmap.alternatives)]
+        self.maps = [self._partition([int(d[1:]) for d in names])
+                     for names in [cmap.dstate_of] + list(cmap.alternatives)]
         self.refuted = False
         return self
 
