@@ -92,6 +92,11 @@ class Step:
         return d
 
 
+def _beyond(match: Any, n: int) -> bool:
+    """Whether a place match (``meta.place_matches``) names a time point at or after ``n``."""
+    return isinstance(match, dict) and any(isinstance(match.get(k), int) and match[k] >= n for k in ("a", "b"))
+
+
 @dataclass(frozen=True)
 class Tableau:
     """A validated tableau. Build one with :meth:`from_dict`, :meth:`loads` or :func:`load`."""
@@ -138,7 +143,10 @@ class Tableau:
             raise TableauError(f"a prefix of 1 to {len(self.steps)} time points, not {n}")
         last = self.steps[n - 1]
         steps = self.steps[:n - 1] + (replace(last, action=None),)
-        return Tableau(steps, self.world, dict(self.meta))
+        meta = dict(self.meta)
+        if isinstance(meta.get("place_matches"), list):  # what the laser says of pairs, within the prefix
+            meta["place_matches"] = [m for m in meta["place_matches"] if not _beyond(m, n)]
+        return Tableau(steps, self.world, meta)
 
     @property
     def labelled(self) -> bool:

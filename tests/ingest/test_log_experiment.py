@@ -160,8 +160,8 @@ def test_an_unknown_view_criterion_is_refused(square):
 @pytest.mark.slow
 def test_the_whole_killian_log_as_the_readme_shows_it(tmp_path, capsys):
     pytest.importorskip("rtbdata")
-    # The README's command; scan matching (half the time, and lines the README does not show) left out.
-    code = main(["experiment", "killian", "-o", str(tmp_path), "--no-scan-match"])
+    # The README's command as it is: the laser's place matches are evidence for loop closing.
+    code = main(["experiment", "killian", "-o", str(tmp_path)])
     r = json.loads((tmp_path / "results.json").read_text())
     assert (r["scans"], r["images"], r["truth"]["true_dstates"]) == (3873, 98, 75)
     assert set(r["timings"]) >= {"ingest_s", "views_s", "map_s"}  # its speed is bench/real_logs_bench.py's
@@ -329,3 +329,36 @@ def test_place_recognition_along_refuses_what_it_cannot_judge(square, bare):
         place_recognition_along(square, every_m=0.0)
     with pytest.raises(LogError, match="bare.log: the log has no true poses"):
         place_recognition_along(bare)
+
+
+def test_bootmap_ingest_gives_the_lasers_place_matches_and_loop_closing_weighs_them(tmp_path, capsys):
+    """`bootmap ingest` writes each visit's place matches with the earlier visits (meta.place_matches): on
+    two laps of the ring corridor, every corner's second visit matches its first. Where odometry cannot
+    join them (the second lap 5 m off, beyond a near proposal after 70 m; the views all different, so no
+    retraced context), the matches do, and `bootmap why` says so; without them the laps stay apart."""
+    from dataclasses import replace
+
+    from bootmap.mapping.loops import LoopCloser
+    from bootmap.tableau import Tableau, load
+
+    log = write_drive_log(tmp_path / "ring.log", ring_walls(), ring_poses(laps=2))
+    out = tmp_path / "ring.json"
+    assert main(["ingest", str(log), "-o", str(out), "--no-progress"]) == 0
+    tableau = load(out)
+    said = f"; {len(tableau.meta['place_matches'])} place matches between visits"
+    assert said in capsys.readouterr().err
+    second = len(tableau) // 2
+    matches = {(m["a"], m["b"]): m["score"] for m in tableau.meta["place_matches"]}
+    assert all(matches.get((t, t + second), 0) > 0.9 for t in range(second))  # each corner, both ends
+    assert all(a < b for a, b in matches)
+    shifted = Tableau(tuple(replace(s, view=f"v{t}", odometry=(s.odometry[0] + (5.0 if t >= second else 0.0),
+                                                                *s.odometry[1:]))
+                            for t, s in enumerate(tableau.steps)), tableau.world, dict(tableau.meta))
+    cmap = LoopCloser().resolve(shifted)
+    assert all(cmap.dstate_of[t] == cmap.dstate_of[t + second] for t in range(second))
+    why = LoopCloser().explain(shifted, 0, second)
+    assert any(f"t0 = t{second}: proposed (recognised): the laser matches their places" in j for j in why.joins)
+    blind = Tableau(shifted.steps, shifted.world, {k: v for k, v in shifted.meta.items() if k != "place_matches"})
+    assert LoopCloser().resolve(blind).n_dstates == len(tableau)
+    assert main(["ingest", str(log), "-o", str(out), "--no-progress", "--no-place-matches"]) == 0
+    assert "place_matches" not in load(out).meta

@@ -314,3 +314,73 @@ def test_of_two_near_visits_that_are_not_near_each_other_the_nearer_in_metres_is
     drift odometry is allowed."""
     cmap = LoopCloser().resolve(_chained_near_visits(last_x=6.5))
     assert cmap.dstate_of[8] == cmap.dstate_of[12] != cmap.dstate_of[0]
+
+
+def _drifted_loop(matches: list[dict] | None = None) -> Tableau:
+    """A loop of four corners, 20 m a side, turned on the spot, then the first side again: dead reckoning
+    puts the second visit of the first corner (t8) 5 m from the first (t0) after 80 m driven, beyond what a
+    near proposal allows (3.8 m), and only one action around them agrees: odometry proposes nothing. The
+    laser's ``matches`` (``meta.place_matches``) may."""
+    at = [(0, 0, 0), (20, 0, 0), (20, 0, 90), (20, 20, 90), (20, 20, 180), (0, 20, 180), (0, 20, 270),
+          (5, 0, 270), (5, 0, 0), (25, 0, 0)]
+    steps = [{"view": "corner", "odometry": list(p),
+              "action": {"type": "travel", "distance_m": 20.0} if k % 2 == 0 else {"type": "turn", "angle_deg": 90}}
+             for k, p in enumerate(at)]
+    del steps[-1]["action"]
+    meta = {"passes_through": True} | ({} if matches is None else {"place_matches": matches})
+    return Tableau.from_dict({"format": FORMAT, "steps": steps, "meta": meta})
+
+
+def test_a_place_match_the_laser_verified_proposes_a_join_odometry_cannot():
+    alone = LoopCloser().resolve(_drifted_loop())
+    assert alone.dstate_of[8] != alone.dstate_of[0] and alone.n_dstates == 10
+    matched = _drifted_loop([{"a": 0, "b": 8, "score": 0.9}])
+    cmap = LoopCloser().resolve(matched)
+    # t0 = t8, and determinism then joins where both travelled to: t1 = t9
+    assert cmap.dstate_of[8] == cmap.dstate_of[0] and cmap.dstate_of[9] == cmap.dstate_of[1]
+    assert cmap.n_dstates == 8
+    why = LoopCloser().explain(matched, 0, 8)
+    assert why.verdict == "same"
+    assert any(j.startswith("t0 = t8: proposed (recognised): the laser matches their places, verified by the "
+                            "places around them, with score 0.90 (loop closing proposes 0.7 or more)") for j in why.joins)
+    forced = LoopCloser().explain(matched, 1, 9)
+    assert any(j.startswith("t1 = t9: forced: t0 and t8 are one dstate") for j in forced.joins)
+
+
+def test_a_weak_place_match_or_one_facing_another_way_proposes_nothing():
+    weak = _drifted_loop([{"a": 0, "b": 8, "score": 0.6}])
+    assert LoopCloser().resolve(weak).n_dstates == 10
+    assert LoopCloser(match_score=0.5).resolve(weak).n_dstates == 8  # the bound is the closer's to set
+    why = LoopCloser().explain(weak, 0, 8)
+    assert why.verdict == "different" and "only for want of evidence" in why.sentence
+    assert "with score 0.60 (loop closing proposes 0.7 or more)" in why.sentence
+    turned = _drifted_loop([{"a": 0, "b": 6, "score": 1.0}])  # facing east and facing south
+    assert LoopCloser().resolve(turned).n_dstates == 10
+    # Beyond the drift bound no match joins: t8 20 m further on than the laser says (80 m driven: 7 m).
+    far = [s.to_dict() for s in _drifted_loop().steps]
+    far[8]["odometry"], far[9]["odometry"] = [20, 0, 0], [40, 0, 0]
+    far = Tableau.from_dict({"format": FORMAT, "steps": far,
+                             "meta": {"passes_through": True, "place_matches": [{"a": 0, "b": 8, "score": 1.0}]}})
+    assert LoopCloser().resolve(far).dstate_of[8] != LoopCloser().resolve(far).dstate_of[0]
+
+
+@pytest.mark.parametrize("match, where", [
+    ({"a": 0, "b": 10, "score": 0.9}, "tableau: meta.place_matches[0].b"),
+    ({"a": 3, "b": 3, "score": 0.9}, "tableau: meta.place_matches[0]"),
+])
+def test_a_place_match_naming_no_time_point_or_one_twice_is_refused_by_place(match, where):
+    from bootmap.errors import TableauError
+    with pytest.raises(TableauError) as e:
+        LoopCloser().resolve(_drifted_loop([match]))
+    assert e.value.where == where
+
+
+def test_a_place_match_out_of_shape_is_refused_when_read_and_a_prefix_keeps_the_matches_within_it():
+    from bootmap.errors import TableauError
+    with pytest.raises(TableauError, match=r"place_matches"):
+        _drifted_loop([{"a": 0, "b": 8, "score": 1.5}])
+    with pytest.raises(TableauError, match=r"place_matches"):
+        _drifted_loop([{"a": 0, "b": 8}])
+    matched = _drifted_loop([{"a": 0, "b": 8, "score": 0.9}, {"a": 1, "b": 5, "score": 0.8}])
+    assert matched.prefix(8).meta["place_matches"] == [{"a": 1, "b": 5, "score": 0.8}]
+    assert LoopCloser().resolve(matched.prefix(8)).n_dstates == 8

@@ -152,7 +152,12 @@ def _experiment(scans, log, lap, seed, k_max, time_limit, quantum_deg, view_crit
     views = view_labels(clusterer.labels_per_k_[views_section["k"]])
     views_section.update(table=jsonable(view_table(images, views)), labels=views)
     lap("views_s")
+    seen = calibration.transform(scans) if calibration is not None else scans  # the odometry the learning reads
+    matched = place_matches(tableau, seen, radius_m, max_range) if scan_match else None
+    lap("place_matches_s")
     mapped = tableau.with_views(views)
+    if matched is not None:  # what the laser says of pairs of visits, for loop closing to weigh
+        mapped.meta["place_matches"] = matched.pairs()
     try:
         cmap, map_note = Mapper(time_limit=time_limit, quantum_deg=quantum_deg, how=mapper).map(mapped), None
     except SolveTimeout as e:
@@ -180,26 +185,51 @@ def _experiment(scans, log, lap, seed, k_max, time_limit, quantum_deg, view_crit
                 "retyped_steps": cmap.retyped_steps},
         "dead_reckoning": {"dstates": len(set(dead)), "dstate_accuracy": dstate_accuracy(truth, dead)},
         "recognition": recognition, "nn_revisited": nn, "timings": timings}
-    visits = tableau.meta["dstates"]["scans"]
-    seen = calibration.transform(scans) if calibration is not None else scans  # the odometry the learning reads
-    local = local_images(seen, visits, radius_m, max_range=max_range) if scan_match and recognise else None
-    # The pairs loop closing's own dead reckoning allows to be one place (its drift bound, on its numbers).
-    reach = None if local is None else within_reach(*dead_reckoning(tableau), radius_m)
     results.update(_slam_evaluation(results, images, poses, positions, truth, cmap, dead, radius_m, recognise,
-                                    max_range if scan_match else None, local, reach, (seen, visits)))
+                                    max_range if scan_match else None, matched))
     lap("evaluate_s")
     return results, tableau, cmap
 
 
+class _PlaceMatches:
+    """The visits' local maps matched (every pair's score, ``scores``), the pairs loop closing's own dead
+    reckoning allows to be one place (``reach``: its drift bound, on its numbers), and each visit's likeliest
+    matches among those verified by their surroundings (``verified``)."""
+
+    def __init__(self, scores: np.ndarray, reach: np.ndarray, verified: np.ndarray):
+        self.scores, self.reach, self.verified = scores, reach, verified
+
+    def pairs(self) -> list[dict]:
+        """The verified matches as a tableau carries them (``meta.place_matches``): each later visit ``b``
+        with an earlier ``a``, scores rounded to a thousandth."""
+        later, earlier = np.nonzero(self.verified > 0)
+        return [{"a": int(a), "b": int(b), "score": round(float(self.verified[b, a]), 3)}
+                for b, a in zip(later, earlier)]
+
+
+def place_matches(tableau, seen, radius_m: float = 3.0, max_range: float = 20.0) -> _PlaceMatches:
+    """Place recognition among a log tableau's visits (``meta.dstates.scans``), on the log's scans ``seen``
+    (their odometry as the learning reads it: calibrated where the tableau's is): the local maps drawn all
+    round, matched within odometry's reach, verified by their surroundings
+    (:class:`~bootmap.surroundings.SurroundingsCheck`). ``pairs()`` is what the tableau carries for loop
+    closing to weigh (``meta.place_matches``)."""
+    visits = tableau.meta["dstates"]["scans"]
+    local = local_images(seen, visits, radius_m, max_range=max_range)
+    matcher = _matcher(max_range, radius_m, fov_deg=360.0)
+    scores = matcher.scores(local)
+    reach = within_reach(*dead_reckoning(tableau), radius_m)
+    verified = SurroundingsCheck(matcher, reach_m=radius_m).verify(seen, visits, scores, reach)
+    return _PlaceMatches(scores, reach, verified)
+
+
 def _slam_evaluation(r: dict, images, poses, positions, truth, cmap, dead, radius_m,
                      recognise_places: bool = True, scan_match_range: float | None = None,
-                     local: np.ndarray | None = None, reach: np.ndarray | None = None,
-                     drive: tuple | None = None) -> dict:
+                     matched: _PlaceMatches | None = None) -> dict:
     """The figures SLAM papers report, against the corrected poses: the map beside both baselines,
     loop closures (the map's and odometry alone's) and place recognition by each descriptor (and by
-    scan matching images clipped at ``scan_match_range``, when given, and the visits' ``local`` maps
-    rendered all round, also among the pairs odometry allows alone, ``reach``, and those verified by their
-    surroundings on the ``drive``: its scans and the visits' scan indices). A loop closure joins
+    scan matching images clipped at ``scan_match_range``, when given, and the visits' local maps rendered
+    all round, ``matched``: among every earlier visit, among the pairs odometry allows alone, and those
+    verified by their surroundings). A loop closure joins
     dstates, judged where the truth places their visits (``positions``: a turn's two ends at their middle,
     as the true places are made); place recognition matches images, judged where they were taken
     (``poses``)."""
@@ -220,15 +250,10 @@ def _slam_evaluation(r: dict, images, poses, positions, truth, cmap, dead, radiu
         if scan_match_range is not None:
             scores = _matcher(scan_match_range, radius_m).scores(images)
             recognition[SCAN_MATCH] = place_recognition(scores, poses, radius_m)
-            if local is not None:
-                matcher = _matcher(scan_match_range, radius_m, fov_deg=360.0)
-                scores = matcher.scores(local)
-                recognition[LOCAL_MAP] = place_recognition(scores, poses, radius_m)
-                if reach is not None:
-                    recognition[LOCAL_MAP_IN_REACH] = place_recognition(scores, poses, radius_m, reach)
-                    if drive is not None:
-                        verified = SurroundingsCheck(matcher, reach_m=radius_m).verify(*drive, scores, reach)
-                        recognition[LOCAL_MAP_VERIFIED] = place_recognition(verified, poses, radius_m, reach)
+            if matched is not None:
+                recognition[LOCAL_MAP] = place_recognition(matched.scores, poses, radius_m)
+                recognition[LOCAL_MAP_IN_REACH] = place_recognition(matched.scores, poses, radius_m, matched.reach)
+                recognition[LOCAL_MAP_VERIFIED] = place_recognition(matched.verified, poses, radius_m, matched.reach)
     return {"baselines": baselines, "loop_closure": loops, "place_recognition": recognition}
 
 
@@ -241,7 +266,10 @@ def _matcher(max_range: float, radius_m: float, fov_deg: float = 180.0) -> ScanM
 
 def _perfect_odometry(scans, log, settings: dict) -> dict:
     """The experiment again with each scan's odometry replaced by its corrected pose: an upper bound
-    that separates the method's errors from the odometry's drift (which leaves nothing to calibrate)."""
+    that separates the method's errors from the odometry's drift (which leaves nothing to calibrate). Its
+    map weighs no place matches of the laser: with odometry this good every revisit is proposed as near,
+    and weighing them as well gave the same figures on every log at hand, in twice the time
+    (docs/results/real_logs.md)."""
     perfect = [replace(s, odometry=s.truth, odometry_gap="") for s in scans]
     r, _, _ = _experiment(perfect, log, Laps(), **{**settings, "calibrate": False}, recognise=False)
     keep = ("images", "truth", "map", "dead_reckoning", "baselines", "loop_closure")

@@ -13,6 +13,7 @@ from pathlib import Path
 
 from .. import arguments
 from ..errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_OK, BadInput, error_line
+from .calibrate import OdometryCalibration
 from .dstates import JunctionDetector, TurnDetector
 from .places import PlaceDetector
 
@@ -47,6 +48,10 @@ def register(subparsers) -> None:
     p.add_argument("--odom-topic", help="ROS: the Odometry topic (when the bag has several)")
     p.add_argument("--truth-topic", help="ROS: an Odometry topic of true poses")
     arguments.add_calibrate(p)
+    p.add_argument("--no-place-matches", action="store_true",
+                   help="leave out the laser's place matches between visits (meta.place_matches: each visit's "
+                        "local map matched with the earlier visits odometry allows, verified by the places "
+                        "around it), which loop closing weighs beside odometry; they take most of the time")
     p.add_argument("--no-progress", action="store_true", help="no progress count")
     p.set_defaults(handler=cmd_ingest)
 
@@ -62,8 +67,15 @@ def cmd_ingest(args: argparse.Namespace) -> int:
         detector = TurnDetector(window_m=args.window, turn_deg=args.turn)
         junctions = JunctionDetector() if args.junctions else None
         places = PlaceDetector() if args.dstates == "places" else None
+        calibration = None if args.no_calibrate else OdometryCalibration().fit(scans)
         tableau = log_tableau(scans, detector, max_range=args.max_range, radius_m=args.radius, source=args.log,
-                              junctions=junctions, places=places, calibrate=not args.no_calibrate)
+                              junctions=junctions, places=places, calibrate=not args.no_calibrate,
+                              calibration=calibration)
+        if not args.no_place_matches:
+            from ..experiments.log import place_matches
+
+            seen = scans if calibration is None else calibration.transform(scans)
+            tableau.meta["place_matches"] = place_matches(tableau, seen, args.radius, args.max_range).pairs()
     except BadInput as e:
         print(error_line("ingest", e, EXIT_BAD_INPUT), file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -78,8 +90,17 @@ def cmd_ingest(args: argparse.Namespace) -> int:
         return EXIT_FAILURE
     seconds = time.perf_counter() - start
     print(f"{args.output}: {len(tableau)} dstates from {len(scans)} scans ({len(scans) / seconds:.0f} scans/s)"
-          + _recall_note(tableau.meta) + _gap_note(tableau.meta) + _calibration_note(tableau.meta), file=sys.stderr)
+          + _recall_note(tableau.meta) + _gap_note(tableau.meta) + _calibration_note(tableau.meta)
+          + _matches_note(tableau.meta), file=sys.stderr)
     return EXIT_OK
+
+
+def _matches_note(meta: dict) -> str:
+    """How many place matches the laser gives loop closing to weigh ("" where they were left out)."""
+    if "place_matches" not in meta:
+        return ""
+    matches = meta["place_matches"]
+    return f"; {len(matches)} place match{'' if len(matches) == 1 else 'es'} between visits"
 
 
 def _recall_note(meta: dict) -> str:

@@ -14,7 +14,10 @@ Here the robot's odometry proposes which visits are one dstate, and the axioms d
    same actions (turn types, travel length types) for ``context`` steps before and after them, they
    show one view, and they are within ``radius_m`` plus ``drift_share`` of the distance driven (a long
    loop driven again, whose ends dead reckoning has drifted apart). Longest context first, then
-   nearest in metres.
+   nearest in metres. After odometry's, the laser's: **recognised**, a place match the tableau carries
+   (``meta.place_matches``: a log's visits' local maps matched and verified by the places around them,
+   :mod:`bootmap.surroundings`) scoring at least ``match_score``, within the drift bound, whose turns'
+   middles are one place once their scans are put together. Strongest match first.
 3. A proposal is folded as the causal level demands (the same action from one dstate reaches one
    dstate: merge and fold, as RPNI does); every pair of visits the fold joins must face one way and
    lie within the drift bound, or the proposal is dropped. A near proposal says the visits are in one
@@ -29,8 +32,8 @@ The result satisfies every axiom but is not proved minimal (``minimal`` is False
 odometry supports, not the smallest one the views allow. A tableau whose steps carry ``odometry``
 (a log) is dead-reckoned from it; otherwise from its actions (turns on the spot, as the simulator's,
 at the learned types' angles). :meth:`LoopCloser.explain` says why two time points are one dstate of
-the map (each join, proposed or forced) or not (headings, odometry, the rules that reject joining them,
-or no evidence); :func:`closes_loops` says when loop closing is the mapper (a log's tableau, ``passes_through``).
+the map (each join, proposed by odometry or the laser, or forced) or not (headings, odometry, the rules
+that reject joining them, or no evidence); :func:`closes_loops` says when loop closing is the mapper (a log's tableau, ``passes_through``).
 
 Loop closing itself is :mod:`.closing`; saying why two time points are one dstate of its map or
 not is :mod:`.explain`.

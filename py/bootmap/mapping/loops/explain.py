@@ -63,13 +63,13 @@ class LoopExplanation:
 @dataclass(frozen=True)
 class Join:
     """Why time points ``x`` and ``y`` were put in one dstate: ``proposed`` by odometry (``kind`` near or
-    retraced), or ``forced`` by determinism (``after``: the time points before them, already one dstate,
+    retraced) or by the laser's place match (recognised), or ``forced`` by determinism (``after``: the time points before them, already one dstate,
     took the same ``action``)."""
 
     x: int
     y: int
     how: str                                 # "proposed" or "forced"
-    kind: str = ""                           # proposed: "near" or "retraced"
+    kind: str = ""                           # proposed: "near", "retraced" or "recognised"
     action: str = ""                         # forced: the action both took
     after: tuple[int, int] | None = None     # forced: the time points that took it
     person: bool = False                     # made on a person's word (asserted, preferred) or forced by one
@@ -151,11 +151,22 @@ class _Explaining:
         i, j = min(x, y), max(x, y)
         if closing.kinds.get((i, j)) == "preferred":
             return f"a person prefers them one dstate ({closing.odometry(x, y)})"
+        if closing.kinds.get((i, j)) == "recognised":
+            return (f"{self._matched(i, j)}, and {closing.odometry(x, y)} (within "
+                    f"{closing.drift_bound(x, y, closer.drift_share):.1f} m){self._scans(x, y)}")
         if closing.kinds.get((i, j)) == "retraced":
             return (f"the same {closing.agreeing(i, j)} actions around them, one view, and {closing.odometry(x, y)} "
                     f"(within {closing.drift_bound(x, y, closer.drift_share):.1f} m){self._scans(x, y)}")
         return (f"{closing.odometry(x, y)} (within {closing.drift_bound(x, y, closer.near_share):.1f} m)"
                 f"{self._scans(x, y)}")
+
+    def _matched(self, i: int, j: int) -> str:
+        """What the tableau's place match says of i and j (i < j), in words ("" where it has none)."""
+        score = self.closing.matches.get((i, j))
+        if score is None:
+            return ""
+        return (f"the laser matches their places, verified by the places around them, with score {score:.2f} "
+                f"(loop closing proposes {self.closing.closer.match_score:g} or more)")
 
     def _chain(self, a: int, b: int) -> list[Join]:
         """The joins that link a to b (a path in the forest of the joins standing)."""
@@ -200,13 +211,16 @@ class _Explaining:
         if failing:
             return (f"t{a} and t{b} are different dstates: the axioms reject the map that makes them one (with "
                     f"what determinism then joins): it breaks {' and '.join(r.cite() for r in failing)}."), failing
+        matched = self._matched(min(a, b), max(a, b))
         why = (f"it was proposed ({proposed}) but rejected beside joins made before it" if proposed else
                f"nothing proposed them ({closing.odometry(a, b)}: beyond "
                f"{closing.drift_bound(a, b, closer.near_share):.1f} m for visits proposed as near; "
                f"{closing.agreeing(min(a, b), max(a, b))} actions around them agree, where "
-               f"{closer.context} and one view propose visits as retraced)")
+               f"{closer.context} and one view propose visits as retraced; "
+               f"{matched or 'the tableau has no place match of them'})")
         return (f"t{a} and t{b} are different dstates only for want of evidence: {why}{self._scans(a, b)}. Every "
-                f"axiom would accept them as one dstate; loop closing joins only what odometry proposes."), []
+                f"axiom would accept them as one dstate; loop closing joins only what odometry or the laser's "
+                f"place matches propose."), []
 
     def _failing_rules(self, dstate_of: list[int]) -> list[RuleRef]:
         """The constraints this partition breaks: a subset-minimal set that still rules it out (each switched
