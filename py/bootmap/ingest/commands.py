@@ -75,6 +75,9 @@ def cmd_ingest(args: argparse.Namespace) -> int:
             from ..experiments.log import place_matches
 
             seen = scans if calibration is None else calibration.transform(scans)
+            if not args.no_progress:  # the longest part of an ingest: say what it is doing
+                print(f"matching the places of {len(tableau)} dstates with the earlier ones odometry allows "
+                      f"(--no-place-matches leaves it out) ...", file=sys.stderr, flush=True)
             tableau.meta["place_matches"] = place_matches(tableau, seen, args.radius, args.max_range).pairs()
     except BadInput as e:
         print(error_line("ingest", e, EXIT_BAD_INPUT), file=sys.stderr)
