@@ -364,6 +364,34 @@ def test_a_weak_place_match_or_one_facing_another_way_proposes_nothing():
     assert LoopCloser().resolve(far).dstate_of[8] != LoopCloser().resolve(far).dstate_of[0]
 
 
+def _closed_loop(matches: list[dict] | None = None) -> Tableau:
+    """The loop of :func:`_drifted_loop` with exact odometry: t8 where t0 was, facing east again, so odometry
+    proposes t0 = t8 (and t1 = t9) as near."""
+    steps = [s.to_dict() for s in _drifted_loop().steps]
+    steps[7]["odometry"], steps[8]["odometry"], steps[9]["odometry"] = [0, 0, 270], [0, 0, 0], [20, 0, 0]
+    meta = {"passes_through": True} | ({} if matches is None else {"place_matches": matches})
+    return Tableau.from_dict({"format": FORMAT, "steps": steps, "meta": meta})
+
+
+def test_odometry_near_alone_proposes_no_visits_the_laser_places_elsewhere():
+    """Where the laser matched a visit's place with earlier visits and none of them is the place odometry
+    puts it at, nearness alone proposes nothing; a match with that place, however weak, or with the other end
+    of its turn, or no match of the visit at all, leaves odometry's proposal standing."""
+    assert LoopCloser().resolve(_closed_loop()).dstate_of[8] == LoopCloser().resolve(_closed_loop()).dstate_of[0]
+    elsewhere = _closed_loop([{"a": 4, "b": 8, "score": 0.9}])  # t8's place is t4's, says the laser
+    cmap = LoopCloser().resolve(elsewhere)
+    assert cmap.dstate_of[8] != cmap.dstate_of[0] and cmap.dstate_of[9] == cmap.dstate_of[1]  # t9: no match
+    why = LoopCloser().explain(elsewhere, 0, 8)
+    assert why.verdict == "different" and "only for want of evidence" in why.sentence
+    assert "0.0 m apart after 80 m driven (within 3.8 m, near), but the laser matches t8's place, verified by the places around it, with t4, " \
+           "not with t0's: odometry's nearness alone proposes no visits the laser places elsewhere" in why.sentence
+    for confirmed in ([{"a": 4, "b": 8, "score": 0.9}, {"a": 0, "b": 8, "score": 0.3}],  # among its matches
+                      [{"a": 4, "b": 8, "score": 0.9}, {"a": 0, "b": 7, "score": 0.8}],  # the other end of t8's turn
+                      [{"a": 2, "b": 5, "score": 0.9}]):  # a match of another visit: nothing said of t8
+        cmap = LoopCloser().resolve(_closed_loop(confirmed))
+        assert cmap.dstate_of[8] == cmap.dstate_of[0], confirmed
+
+
 @pytest.mark.parametrize("match, where", [
     ({"a": 0, "b": 10, "score": 0.9}, "tableau: meta.place_matches[0].b"),
     ({"a": 3, "b": 3, "score": 0.9}, "tableau: meta.place_matches[0]"),

@@ -350,11 +350,13 @@ class Closing:
             for j in range(i + 1, self.n):
                 if self.heading[i] != self.heading[j]:
                     continue
-                near = self._apart(i, j, self.closer.near_share)
+                near = self._apart(i, j, self.closer.near_share)  # within the near bound at 1.0 or less
                 agree = self.agreeing(i, j)
                 # a retraced pair's odometry is loose: it needs its views to agree as well
                 retraced = (agree >= self.closer.context and self.views[i] == self.views[j]
                             and self._apart(i, j, self.closer.drift_share) <= 1.0)
+                if near <= 1.0 and not retraced and self.elsewhere(i, j):
+                    continue  # the laser places j elsewhere: odometry's nearness alone does not propose them
                 if near <= 1.0 or retraced:
                     # nearest in metres, as the truth's places are drawn (not as a share of the drift allowed:
                     # that ranks a pair far apart after a long drive before a close pair after a short one)
@@ -377,6 +379,17 @@ class Closing:
         ranked.sort()
         return [(i, j) for _, i, j in ranked]
 
+    def elsewhere(self, i: int, j: int) -> list[int]:
+        """The earlier visits the laser matched j's place with, where none of them is i's place (i, or the
+        other end of i's turn; j's place likewise): the likeliest earlier places of j, verified by the places
+        around them, and i not among them. Empty where the laser confirms i or says nothing of j (no match of
+        j's place with an earlier visit: the laser was not asked, or found nothing it could verify)."""
+        if not self.matches:
+            return []
+        here, there = set(self.turn_ends[i]), set(self.turn_ends[j])
+        named = sorted({a for (a, b) in self.matches if b in there and a < min(there)})
+        return [] if here & set(named) else named
+
     def turn_offset(self, i: int, j: int) -> float:
         """How far apart the visits of i and j lie where their scans coincide (metres): a place match puts the
         scans together, but a visit is the middle of its turn (:meth:`gap`), metres from either end where the
@@ -385,6 +398,10 @@ class Closing:
         here = self.middle[i] - self.xy[i]
         there = self.middle[j] - self.xy[j]
         return float(np.hypot(*(there - here)))
+
+    def near(self, i: int, j: int) -> bool:
+        """Whether dead reckoning puts i and j near enough to be proposed as one dstate on its word alone."""
+        return self._apart(i, j, self.closer.near_share) <= 1.0
 
     def _apart(self, i: int, j: int, share: float) -> float:
         """How far apart dead reckoning puts i and j, as a share of what it may drift between them."""

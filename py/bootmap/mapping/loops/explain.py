@@ -211,13 +211,20 @@ class _Explaining:
         if failing:
             return (f"t{a} and t{b} are different dstates: the axioms reject the map that makes them one (with "
                     f"what determinism then joins): it breaks {' and '.join(r.cite() for r in failing)}."), failing
-        matched = self._matched(min(a, b), max(a, b))
-        why = (f"it was proposed ({proposed}) but rejected beside joins made before it" if proposed else
-               f"nothing proposed them ({closing.odometry(a, b)}: beyond "
-               f"{closing.drift_bound(a, b, closer.near_share):.1f} m for visits proposed as near; "
-               f"{closing.agreeing(min(a, b), max(a, b))} actions around them agree, where "
-               f"{closer.context} and one view propose visits as retraced; "
-               f"{matched or 'the tableau has no place match of them'})")
+        i, j = min(a, b), max(a, b)
+        matched, elsewhere = self._matched(i, j), closing.elsewhere(i, j)
+        if not proposed and elsewhere and closing.near(i, j):
+            why = (f"{closing.odometry(a, b)} (within {closing.drift_bound(a, b, closer.near_share):.1f} m, near), but "
+                   f"the laser matches t{j}'s place, verified by the places around it, with "
+                   f"{', '.join(f't{x}' for x in elsewhere)}, not with t{i}'s: odometry's nearness alone proposes no "
+                   f"visits the laser places elsewhere")
+        else:
+            why = (f"it was proposed ({proposed}) but rejected beside joins made before it" if proposed else
+                   f"nothing proposed them ({closing.odometry(a, b)}: beyond "
+                   f"{closing.drift_bound(a, b, closer.near_share):.1f} m for visits proposed as near; "
+                   f"{closing.agreeing(i, j)} actions around them agree, where "
+                   f"{closer.context} and one view propose visits as retraced; "
+                   f"{matched or 'the tableau has no place match of them'})")
         return (f"t{a} and t{b} are different dstates only for want of evidence: {why}{self._scans(a, b)}. Every "
                 f"axiom would accept them as one dstate; loop closing joins only what odometry or the laser's "
                 f"place matches propose."), []
