@@ -119,6 +119,28 @@ def test_the_command_line_exits_2_on_a_log_or_a_binary_file(tmp_path, capsys):
         assert ("bootmap ingest" in err) == name.endswith(".mcap")
 
 
+@pytest.mark.parametrize("match, where, said", [
+    ({"a": 0, "b": 3, "score": 0.9}, "meta.place_matches[0].b",
+     "names no time point of the tableau (3; it has 0 to 2)"),
+    ({"a": 1, "b": 1, "score": 0.9}, "meta.place_matches[0]", "matches time point 1 with itself"),
+    ({"a": 0, "b": 2, "score": 1.2}, "meta.place_matches[0].score", "1.2 is greater than the maximum of 1"),
+])
+def test_a_place_match_the_tableau_cannot_hold_is_refused_when_read_naming_file_and_field(tmp_path, capsys, match,
+                                                                                         where, said):
+    from bootmap.cli import main
+
+    turn = {"type": "turn", "angle_deg": 90}
+    steps = [{"view": "a", "action": turn}, {"view": "b", "action": turn}, {"view": "a"}]
+    run = tmp_path / "run.json"
+    run.write_text(json.dumps({"format": "bootmap.tableau/1", "steps": steps, "meta": {"place_matches": [match]}}))
+    with pytest.raises(TableauError) as e:
+        load(run)
+    assert e.value.where == f"{run}: {where}" and said in str(e.value)
+    assert main(["map", str(run)]) == 2
+    err = capsys.readouterr().err
+    assert f"{run}: {where}" in err and "Traceback" not in err
+
+
 def test_missing_file_is_named(tmp_path):
     with pytest.raises(TableauError, match="nope.json: cannot read"):
         load(tmp_path / "nope.json")

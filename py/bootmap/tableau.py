@@ -218,7 +218,9 @@ class Tableau:
         raw = data["steps"]
         steps = tuple(_step(s, i, i == len(raw) - 1, source) for i, s in enumerate(raw))
         _check_images(steps, source)
-        return cls(steps, data.get("world"), dict(data.get("meta", {})))
+        meta = dict(data.get("meta", {}))
+        _check_place_matches(meta.get("place_matches", []), len(steps), source)
+        return cls(steps, data.get("world"), meta)
 
 
 #: Files a robot's log comes in, which ``bootmap ingest`` reads into a tableau.
@@ -383,6 +385,19 @@ def _action(a: dict, where: str) -> Action:
         return Turn(_finite(a["angle_deg"], where + ".angle_deg"))
     return Travel(_finite(a["distance_m"], where + ".distance_m"),
                   _finite(a.get("heading_change_deg", 0.0), where + ".heading_change_deg"))
+
+
+def _check_place_matches(matches: list, n: int, source: str) -> None:
+    """Each place match (``meta.place_matches``, its shape checked by the schema) names two time points of
+    the tableau's ``n``, not one twice."""
+    for k, match in enumerate(matches):
+        for key in ("a", "b"):
+            if match[key] >= n:
+                raise TableauError(f"names no time point of the tableau ({match[key]}; it has 0 to {n - 1})",
+                                   f"{source}: {_pointer(['meta', 'place_matches', k, key])}")
+        if match["a"] == match["b"]:
+            raise TableauError(f"matches time point {match['a']} with itself",
+                               f"{source}: {_pointer(['meta', 'place_matches', k])}")
 
 
 def _check_images(steps: tuple[Step, ...], source: str) -> None:

@@ -341,8 +341,9 @@ def test_a_place_match_the_laser_verified_proposes_a_join_odometry_cannot():
     assert cmap.n_dstates == 8
     why = LoopCloser().explain(matched, 0, 8)
     assert why.verdict == "same"
-    assert any(j.startswith("t0 = t8: proposed (recognised): the laser matches their places, verified by the "
-                            "places around them, with score 0.90 (loop closing proposes 0.7 or more)") for j in why.joins)
+    said = ("t0 = t8: proposed (recognised): the laser matches their places, verified by the places around them, "
+            "with score 0.90 (loop closing proposes 0.7 or more)")
+    assert any(j.startswith(said) for j in why.joins)
     forced = LoopCloser().explain(matched, 1, 9)
     assert any(j.startswith("t1 = t9: forced: t0 and t8 are one dstate") for j in forced.joins)
 
@@ -383,8 +384,9 @@ def test_odometry_near_alone_proposes_no_visits_the_laser_places_elsewhere():
     assert cmap.dstate_of[8] != cmap.dstate_of[0] and cmap.dstate_of[9] == cmap.dstate_of[1]  # t9: no match
     why = LoopCloser().explain(elsewhere, 0, 8)
     assert why.verdict == "different" and "only for want of evidence" in why.sentence
-    assert "0.0 m apart after 80 m driven (within 3.8 m, near), but the laser matches t8's place, verified by the places around it, with t4, " \
-           "not with t0's: odometry's nearness alone proposes no visits the laser places elsewhere" in why.sentence
+    assert ("0.0 m apart after 80 m driven (within 3.8 m, near), but the laser matches t8's place, verified by "
+            "the places around it, with t4, not with t0's: odometry's nearness alone proposes no visits the laser "
+            "places elsewhere") in why.sentence
     for confirmed in ([{"a": 4, "b": 8, "score": 0.9}, {"a": 0, "b": 8, "score": 0.3}],  # among its matches
                       [{"a": 4, "b": 8, "score": 0.9}, {"a": 0, "b": 7, "score": 0.8}],  # the other end of t8's turn
                       [{"a": 2, "b": 5, "score": 0.9}]):  # a match of another visit: nothing said of t8

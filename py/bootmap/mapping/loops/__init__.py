@@ -35,7 +35,8 @@ odometry supports, not the smallest one the views allow. A tableau whose steps c
 (a log) is dead-reckoned from it; otherwise from its actions (turns on the spot, as the simulator's,
 at the learned types' angles). :meth:`LoopCloser.explain` says why two time points are one dstate of
 the map (each join, proposed by odometry or the laser, or forced) or not (headings, odometry, the rules
-that reject joining them, or no evidence); :func:`closes_loops` says when loop closing is the mapper (a log's tableau, ``passes_through``).
+that reject joining them, or no evidence); :func:`closes_loops` says when loop closing is the mapper (a log's tableau,
+``passes_through``).
 
 Loop closing itself is :mod:`.closing`; saying why two time points are one dstate of its map or
 not is :mod:`.explain`.

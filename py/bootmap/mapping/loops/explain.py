@@ -63,8 +63,8 @@ class LoopExplanation:
 @dataclass(frozen=True)
 class Join:
     """Why time points ``x`` and ``y`` were put in one dstate: ``proposed`` by odometry (``kind`` near or
-    retraced) or by the laser's place match (recognised), or ``forced`` by determinism (``after``: the time points before them, already one dstate,
-    took the same ``action``)."""
+    retraced) or by the laser's place match (recognised), or ``forced`` by determinism (``after``: the time
+    points before them, already one dstate, took the same ``action``)."""
 
     x: int
     y: int
