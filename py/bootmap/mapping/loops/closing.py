@@ -386,9 +386,17 @@ class Closing:
         j's place with an earlier visit: the laser was not asked, or found nothing it could verify)."""
         if not self.matches:
             return []
-        here, there = set(self.turn_ends[i]), set(self.turn_ends[j])
-        named = sorted({a for (a, b) in self.matches if b in there and a < min(there)})
-        return [] if here & set(named) else named
+        there = self.turn_ends[j]
+        named = {a for b in there for a in self.earlier_matches.get(b, ()) if a < min(there)}
+        return [] if named & set(self.turn_ends[i]) else sorted(named)
+
+    @cached_property
+    def earlier_matches(self) -> dict[int, set[int]]:
+        """Each time point with the earlier ones the laser matched its place with."""
+        out: dict[int, set[int]] = {}
+        for a, b in self.matches:
+            out.setdefault(b, set()).add(a)
+        return out
 
     def turn_offset(self, i: int, j: int) -> float:
         """How far apart the visits of i and j lie where their scans coincide (metres): a place match puts the
