@@ -257,7 +257,7 @@ class Closing:
         self.odometry_bound = True  # whether dead reckoning's drift bound keeps visits apart
         self.made: dict[tuple, Symbol] = {}  # the views' and the partition's facts made so far (_fact)
         self.dstates = _Partition(n)
-        self.kinds: dict[tuple[int, int], str] = {}  # each proposal: "near" or "retraced"
+        self.kinds: dict[tuple[int, int], str] = {}  # each proposal: "near", "retraced" or "recognised"
         self.refused: tuple[int, int, str] | None = None  # the last pair a fold refused, and why
         self.best: CognitiveMap | None = None
         self.tries: list[Try] = []
