@@ -148,6 +148,26 @@ class Tableau:
             meta["place_matches"] = [m for m in meta["place_matches"] if not _beyond(m, n)]
         return Tableau(steps, self.world, meta)
 
+    def place_matches(self) -> dict[tuple[int, int], float]:
+        """The place matches the tableau carries (``meta.place_matches``), as ``{(earlier, later): score}``
+        (the best score where a pair is given twice); empty where it carries none.
+
+        Raises
+        ------
+        TableauError
+            A match names a time point the tableau does not have, or one time point twice, or is not of that
+            shape (where its meta was set in code, not read).
+        """
+        found = self.meta.get("place_matches")
+        if found is None:
+            return {}
+        _check_place_matches(found, len(self.steps), "tableau")
+        out: dict[tuple[int, int], float] = {}
+        for match in found:
+            pair = (min(match["a"], match["b"]), max(match["a"], match["b"]))
+            out[pair] = max(out.get(pair, 0.0), float(match["score"]))
+        return out
+
     @property
     def labelled(self) -> bool:
         """Every step has a view label (else the views are found by clustering the images)."""
@@ -387,17 +407,26 @@ def _action(a: dict, where: str) -> Action:
                   _finite(a.get("heading_change_deg", 0.0), where + ".heading_change_deg"))
 
 
-def _check_place_matches(matches: list, n: int, source: str) -> None:
-    """Each place match (``meta.place_matches``, its shape checked by the schema) names two time points of
-    the tableau's ``n``, not one twice."""
+def _check_place_matches(matches: Any, n: int, source: str) -> None:
+    """Each place match (``meta.place_matches``) is ``{a, b, score}`` naming two time points of the tableau's
+    ``n``, not one twice, with a score from 0 to 1. A tableau read is checked for the shape by the schema as
+    well; one built in code only here."""
+    where = f"{source}: meta.place_matches"
+    if not isinstance(matches, list):
+        raise TableauError("must be a list of {a, b, score}", where)
     for k, match in enumerate(matches):
+        if not isinstance(match, dict):
+            raise TableauError("must be an object {a, b, score}", f"{where}[{k}]")
         for key in ("a", "b"):
-            if match[key] >= n:
-                raise TableauError(f"names no time point of the tableau ({match[key]}; it has 0 to {n - 1})",
-                                   f"{source}: {_pointer(['meta', 'place_matches', k, key])}")
+            t = match.get(key)
+            if not isinstance(t, int) or isinstance(t, bool) or not 0 <= t < n:
+                raise TableauError(f"names no time point of the tableau ({t!r}; it has 0 to {n - 1})",
+                                   f"{where}[{k}].{key}")
+        score = match.get("score")
+        if not isinstance(score, (int, float)) or isinstance(score, bool) or not 0 <= score <= 1:
+            raise TableauError(f"must be a number from 0 to 1, not {score!r}", f"{where}[{k}].score")
         if match["a"] == match["b"]:
-            raise TableauError(f"matches time point {match['a']} with itself",
-                               f"{source}: {_pointer(['meta', 'place_matches', k])}")
+            raise TableauError(f"matches time point {match['a']} with itself", f"{where}[{k}]")
 
 
 def _check_images(steps: tuple[Step, ...], source: str) -> None:

@@ -405,6 +405,23 @@ def test_a_place_match_naming_no_time_point_or_one_twice_is_refused_by_place(mat
     assert e.value.where == where
 
 
+@pytest.mark.parametrize("matches, where", [
+    ({"a": 0, "b": 8}, "tableau: meta.place_matches"),
+    ([[0, 8, 0.9]], "tableau: meta.place_matches[0]"),
+    ([{"a": 0, "b": 12, "score": 0.9}], "tableau: meta.place_matches[0].b"),
+    ([{"a": 0, "b": 8, "score": "high"}], "tableau: meta.place_matches[0].score"),
+])
+def test_place_matches_set_in_code_are_checked_by_loop_closing_as_a_read_tableau_is(matches, where):
+    """A tableau whose meta is set in code is not read through the schema: its matches are checked where they
+    are read, with the same messages."""
+    from bootmap.errors import TableauError
+    loop = _drifted_loop()
+    made = Tableau(loop.steps, loop.world, dict(loop.meta, place_matches=matches))
+    with pytest.raises(TableauError) as e:
+        LoopCloser().resolve(made)
+    assert e.value.where == where
+
+
 def test_a_place_match_out_of_shape_is_refused_when_read_and_a_prefix_keeps_the_matches_within_it():
     from bootmap.errors import TableauError
     with pytest.raises(TableauError, match=r"place_matches"):

@@ -16,7 +16,7 @@ from typing import Sequence
 import numpy as np
 from clingo import Symbol
 
-from ...errors import InconsistentTableau, SolveTimeout, TableauError
+from ...errors import InconsistentTableau, SolveTimeout
 from ...tableau import Tableau, Travel, Turn
 from ..assertions import Assertion, Conflict, assertion_facts, hard
 from ..cogmap import CognitiveMap, SolveStats, Try, build_map
@@ -188,42 +188,6 @@ def dead_reckoning(tableau: Tableau, angles: Sequence[int] | None = None) -> tup
     return xy, along
 
 
-def place_matches(tableau: Tableau) -> dict[tuple[int, int], float]:
-    """The place matches ``tableau`` carries (``meta.place_matches``: ``{"a": t, "b": u, "score": s}``), as
-    ``{(earlier, later): score}``; empty where it carries none.
-
-    Raises
-    ------
-    TableauError
-        A match names a time point the tableau does not have, or one time point twice, or is not of that
-        shape (where the tableau was built in code, not read).
-    """
-    found = tableau.meta.get("place_matches")
-    if found is None:
-        return {}
-    if not isinstance(found, list):
-        raise TableauError("must be a list of {a, b, score}", "tableau: meta.place_matches")
-    out: dict[tuple[int, int], float] = {}
-    for k, match in enumerate(found):
-        where = f"tableau: meta.place_matches[{k}]"
-        if not isinstance(match, dict):
-            raise TableauError("must be an object {a, b, score}", where)
-        for key in ("a", "b"):
-            t = match.get(key)
-            if not isinstance(t, int) or isinstance(t, bool) or not 0 <= t < len(tableau):
-                raise TableauError(f"names no time point of the tableau ({t!r}; it has 0 to {len(tableau) - 1})",
-                                   f"{where}.{key}")
-        score = match.get("score")
-        if not isinstance(score, (int, float)) or isinstance(score, bool) or not 0 <= score <= 1:
-            raise TableauError(f"must be a number from 0 to 1, not {score!r}", f"{where}.score")
-        a, b = match["a"], match["b"]
-        if a == b:
-            raise TableauError(f"matches time point {a} with itself", where)
-        pair = (min(a, b), max(a, b))
-        out[pair] = max(out.get(pair, 0.0), float(score))
-    return out
-
-
 class Closing:
     """One loop closing: the evidence, the partition (with every join undoable) and the last map the axioms
     accepted."""
@@ -245,7 +209,7 @@ class Closing:
         self.heading = np.concatenate([[0], np.cumsum(self.angles)]).astype(int) % 360
         self.xy, self.along = dead_reckoning(tableau, self.angles)
         self.views = tableau.views
-        self.matches = place_matches(tableau)  # what the laser says of pairs of visits
+        self.matches = tableau.place_matches()  # what the laser says of pairs of visits
         # What every check of a partition shares: the actions as the axioms see them (not the views)
         self.action_facts = [f for f in tableau_facts(tableau, angles=self.angles, lengths=lengths)
                              if not VIEW.matches(f)]
