@@ -431,3 +431,33 @@ def test_a_place_match_out_of_shape_is_refused_when_read_and_a_prefix_keeps_the_
     matched = _drifted_loop([{"a": 0, "b": 8, "score": 0.9}, {"a": 1, "b": 5, "score": 0.8}])
     assert matched.prefix(8).meta["place_matches"] == [{"a": 1, "b": 5, "score": 0.8}]
     assert LoopCloser().resolve(matched.prefix(8)).n_dstates == 8
+
+
+def _figure_eight() -> Tableau:
+    """Two loops of 400 m from one corner, c0 (100 m sides, turned on the spot), each closing there facing east:
+    t0, t8 and t17. Dead reckoning drifts 6.5 m round the first loop and 5 m round the second, so t8 is near
+    t0 (within 3 m + 1% of 400 m) and t17 near t8, but t17 lies 11.5 m from t0 after 800 m driven, beyond the
+    11 m a near pair may drift: joined along the drive alone, the three cannot be one place."""
+    at = [(0, 0, 0), (100, 0, 0), (100, 0, 90), (100, 100, 90), (100, 100, 180), (0, 100, 180), (0, 100, 270),
+          (6.5, 0, 270), (6.5, 0, 0), (6.5, 0, 180), (-93.5, 0, 180), (-93.5, 0, 270), (-93.5, -100, 270),
+          (-93.5, -100, 0), (6.5, -100, 0), (6.5, -100, 90), (11.5, 0, 90), (11.5, 0, 0)]
+    turns = {1: 90, 3: 90, 5: 90, 7: 90, 8: 180, 10: 90, 12: 90, 14: 90, 16: -90}
+    steps = [{"view": "corner", "odometry": list(p),
+              "action": {"type": "turn", "angle_deg": turns[k]} if k in turns else
+              {"type": "travel", "distance_m": 100.0}} for k, p in enumerate(at)]
+    del steps[-1]["action"]
+    return Tableau.from_dict({"format": FORMAT, "steps": steps, "meta": {"passes_through": True}})
+
+
+def test_a_closed_loop_re_anchors_dead_reckoning_for_the_visits_around_it():
+    """The second loop closed (t8 = t17, nearest first) refuses t0 = t8 by complete linkage (t0 and t17 11.5 m
+    apart after 800 m); re-anchored at that closure, t17 is t0's drift round the first loop away (6.5 m through
+    400 m of drive and a join counted as 300 m), near enough, and all three are one dstate."""
+    eight = _figure_eight()
+    cmap = LoopCloser().resolve(eight)
+    assert cmap.dstate_of[0] == cmap.dstate_of[8] == cmap.dstate_of[17]
+    assert cmap.n_dstates == 16
+    assert check_map(eight, cmap.dstate_of) == []
+    why = LoopCloser().explain(eight, 0, 17)
+    assert ("t0 = t17: proposed (near): dead reckoning re-anchored at the loops closed puts them 6.5 m apart, "
+            "700 m of drive between them that way, not the 800 m driven (within 10.0 m)") in why.joins

@@ -29,6 +29,12 @@ Here the robot's odometry proposes which visits are one dstate, and the axioms d
 4. What is left is checked by clingo with every axiom file (the partition fixed, ``fixed/2``), views
    taken as soft evidence: each dstate shows the view most of its visits show, and the other visits
    are listed as misreads (``suspect_steps``). A proposal the axioms reject is dropped.
+5. Then again, with dead reckoning re-anchored at the joins made (:mod:`.anchoring`, as a pose graph
+   corrects a drive where its loops close): between two visits, the drift that counts is that of the
+   shortest way through the drive and the joins (a join counted as the drive over which a near pair may
+   drift a place radius), and the visits lie where odometry puts them along that way. The pairs that
+   become near, retraced or recognised are proposed (none proposed before) and checked as above, until a
+   round joins nothing.
 
 The result satisfies every axiom but is not proved minimal (``minimal`` is False): it is the map
 odometry supports, not the smallest one the views allow. A tableau whose steps carry ``odometry``
@@ -38,8 +44,8 @@ the map (each join, proposed by odometry or the laser, or forced) or not (headin
 that reject joining them, or no evidence); :func:`closes_loops` says when loop closing is the mapper (a log's tableau,
 ``passes_through``).
 
-Loop closing itself is :mod:`.closing`; saying why two time points are one dstate of its map or
-not is :mod:`.explain`.
+Loop closing itself is :mod:`.closing`; dead reckoning re-anchored at its joins is :mod:`.anchoring`;
+saying why two time points are one dstate of its map or not is :mod:`.explain`.
 
 Example
 -------

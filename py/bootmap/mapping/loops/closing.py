@@ -6,6 +6,7 @@ causal level demands, and every axiom checks the partition (the steps in :mod:`b
 
 from __future__ import annotations
 
+import itertools
 import math
 import time
 from collections import Counter
@@ -26,6 +27,7 @@ from ..grounding import Deadline, check_fixed
 from ..motion import measured_angle
 from ..resolver import Resolver
 from ..vocabulary import FIXED, VIEW, Predicate, action_word, fixed_dstate
+from .anchoring import Anchoring
 from .explain import Join, LoopExplanation, explain, failing_rules as _failing_rules, why_apart
 
 #: How a map is found: ``auto`` (loop closing where the robot drove through dstates, as a log's tableau
@@ -46,7 +48,8 @@ class LoopCloser:
         Visits whose dead-reckoned positions lie this close may be one place: the odometry's
         resolution at a dstate (a robot that turns while driving ends a turn 2-4 m on).
     near_share : float
-        Dead reckoning's drift per metre driven, for visits proposed because they are near.
+        Dead reckoning's drift per metre driven, for visits proposed because they are near. Re-anchored
+        where loops closed, a join counts as ``radius_m / near_share`` metres of drive (:mod:`.anchoring`).
     drift_share : float
         The most it may drift per metre driven between any two visits of one dstate.
     context : int
@@ -226,6 +229,10 @@ class Closing:
         self.best: CognitiveMap | None = None
         self.tries: list[Try] = []
         self.checks = 0
+        # dead reckoning re-anchored at the joins made (None: the drive's own), and the odometry each
+        # proposal was made on (gap, metres of drive, re-anchored), as explanations quote it
+        self.anchoring: Anchoring | None = None
+        self.figures: dict[tuple[int, int], tuple[float, float, bool]] = {}
 
     # ------------------------------------------------------------------------------------------
     def run(self, prior: Sequence[str] | None = None) -> CognitiveMap:
@@ -256,10 +263,40 @@ class Closing:
                 before = self.dstates.mark()
                 if not (self.fold(i, j) and self._accepted()):
                     self.dstates.undo(before)
+        if self.best is not None and self.closer.near_share > 0:  # with no drift allowed, a join counts for none
+            self.close_again()
         if self.best is None:
             raise InconsistentTableau("no map found by loop closing: no partition it reached satisfies the axioms",
                                       levels=tuple(self.resolver.theory.levels))
         return replace(self.best, stats=self._stats())
+
+    def close_again(self) -> None:
+        """Loop closing again with dead reckoning re-anchored at the joins made (:mod:`.anchoring`), as a
+        pose graph corrects a drive where its loops close: the pairs that become near, retraced or recognised
+        are proposed (those proposed before are not asked again), each kept where the fold and the axioms
+        accept it; until a round joins nothing."""
+        while True:
+            self.reanchor()
+            made = False
+            for i, j in self._propose(fresh=True):
+                if self.deadline.passed():
+                    raise self.timed_out()
+                if self.dstates.root[i] == self.dstates.root[j]:
+                    continue
+                before = self.dstates.mark()
+                if self.fold(i, j) and self._accepted():
+                    made = True
+                else:
+                    self.dstates.undo(before)
+            if not made:
+                return
+
+    def reanchor(self) -> None:
+        """Re-anchor dead reckoning at the joins standing: a join counts as the drive over which a near pair
+        may drift a place radius."""
+        members = self.dstates.members
+        groups = [members[r] for r in members if len(members[r]) > 1]
+        self.anchoring = Anchoring(self.along, self.xy, groups, self.closer.radius_m / self.closer.near_share)
 
     def _kept(self, prior: Sequence[str]) -> bool:
         """Fold the joins of a map made before (each dstate's visits, in order), dropping those refused;
@@ -308,38 +345,61 @@ class Closing:
 
     @cached_property
     def proposals(self) -> list[tuple[int, int]]:
-        """Pairs of visits odometry proposes as one dstate, strongest first (longest context, nearest)."""
+        """Pairs of visits odometry proposes as one dstate, strongest first (longest context, nearest), then
+        the laser's."""
+        return self._propose()
+
+    def _propose(self, fresh: bool = False) -> list[tuple[int, int]]:
+        """The proposals on dead reckoning as it stands (re-anchored or not); with ``fresh``, only pairs not
+        proposed before and not one dstate already."""
         ranked = []
-        for i in range(self.n):
-            for j in range(i + 1, self.n):
-                if self.heading[i] != self.heading[j]:
-                    continue
-                near = self._apart(i, j, self.closer.near_share)  # within the near bound at 1.0 or less
-                agree = self.agreeing(i, j)
-                # a retraced pair's odometry is loose: it needs its views to agree as well
-                retraced = (agree >= self.closer.context and self.views[i] == self.views[j]
-                            and self._apart(i, j, self.closer.drift_share) <= 1.0)
-                if near <= 1.0 and not retraced and self.elsewhere(i, j):
-                    continue  # the laser places j elsewhere: odometry's nearness alone does not propose them
-                if near <= 1.0 or retraced:
-                    # nearest in metres, as the truth's places are drawn (not as a share of the drift allowed:
-                    # that ranks a pair far apart after a long drive before a close pair after a short one)
-                    ranked.append((-agree, self.gap(i, j), i, j))
-                    self.kinds[i, j] = "near" if near <= 1.0 else "retraced"
+        for i, j in (self._fresh_pairs() if fresh else itertools.combinations(range(self.n), 2)):
+            if self.heading[i] != self.heading[j]:
+                continue
+            near = self._apart(i, j, self.closer.near_share)  # within the near bound at 1.0 or less
+            agree = self.agreeing(i, j)
+            # a retraced pair's odometry is loose: it needs its views to agree as well
+            retraced = (agree >= self.closer.context and self.views[i] == self.views[j]
+                        and self._apart(i, j, self.closer.drift_share) <= 1.0)
+            if near <= 1.0 and not retraced and self.elsewhere(i, j):
+                continue  # the laser places j elsewhere: odometry's nearness alone does not propose them
+            if near <= 1.0 or retraced:
+                # nearest in metres, as the truth's places are drawn (not as a share of the drift allowed:
+                # that ranks a pair far apart after a long drive before a close pair after a short one)
+                ranked.append((-agree, self.gap(i, j), i, j))
+                self.kinds[i, j] = "near" if near <= 1.0 else "retraced"
+                self._note(i, j)
         ranked.sort()
         return [(i, j) for _, _, i, j in ranked] + self.recognised()
+
+    def _fresh_pairs(self) -> list[tuple[int, int]]:
+        """The pairs not proposed before, in two dstates, facing one way and within the drift bound as dead
+        reckoning stands (re-anchored): all that odometry may propose now, found at once."""
+        a = self.anchoring
+        off = self.middle - self.xy  # each visit's middle from its time point
+        gaps = np.hypot(*np.moveaxis(a.displacement + off[None, :, :] - off[:, None, :], -1, 0))
+        root = np.asarray(self.dstates.root)
+        within = ((gaps <= self.closer.radius_m + self.closer.drift_share * a.driven + 1e-9)
+                  & (self.heading[:, None] == self.heading[None, :]) & (root[:, None] != root[None, :]))
+        return [(int(i), int(j)) for i, j in np.argwhere(np.triu(within, 1)) if (i, j) not in self.kinds]
+
+    def _note(self, i: int, j: int) -> None:
+        """Keep the odometry a proposal was made on, for explanations."""
+        self.figures[i, j] = (self.gap(i, j), self.driven(i, j), self.reanchored(i, j))
 
     def recognised(self) -> list[tuple[int, int]]:
         """Pairs of visits the laser proposes as one dstate, after odometry's (strongest match first): a place
         match of at least ``match_score``, facing one way, within the drift bound, not proposed by odometry,
         and one place once their scans are put together (:meth:`turn_offset`)."""
         ranked = []
+        root = self.dstates.root
         for (i, j), score in self.matches.items():
-            if score >= self.closer.match_score and (i, j) not in self.kinds \
+            if score >= self.closer.match_score and (i, j) not in self.kinds and root[i] != root[j] \
                     and self.heading[i] == self.heading[j] and self._apart(i, j, self.closer.drift_share) <= 1.0 \
                     and self.turn_offset(i, j) <= self.closer.radius_m:
                 ranked.append((-score, i, j))
                 self.kinds[i, j] = "recognised"
+                self._note(i, j)
         ranked.sort()
         return [(i, j) for _, i, j in ranked]
 
@@ -378,7 +438,18 @@ class Closing:
     def _apart(self, i: int, j: int, share: float) -> float:
         """How far apart dead reckoning puts i and j, as a share of what it may drift between them."""
         gap = self.gap(i, j)
-        return gap / (self.closer.radius_m + share * abs(self.along[j] - self.along[i]))
+        return gap / (self.closer.radius_m + share * self.driven(i, j))
+
+    def driven(self, i: int, j: int) -> float:
+        """The metres of drive whose drift lies between i and j: those driven, or once dead reckoning is
+        re-anchored, the shortest way through the drive and the joins made (:mod:`.anchoring`)."""
+        if self.anchoring is None:
+            return abs(float(self.along[j] - self.along[i]))
+        return float(self.anchoring.driven[i, j])
+
+    def reanchored(self, i: int, j: int) -> bool:
+        """Whether dead reckoning between i and j goes through a join made (a shorter way than the drive)."""
+        return self.anchoring is not None and self.driven(i, j) < abs(float(self.along[j] - self.along[i])) - 1e-6
 
     @cached_property
     def turn_ends(self) -> list[tuple[int, ...]]:
@@ -396,7 +467,13 @@ class Closing:
         """How far apart dead reckoning puts the places of i and j (metres): the middles of the turns they
         belong to (a visit is where its turn is; its ends lie metres apart when the robot turned while
         driving)."""
-        return float(np.hypot(*(self.middle[i] - self.middle[j])))
+        if self.anchoring is None:
+            return float(np.hypot(*(self.middle[i] - self.middle[j])))
+        # re-anchored: the way from i's time point to j's (the earlier first: where two ways tie, one answer),
+        # and each middle's offset from its time point
+        i, j = min(i, j), max(i, j)
+        way = self.anchoring.displacement[i, j] + (self.middle[j] - self.xy[j]) - (self.middle[i] - self.xy[i])
+        return float(np.hypot(*way))
 
     @cached_property
     def middle(self) -> np.ndarray:
@@ -475,14 +552,26 @@ class Closing:
             return f"{self.odometry(x, y)}, more than {allowed} ({self.drift_bound(x, y, share):.1f} m)"
         return ""
 
-    def odometry(self, x: int, y: int) -> str:
-        """How far apart dead reckoning puts x and y, in words."""
-        return (f"dead reckoning puts them {self.gap(x, y):.1f} m apart after "
-                f"{abs(self.along[y] - self.along[x]):.0f} m driven")
+    def odometry(self, x: int, y: int, as_proposed: bool = False) -> str:
+        """How far apart dead reckoning puts x and y, in words (``as_proposed``: as it stood when they were
+        proposed, where they were)."""
+        gap, driven, anchored = self._figures(x, y, as_proposed)
+        if anchored:
+            return (f"dead reckoning re-anchored at the loops closed puts them {gap:.1f} m apart, {driven:.0f} m of "
+                    f"drive between them that way, not the {abs(self.along[y] - self.along[x]):.0f} m driven")
+        return f"dead reckoning puts them {gap:.1f} m apart after {driven:.0f} m driven"
 
-    def drift_bound(self, x: int, y: int, share: float) -> float:
-        """The metres dead reckoning may put x and y apart, drifting ``share`` per metre driven between them."""
-        return self.closer.radius_m + share * abs(self.along[y] - self.along[x])
+    def drift_bound(self, x: int, y: int, share: float, as_proposed: bool = False) -> float:
+        """The metres dead reckoning may put x and y apart, drifting ``share`` per metre of drive between them."""
+        return self.closer.radius_m + share * self._figures(x, y, as_proposed)[1]
+
+    def _figures(self, x: int, y: int, as_proposed: bool = False) -> tuple[float, float, bool]:
+        """The gap, the metres of drive between x and y and whether re-anchored: as now, or ``as_proposed``
+        (as they stood when the pair was proposed, where it was)."""
+        i, j = min(x, y), max(x, y)
+        if as_proposed and (i, j) in self.figures:
+            return self.figures[i, j]
+        return self.gap(i, j), self.driven(i, j), self.reanchored(i, j)
 
     def _accepted(self) -> bool:
         """Check the partition with every axiom; keep its map if they accept it."""

@@ -149,16 +149,17 @@ class _Explaining:
         """The odometry behind a proposal, in words."""
         closing, closer = self.closing, self.closing.closer
         i, j = min(x, y), max(x, y)
+        odometry = closing.odometry(x, y, as_proposed=True)
+        bound = partial(closing.drift_bound, x, y, as_proposed=True)
         if closing.kinds.get((i, j)) == "preferred":
-            return f"a person prefers them one dstate ({closing.odometry(x, y)})"
+            return f"a person prefers them one dstate ({odometry})"
         if closing.kinds.get((i, j)) == "recognised":
-            return (f"{self._matched(i, j)}, and {closing.odometry(x, y)} (within "
-                    f"{closing.drift_bound(x, y, closer.drift_share):.1f} m){self._scans(x, y)}")
+            return (f"{self._matched(i, j)}, and {odometry} (within "
+                    f"{bound(closer.drift_share):.1f} m){self._scans(x, y)}")
         if closing.kinds.get((i, j)) == "retraced":
-            return (f"the same {closing.agreeing(i, j)} actions around them, one view, and {closing.odometry(x, y)} "
-                    f"(within {closing.drift_bound(x, y, closer.drift_share):.1f} m){self._scans(x, y)}")
-        return (f"{closing.odometry(x, y)} (within {closing.drift_bound(x, y, closer.near_share):.1f} m)"
-                f"{self._scans(x, y)}")
+            return (f"the same {closing.agreeing(i, j)} actions around them, one view, and {odometry} "
+                    f"(within {bound(closer.drift_share):.1f} m){self._scans(x, y)}")
+        return f"{odometry} (within {bound(closer.near_share):.1f} m){self._scans(x, y)}"
 
     def _matched(self, i: int, j: int) -> str:
         """What the tableau's place match says of i and j (i < j), in words ("" where it has none)."""
