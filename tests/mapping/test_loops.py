@@ -385,7 +385,7 @@ def test_odometry_near_alone_proposes_no_visits_the_laser_places_elsewhere():
     why = LoopCloser().explain(elsewhere, 0, 8)
     assert why.verdict == "different" and "only for want of evidence" in why.sentence
     assert ("0.0 m apart after 80 m driven (within 3.8 m, near), but the laser matches t8's place, verified by "
-            "the places around it, with t4, not with t0's: odometry's nearness alone proposes no visits the laser "
+            "the places around it, with t4, not with t0's: odometry alone proposes no visits the laser "
             "places elsewhere") in why.sentence
     for confirmed in ([{"a": 4, "b": 8, "score": 0.9}, {"a": 0, "b": 8, "score": 0.3}],  # among its matches
                       [{"a": 4, "b": 8, "score": 0.9}, {"a": 0, "b": 7, "score": 0.8}],  # the other end of t8's turn
@@ -461,3 +461,37 @@ def test_a_closed_loop_re_anchors_dead_reckoning_for_the_visits_around_it():
     why = LoopCloser().explain(eight, 0, 17)
     assert ("t0 = t17: proposed (near): dead reckoning re-anchored at the loops closed puts them 6.5 m apart, "
             "700 m of drive between them that way, not the 800 m driven (within 10.0 m)") in why.joins
+
+
+def _two_drifted_laps(matches: list[dict] | None = None) -> Tableau:
+    """Two laps of a square of 20 m sides, turned on the spot: dead reckoning puts the second lap 5 m east of
+    the first (t8 5 m from t0 after 81 m), beyond a near pair's bound (3.8 m) but within the drift bound (7 m),
+    and eight actions agree around each pair of laps' visits: odometry proposes them as retraced."""
+    square = [(0, 0, 0), (20, 0, 0), (20, 0, 90), (20, 20, 90), (20, 20, 180), (0, 20, 180), (0, 20, 270)]
+    at = square + [(5, 0, 270)] + [(x + 5, y, h) for x, y, h in square] + [(10, 0, 270), (10, 0, 0)]
+    steps = [{"view": "corner", "odometry": list(p),
+              "action": {"type": "travel", "distance_m": 20.0} if k % 2 == 0 else {"type": "turn", "angle_deg": 90}}
+             for k, p in enumerate(at)]
+    del steps[-1]["action"]
+    meta = {"passes_through": True} | ({} if matches is None else {"place_matches": matches})
+    return Tableau.from_dict({"format": FORMAT, "steps": steps, "meta": meta})
+
+
+def test_retraced_visits_the_laser_places_elsewhere_are_not_proposed_either():
+    """The laser's withholding holds for both of odometry's kinds of proposal: a pair retraced (the same
+    actions around it, one view) is not proposed where the laser matched the later visit's place with earlier
+    visits, none of them the earlier visit's place; its neighbours, retraced too, still are."""
+    laps = _two_drifted_laps()
+    alone = LoopCloser().resolve(laps)
+    assert alone.dstate_of[0] == alone.dstate_of[8] and alone.n_dstates == 8  # the second lap is the first
+    assert any(j.startswith("t0 = t8: proposed (retraced): the same 8 actions around them")
+               for j in LoopCloser().explain(laps, 0, 8).joins)
+    elsewhere = _two_drifted_laps([{"a": 4, "b": 8, "score": 0.9}])  # t8's place is t4's, says the laser
+    cmap = LoopCloser().resolve(elsewhere)
+    assert cmap.dstate_of[0] != cmap.dstate_of[8]
+    assert all(cmap.dstate_of[t] == cmap.dstate_of[t + 8] for t in range(1, 9))  # t1 = t9 on, and all it forces
+    why = LoopCloser().explain(elsewhere, 0, 8)
+    assert why.verdict == "different" and "only for want of evidence" in why.sentence
+    assert ("the same 8 actions around them, one view, and dead reckoning puts them 5.0 m apart after 81 m driven "
+            "(within 7.0 m, retraced), but the laser matches t8's place, verified by the places around it, with t4, "
+            "not with t0's: odometry alone proposes no visits the laser places elsewhere") in why.sentence

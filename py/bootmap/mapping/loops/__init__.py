@@ -17,8 +17,8 @@ Here the robot's odometry proposes which visits are one dstate, and the axioms d
    nearest in metres. After odometry's, the laser's: **recognised**, a place match the tableau carries
    (``meta.place_matches``: a log's visits' local maps matched and verified by the places around them,
    :mod:`bootmap.surroundings`) scoring at least ``match_score``, within the drift bound, whose turns'
-   middles are one place once their scans are put together. Strongest match first. A near pair is not
-   proposed where the laser matched the later visit's place with earlier visits, none of them the
+   middles are one place once their scans are put together. Strongest match first. A near or retraced
+   pair is not proposed where the laser matched the later visit's place with earlier visits, none of them the
    earlier visit's place (:meth:`Closing.elsewhere`).
 3. A proposal is folded as the causal level demands (the same action from one dstate reaches one
    dstate: merge and fold, as RPNI does); every pair of visits the fold joins must face one way and

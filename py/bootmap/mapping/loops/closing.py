@@ -358,11 +358,9 @@ class Closing:
                 continue
             near = self._apart(i, j, self.closer.near_share)  # within the near bound at 1.0 or less
             agree = self.agreeing(i, j)
-            # a retraced pair's odometry is loose: it needs its views to agree as well
-            retraced = (agree >= self.closer.context and self.views[i] == self.views[j]
-                        and self._apart(i, j, self.closer.drift_share) <= 1.0)
-            if near <= 1.0 and not retraced and self.elsewhere(i, j):
-                continue  # the laser places j elsewhere: odometry's nearness alone does not propose them
+            retraced = self.retraced(i, j, agree)
+            if (near <= 1.0 or retraced) and self.elsewhere(i, j):
+                continue  # the laser places j elsewhere: odometry alone does not propose them
             if near <= 1.0 or retraced:
                 # nearest in metres, as the truth's places are drawn (not as a share of the drift allowed:
                 # that ranks a pair far apart after a long drive before a close pair after a short one)
@@ -430,6 +428,14 @@ class Closing:
         here = self.middle[i] - self.xy[i]
         there = self.middle[j] - self.xy[j]
         return float(np.hypot(*(there - here)))
+
+    def retraced(self, i: int, j: int, agree: int | None = None) -> bool:
+        """Whether odometry proposes i and j as one dstate retraced: ``context`` actions around them agree,
+        they show one view (a retraced pair's odometry is loose: its views must agree as well) and lie within
+        the drift bound."""
+        agree = self.agreeing(i, j) if agree is None else agree
+        return (agree >= self.closer.context and self.views[i] == self.views[j]
+                and self._apart(i, j, self.closer.drift_share) <= 1.0)
 
     def near(self, i: int, j: int) -> bool:
         """Whether dead reckoning puts i and j near enough to be proposed as one dstate on its word alone."""

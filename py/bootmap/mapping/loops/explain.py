@@ -214,10 +214,13 @@ class _Explaining:
                     f"what determinism then joins): it breaks {' and '.join(r.cite() for r in failing)}."), failing
         i, j = min(a, b), max(a, b)
         matched, elsewhere = self._matched(i, j), closing.elsewhere(i, j)
-        if not proposed and elsewhere and closing.near(i, j):
-            why = (f"{closing.odometry(a, b)} (within {closing.drift_bound(a, b, closer.near_share):.1f} m, near), but "
-                   f"the laser matches t{j}'s place, verified by the places around it, with "
-                   f"{', '.join(f't{x}' for x in elsewhere)}, not with t{i}'s: odometry's nearness alone proposes no "
+        if not proposed and elsewhere and (closing.near(i, j) or closing.retraced(i, j)):
+            said = (f"{closing.odometry(a, b)} (within {closing.drift_bound(a, b, closer.near_share):.1f} m, near)"
+                    if closing.near(i, j) else
+                    f"the same {closing.agreeing(i, j)} actions around them, one view, and {closing.odometry(a, b)} "
+                    f"(within {closing.drift_bound(a, b, closer.drift_share):.1f} m, retraced)")
+            why = (f"{said}, but the laser matches t{j}'s place, verified by the places around it, with "
+                   f"{', '.join(f't{x}' for x in elsewhere)}, not with t{i}'s: odometry alone proposes no "
                    f"visits the laser places elsewhere")
         else:
             why = (f"it was proposed ({proposed}) but rejected beside joins made before it" if proposed else
