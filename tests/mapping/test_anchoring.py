@@ -51,19 +51,21 @@ def drives(draw):
 @given(drives())
 def test_the_shortest_ways_through_drive_and_joins_are_those_a_full_search_finds(drive):
     along, xy, groups, jump = drive
-    a = Anchoring(along, xy, groups, jump)
+    driven, displacement = Anchoring(along, xy, groups, jump).rows(range(len(along)))
     R, V = searched(along, xy, groups, jump)
-    assert np.allclose(a.driven, R, atol=1e-6)
-    assert np.allclose(a.driven, a.driven.T)
-    assert np.all(a.driven <= np.abs(along[:, None] - along[None, :]) + 1e-9)  # never longer than the drive
+    assert np.allclose(driven, R, atol=1e-6)
+    assert np.allclose(driven, driven.T)
+    assert np.all(driven <= np.abs(along[:, None] - along[None, :]) + 1e-9)  # never longer than the drive
     for g in groups:
         for x in g:
             for y in g:
-                assert a.driven[x, y] <= jump + 1e-9
+                assert driven[x, y] <= jump + 1e-9
     # where two ways tie, either displacement is right: compare where the shortest way is the only one
     unique = _unique_ways(along, groups, jump, R)
-    assert np.allclose(a.displacement[unique], V[unique], atol=1e-6)
-    assert np.allclose(a.displacement[unique], -a.displacement.transpose(1, 0, 2)[unique], atol=1e-6)
+    assert np.allclose(displacement[unique], V[unique], atol=1e-6)
+    assert np.allclose(displacement[unique], -displacement.transpose(1, 0, 2)[unique], atol=1e-6)
+    # rows asked a few at a time are the rows asked all at once
+    assert all(np.allclose(Anchoring(along, xy, groups, jump).rows([t])[0][0], driven[t]) for t in range(len(along)))
 
 
 def _unique_ways(along, groups, jump, R):
@@ -87,9 +89,9 @@ def _unique_ways(along, groups, jump, R):
 def test_without_joins_the_drive_is_its_own_way():
     along = np.array([0.0, 5, 12, 30])
     xy = np.array([[0, 0], [5, 0], [5, 7], [20, 7.0]])
-    a = Anchoring(along, xy, [[0], [1, ], [2], [3]], jump_m=10.0)
-    assert np.allclose(a.driven, np.abs(along[:, None] - along[None, :]))
-    assert np.allclose(a.displacement, xy[None, :, :] - xy[:, None, :])
+    driven, displacement = Anchoring(along, xy, [[0], [1], [2], [3]], jump_m=10.0).rows(range(4))
+    assert np.allclose(driven, np.abs(along[:, None] - along[None, :]))
+    assert np.allclose(displacement, xy[None, :, :] - xy[:, None, :])
 
 
 def test_a_join_shortens_the_way_and_moves_nothing():
@@ -97,8 +99,9 @@ def test_a_join_shortens_the_way_and_moves_nothing():
     along = np.array([0.0, 100, 200, 300, 400])
     xy = np.array([[0, 0], [100, 0], [100, 100], [0, 100], [0, 3.0]])  # 3 m of drift round the loop
     a = Anchoring(along, xy, [[0, 4]], jump_m=50.0)
-    assert a.driven[0, 3] == pytest.approx(150.0) and np.allclose(a.displacement[0, 3], [0, 97])
-    assert a.driven[1, 3] == pytest.approx(200.0)  # the drive is shorter than the way through the join
+    metres, displacement = a.way(0, 3)
+    assert metres == pytest.approx(150.0) and np.allclose(displacement, [0, 97])
+    assert a.way(1, 3)[0] == pytest.approx(200.0)  # the drive is shorter than the way through the join
     with pytest.raises(ValueError, match="jump_m"):
         Anchoring(along, xy, [[0, 4]], jump_m=0.0)
     with pytest.raises(ValueError, match="4 positions for 5 time points"):

@@ -11,8 +11,7 @@ times. A pose graph weighs both; here, as the bound is worst-case, the tighter w
   (``radius_m / share``: the two visits may lie a radius apart), moving it nowhere.
 
 Between two time points, the shortest way through that graph gives the metres of drive whose drift
-matters (:attr:`Anchoring.driven`) and the displacement dead reckoning gives along it
-(:attr:`Anchoring.displacement`). Where no join lies between them, or the joins are no shortcut, these are
+matters and the displacement dead reckoning gives along it (:meth:`Anchoring.rows`, :meth:`Anchoring.way`). Where no join lies between them, or the joins are no shortcut, these are
 the drive's own: the metres driven and the difference of the dead-reckoned positions. So a loop closed
 early keeps a later revisit of the loop's places within reach, with its position corrected by the
 closure, long after the drive alone would have drifted too far to tell.
@@ -33,9 +32,11 @@ from where it puts t3; between t1 and t3 the drive (200 m) is shorter than the w
 >>> along = np.array([0.0, 100, 200, 300, 400])
 >>> xy = np.array([[0, 0], [100, 0], [100, 100], [0, 100], [0, 3.0]])
 >>> a = Anchoring(along, xy, [[0, 4]], jump_m=50.0)
->>> float(a.driven[1, 3]), a.displacement[1, 3].tolist()
+>>> metres, displacement = a.way(1, 3)
+>>> metres, displacement.tolist()
 (200.0, [-100.0, 100.0])
->>> float(a.driven[0, 3]), a.displacement[0, 3].tolist()
+>>> metres, displacement = a.way(0, 3)
+>>> metres, displacement.tolist()
 (150.0, [0.0, 97.0])
 """
 
@@ -62,47 +63,58 @@ class Anchoring:
     jump_m : float
         How long a join counts, in metres of drive: a place radius over the drift per metre.
 
-    Attributes
-    ----------
-    driven : ndarray (n, n)
-        The metres of drive whose drift lies between each two time points, the joins' lengths included.
-    displacement : ndarray (n, n, 2)
-        ``displacement[i, j]``: where dead reckoning puts j from i along that way (a join moves nothing).
+    Only the hubs' ways are kept (their number squared); the ways from other time points are worked out
+    for the rows asked (:meth:`rows`, :meth:`way`), so a long drive costs memory by the rows asked at once.
     """
 
     def __init__(self, along, xy, groups: Sequence[Sequence[int]], jump_m: float):
-        along = np.asarray(along, dtype=float)
-        xy = np.asarray(xy, dtype=float).reshape(-1, 2)
-        n = len(along)
+        self.along = along = np.asarray(along, dtype=float)
+        self.xy = xy = np.asarray(xy, dtype=float).reshape(-1, 2)
+        self.n = n = len(along)
         if xy.shape != (n, 2):
             raise ValueError(f"{len(xy)} positions for {n} time points")
         if not jump_m > 0:
             raise ValueError(f"a join must count for some drive, got jump_m={jump_m}")
-        self.driven = np.abs(along[None, :] - along[:, None])
-        self.displacement = xy[None, :, :] - xy[:, None, :]
         hubs = sorted({t for g in groups if len(g) > 1 for t in g})
+        self.hubs = np.asarray(hubs, dtype=int)
         if not hubs:
             return
-        H, V = self._hub_ways(along, xy, groups, hubs, jump_m)
-        # each time point's nearest hub before and after it along the drive (or none: -1)
-        hub_at = np.asarray(hubs)
-        after = np.searchsorted(hub_at, np.arange(n), side="left")  # first hub at or after t
-        ends = []  # the hub before t, and the hub at or after it
+        self.H, self.V = self._hub_ways(along, xy, groups, hubs, jump_m)
+        # each time point's nearest hub before it and at or after it along the drive (k == -1 or len: none)
+        after = np.searchsorted(self.hubs, np.arange(n), side="left")
+        self.ends = []
         for k in (after - 1, after):
             ok = (k >= 0) & (k < len(hubs))
             k = np.clip(k, 0, len(hubs) - 1)
-            h = hub_at[k]
-            cost = np.where(ok, np.abs(along[h] - along), np.inf)
-            ends.append((k, cost, xy[h] - xy))  # hub index, metres from t to it, displacement from t to it
-        for ki, ci, di in ends:
-            for kj, cj, dj in ends:
-                # t_i -> its hub -> (hubs' shortest way) -> t_j's hub -> t_j
-                total = ci[:, None] + H[ki[:, None], kj[None, :]] + cj[None, :]
-                better = total < self.driven - 1e-9
+            h = self.hubs[k]
+            # hub index, metres from t to it, displacement from t to it
+            self.ends.append((k, np.where(ok, np.abs(along[h] - along), np.inf), xy[h] - xy))
+
+    def rows(self, rows) -> tuple[np.ndarray, np.ndarray]:
+        """The metres of drive whose drift lies between each time point of ``rows`` and every time point
+        ``(len(rows), n)``, the joins' lengths included, and where dead reckoning puts the latter from the
+        former along that way ``(len(rows), n, 2)`` (a join moves nothing)."""
+        rows = np.asarray(rows, dtype=int).reshape(-1)
+        driven = np.abs(self.along[None, :] - self.along[rows, None])
+        displacement = self.xy[None, :, :] - self.xy[rows, None, :]
+        if not len(self.hubs):
+            return driven, displacement
+        for ki, ci, di in self.ends:
+            ki, ci, di = ki[rows], ci[rows], di[rows]
+            for kj, cj, dj in self.ends:
+                # row -> its hub -> (the hubs' shortest way) -> the column's hub -> the column
+                total = ci[:, None] + self.H[ki[:, None], kj[None, :]] + cj[None, :]
+                better = total < driven - 1e-9
                 if better.any():
-                    way = di[:, None, :] + V[ki[:, None], kj[None, :]] - dj[None, :, :]
-                    self.driven = np.where(better, total, self.driven)
-                    self.displacement = np.where(better[..., None], way, self.displacement)
+                    way = di[:, None, :] + self.V[ki[:, None], kj[None, :]] - dj[None, :, :]
+                    driven = np.where(better, total, driven)
+                    displacement = np.where(better[..., None], way, displacement)
+        return driven, displacement
+
+    def way(self, i: int, j: int) -> tuple[float, np.ndarray]:
+        """The metres of drive between i and j and where dead reckoning puts j from i along that way."""
+        driven, displacement = self.rows([i])
+        return float(driven[0, j]), displacement[0, j]
 
     @staticmethod
     def _hub_ways(along, xy, groups, hubs, jump_m) -> tuple[np.ndarray, np.ndarray]:

@@ -35,6 +35,11 @@ from .explain import Join, LoopExplanation, explain, failing_rules as _failing_r
 #: :class:`~bootmap.mapping.resolver.Resolver`).
 MAPPERS = ("auto", "loops", "fewest")
 
+#: Rows of the re-anchored ways worked out at once when looking for fresh pairs, and the most cells
+#: (rows x time points) kept for the pairs asked after (memory: a few tens of MB).
+_ROWS = 256
+_KEPT_CELLS = 2 ** 22
+
 
 @dataclass(frozen=True)
 class LoopCloser:
@@ -297,6 +302,7 @@ class Closing:
         members = self.dstates.members
         groups = [members[r] for r in members if len(members[r]) > 1]
         self.anchoring = Anchoring(self.along, self.xy, groups, self.closer.radius_m / self.closer.near_share)
+        self._rows: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 
     def _kept(self, prior: Sequence[str]) -> bool:
         """Fold the joins of a map made before (each dstate's visits, in order), dropping those refused;
@@ -373,13 +379,20 @@ class Closing:
     def _fresh_pairs(self) -> list[tuple[int, int]]:
         """The pairs not proposed before, in two dstates, facing one way and within the drift bound as dead
         reckoning stands (re-anchored): all that odometry may propose now, found at once."""
-        a = self.anchoring
         off = self.middle - self.xy  # each visit's middle from its time point
-        gaps = np.hypot(*np.moveaxis(a.displacement + off[None, :, :] - off[:, None, :], -1, 0))
         root = np.asarray(self.dstates.root)
-        within = ((gaps <= self.closer.radius_m + self.closer.drift_share * a.driven + 1e-9)
-                  & (self.heading[:, None] == self.heading[None, :]) & (root[:, None] != root[None, :]))
-        return [(int(i), int(j)) for i, j in np.argwhere(np.triu(within, 1)) if (i, j) not in self.kinds]
+        pairs = []
+        for start in range(0, self.n, _ROWS):  # a block of rows at a time: memory by the block, not n squared
+            rows = np.arange(start, min(start + _ROWS, self.n))
+            driven, displacement = self.anchoring.rows(rows)
+            if (len(self._rows) + len(rows)) * self.n <= _KEPT_CELLS:
+                self._rows.update({int(i): (driven[[r]], displacement[[r]]) for r, i in enumerate(rows)})
+            gaps = np.hypot(*np.moveaxis(displacement + off[None, :, :] - off[rows, None, :], -1, 0))
+            within = ((gaps <= self.closer.radius_m + self.closer.drift_share * driven + 1e-9)
+                      & (self.heading[rows, None] == self.heading[None, :]) & (root[rows, None] != root[None, :])
+                      & (rows[:, None] < np.arange(self.n)[None, :]))
+            pairs += [(int(rows[r]), int(j)) for r, j in np.argwhere(within) if (rows[r], j) not in self.kinds]
+        return pairs
 
     def _note(self, i: int, j: int) -> None:
         """Keep the odometry a proposal was made on, for explanations."""
@@ -451,7 +464,7 @@ class Closing:
         re-anchored, the shortest way through the drive and the joins made (:mod:`.anchoring`)."""
         if self.anchoring is None:
             return abs(float(self.along[j] - self.along[i]))
-        return float(self.anchoring.driven[i, j])
+        return self._way(i, j)[0]
 
     def reanchored(self, i: int, j: int) -> bool:
         """Whether dead reckoning between i and j goes through a join made (a shorter way than the drive)."""
@@ -478,8 +491,18 @@ class Closing:
         # re-anchored: the way from i's time point to j's (the earlier first: where two ways tie, one answer),
         # and each middle's offset from its time point
         i, j = min(i, j), max(i, j)
-        way = self.anchoring.displacement[i, j] + (self.middle[j] - self.xy[j]) - (self.middle[i] - self.xy[i])
+        way = self._way(i, j)[1] + (self.middle[j] - self.xy[j]) - (self.middle[i] - self.xy[i])
         return float(np.hypot(*way))
+
+    def _way(self, i: int, j: int) -> tuple[float, np.ndarray]:
+        """The re-anchored way from i to j (metres of drive, displacement), from i's row, kept while the
+        anchoring stands (the rows asked are few: the proposals' and their dstates' visits)."""
+        if i not in self._rows:
+            if (len(self._rows) + 1) * self.n > _KEPT_CELLS:
+                self._rows.clear()
+            self._rows[i] = self.anchoring.rows([i])
+        driven, displacement = self._rows[i]
+        return float(driven[0, j]), displacement[0, j]
 
     @cached_property
     def middle(self) -> np.ndarray:
