@@ -38,7 +38,8 @@ def searched(along, xy, groups, jump):
 @st.composite
 def drives(draw):
     n = draw(st.integers(2, 24))
-    hops = draw(st.lists(st.floats(0.5, 60.0), min_size=n - 1, max_size=n - 1))
+    # a turn on the spot drives nowhere: hops of no length are drawn too
+    hops = draw(st.lists(st.one_of(st.just(0.0), st.floats(0.5, 60.0)), min_size=n - 1, max_size=n - 1))
     along = np.concatenate([[0.0], np.cumsum(hops)])
     xy = np.array(draw(st.lists(st.tuples(st.floats(-200, 200), st.floats(-200, 200)), min_size=n, max_size=n)))
     labels = draw(st.lists(st.integers(0, max(1, n // 3)), min_size=n, max_size=n))  # a partition of the points

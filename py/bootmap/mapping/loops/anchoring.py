@@ -18,8 +18,8 @@ closure, long after the drive alone would have drifted too far to tell.
 
 Only the time points of joined dstates (*hubs*) need the graph's search: a way from any time point
 reaches a hub first along the drive, at the hub just before or just after it. The hubs' shortest ways are
-found by Floyd-Warshall carrying the displacement along; every other pair combines its two nearest hubs
-each side.
+found by Dijkstra (scipy's) and their displacements summed down each tree of shortest ways; every other
+pair combines its two nearest hubs each side.
 
 Example
 -------
@@ -45,6 +45,8 @@ from __future__ import annotations
 from typing import Sequence
 
 import numpy as np
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import dijkstra
 
 __all__ = ["Anchoring"]
 
@@ -118,25 +120,39 @@ class Anchoring:
 
     @staticmethod
     def _hub_ways(along, xy, groups, hubs, jump_m) -> tuple[np.ndarray, np.ndarray]:
-        """Shortest ways among the hubs (Floyd-Warshall, displacements carried along): the drive between
-        consecutive hubs, and a join between the hubs of one dstate."""
+        """Shortest ways among the hubs, over the drive between consecutive hubs and a join between the hubs
+        of one dstate (Dijkstra, scipy's), and the displacement along each: summed down each source's tree
+        of shortest ways by pointer doubling (log2 of the hubs' number of steps, each over every pair)."""
         k = len(hubs)
-        index = {t: i for i, t in enumerate(hubs)}
         at = np.asarray(hubs)
-        H = np.abs(along[at][None, :] - along[at][:, None])
-        H = np.where(np.abs(np.arange(k)[None, :] - np.arange(k)[:, None]) <= 1, H, np.inf)
-        V = xy[at][None, :, :] - xy[at][:, None, :]
-        for g in groups:
-            members = [index[t] for t in g if t in index]
+        group = np.full(len(along), -1)
+        for g, members in enumerate(groups):
+            if len(members) > 1:
+                group[list(members)] = g
+        gid = group[at]
+        hop = np.diff(along[at])  # the drive between consecutive hubs
+        weight = {}
+        for a in range(k - 1):
+            weight[a, a + 1] = weight[a + 1, a] = hop[a]
+        for g in np.unique(gid):
+            members = np.flatnonzero(gid == g)
             for a in members:
                 for b in members:
-                    if a != b and jump_m < H[a, b]:
-                        H[a, b] = jump_m
-                        V[a, b] = 0.0
-        for m in range(k):
-            via = H[:, m, None] + H[None, m, :]
-            better = via < H - 1e-9
-            if better.any():
-                H = np.where(better, via, H)
-                V = np.where(better[..., None], V[:, m, None, :] + V[None, m, :, :], V)
+                    if a != b and jump_m < weight.get((a, b), np.inf):
+                        weight[a, b] = jump_m
+        rows, cols = np.array(list(weight)).T if weight else (np.zeros(0, int), np.zeros(0, int))
+        # scipy reads a stored zero as no edge: a hop of no drive (a turn's two ends) costs a nanometre
+        cost = np.maximum([weight[e] for e in zip(rows, cols)], 1e-9) if weight else np.zeros(0)
+        H, parent = dijkstra(csr_matrix((cost, (rows, cols)), shape=(k, k)), return_predecessors=True)
+        # each hub's step from its parent on its source's tree: nothing across a join, the drive's else
+        root = parent < 0
+        parent = np.where(root, np.arange(k)[:, None], parent)
+        child = np.broadcast_to(np.arange(k)[None, :], (k, k))
+        joined = (gid[parent] == gid[child]) & ((np.abs(parent - child) != 1)
+                                                 | (jump_m < np.abs(along[at][parent] - along[at][child])))
+        V = np.where((joined | root)[..., None], 0.0, xy[at][child] - xy[at][parent])
+        up = parent
+        for _ in range(max(1, int(np.ceil(np.log2(max(k, 2))))) + 1):
+            V = V + np.take_along_axis(V, up[..., None], axis=1)
+            up = np.take_along_axis(up, up, axis=1)
         return H, V
