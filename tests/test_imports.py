@@ -123,3 +123,16 @@ def test_the_command_line_builds_its_parser_without_the_heavy_libraries():
             f"print(sorted(m for m in {heavy!r} if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
+
+
+def test_loop_closing_loads_scipy_only_once_a_loop_is_closed():
+    """Every mapper loads loop closing (the service's solvers too, whose memory is capped); re-anchoring
+    dead reckoning needs scipy's shortest paths, some 25 MB, only once a join is made."""
+    code = ("import sys; from bootmap.mapping.loops import LoopCloser; print('scipy' in sys.modules); "
+            "from bootmap.tableau import Tableau; "
+            "lap = [{'view': 'c', 'action': {'type': 'travel', 'distance_m': 5}}, "
+            "{'view': 'c', 'action': {'type': 'turn', 'angle_deg': 90}}] * 4; "
+            "t = Tableau.from_dict({'format': 'bootmap.tableau/1', 'steps': lap * 2 + [{'view': 'c'}]}); "
+            "print(LoopCloser().resolve(t).n_dstates, 'scipy' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["False", "8", "True"]

@@ -45,8 +45,6 @@ from __future__ import annotations
 from typing import Sequence
 
 import numpy as np
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import dijkstra
 
 __all__ = ["Anchoring"]
 
@@ -123,6 +121,11 @@ class Anchoring:
         """Shortest ways among the hubs, over the drive between consecutive hubs and a join between the hubs
         of one dstate (Dijkstra, scipy's), and the displacement along each: summed down each source's tree
         of shortest ways by pointer doubling (log2 of the hubs' number of steps, each over every pair)."""
+        # scipy only once loops are closed: loop closing is loaded wherever maps are made (the service's
+        # solvers too, whose memory is capped), and scipy costs some 25 MB
+        from scipy.sparse import csr_matrix
+        from scipy.sparse.csgraph import dijkstra
+
         k = len(hubs)
         at = np.asarray(hubs)
         group = np.full(len(along), -1)
