@@ -263,6 +263,7 @@ def test_place_recognition_is_judged_by_a_method_fixed_beforehand_not_by_the_bes
     assert place_recognition_method(scans_only)[0] == first
 
 
+@pytest.mark.slow
 def test_place_recognition_along_the_drive_finds_the_second_lap_where_it_was_on_the_first(tmp_path):
     """Two laps of the ring corridor, a visit every 3 m: the visits of the second lap revisit the first,
     odometry (exact here) allows the true match, and scan matching the local maps, verified by their

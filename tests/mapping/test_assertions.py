@@ -330,6 +330,7 @@ def test_an_apart_starts_from_the_dstates_the_map_before_it_proves(paper_tableau
     assert proved(before, said([{"apart": [1, 9]}], paper_tableau), apart) == 0
 
 
+@pytest.mark.slow
 @settings(max_examples=12, deadline=None, suppress_health_check=list(HealthCheck))
 @given(seed=st.integers(0, 10 ** 6), kinds=st.lists(st.sampled_from(["same", "apart"]), min_size=1, max_size=3))
 def test_every_loop_closed_answer_honours_the_assertions_or_is_a_minimal_clash(seed, kinds):

@@ -301,6 +301,7 @@ def test_a_map_one_search_sets_aside_is_learned_from_before_the_next_one_solves(
 @settings(max_examples=12, deadline=None)
 @given(seed=st.integers(0, 10_000), steps=st.integers(30, 120), size=st.sampled_from([(3, 3), (4, 3), (4, 4)]),
        pair=st.tuples(st.floats(0, 1), st.floats(0, 1)))
+@pytest.mark.slow
 def test_a_bound_searched_with_its_spares_held_empty_gives_the_maps_of_a_search_with_the_level(seed, steps, size,
                                                                                                 pair):
     """A person's hard apart of two time points of one class, every search learning (so the search at the

@@ -135,6 +135,7 @@ def test_only_the_owner_reads_or_changes_assertions(alice, bob):
     assert len(alice.get(f"/tableaux/{tid}/assertions").json()["assertions"]) == 1
 
 
+@pytest.mark.slow
 def test_assertions_and_the_map_they_made_survive_a_restart(tmp_path):
     server = Server(tmp_path, **PATIENT_SETTINGS).start()
     try:

@@ -71,6 +71,7 @@ def _token_command(*args, data_dir) -> subprocess.CompletedProcess:
                           capture_output=True, text=True, env=env, timeout=60)
 
 
+@pytest.mark.slow
 def test_tokens_are_listed_without_their_secrets_and_a_revoked_one_is_refused_at_once(tmp_path, server_axioms):
     s = Server(tmp_path / "revoking", axioms=server_axioms, require_tokens=True, **SESSION_SETTINGS)
     dave, admin = make_token("dave", data_dir=s.data_dir), make_token("root", admin=True, data_dir=s.data_dir)
