@@ -316,6 +316,17 @@ def test_of_two_near_visits_that_are_not_near_each_other_the_nearer_in_metres_is
     assert cmap.dstate_of[8] == cmap.dstate_of[12] != cmap.dstate_of[0]
 
 
+def _square_drive(at, matches: list[dict] | None = None) -> Tableau:
+    """A log's tableau of sides of 20 m driven and turns of 90 degrees on the spot, in turn, with odometry
+    ``at`` each time point, and the laser's ``matches`` (``meta.place_matches``) where given."""
+    steps = [{"view": "corner", "odometry": list(p),
+              "action": {"type": "travel", "distance_m": 20.0} if k % 2 == 0 else {"type": "turn", "angle_deg": 90}}
+             for k, p in enumerate(at)]
+    del steps[-1]["action"]
+    meta = {"passes_through": True} | ({} if matches is None else {"place_matches": matches})
+    return Tableau.from_dict({"format": FORMAT, "steps": steps, "meta": meta})
+
+
 def _drifted_loop(matches: list[dict] | None = None) -> Tableau:
     """A loop of four corners, 20 m a side, turned on the spot, then the first side again: dead reckoning
     puts the second visit of the first corner (t8) 5 m from the first (t0) after 80 m driven, beyond what a
@@ -323,12 +334,7 @@ def _drifted_loop(matches: list[dict] | None = None) -> Tableau:
     laser's ``matches`` (``meta.place_matches``) may."""
     at = [(0, 0, 0), (20, 0, 0), (20, 0, 90), (20, 20, 90), (20, 20, 180), (0, 20, 180), (0, 20, 270),
           (5, 0, 270), (5, 0, 0), (25, 0, 0)]
-    steps = [{"view": "corner", "odometry": list(p),
-              "action": {"type": "travel", "distance_m": 20.0} if k % 2 == 0 else {"type": "turn", "angle_deg": 90}}
-             for k, p in enumerate(at)]
-    del steps[-1]["action"]
-    meta = {"passes_through": True} | ({} if matches is None else {"place_matches": matches})
-    return Tableau.from_dict({"format": FORMAT, "steps": steps, "meta": meta})
+    return _square_drive(at, matches)
 
 
 def test_a_place_match_the_laser_verified_proposes_a_join_odometry_cannot():
@@ -469,12 +475,7 @@ def _two_drifted_laps(matches: list[dict] | None = None) -> Tableau:
     and eight actions agree around each pair of laps' visits: odometry proposes them as retraced."""
     square = [(0, 0, 0), (20, 0, 0), (20, 0, 90), (20, 20, 90), (20, 20, 180), (0, 20, 180), (0, 20, 270)]
     at = square + [(5, 0, 270)] + [(x + 5, y, h) for x, y, h in square] + [(10, 0, 270), (10, 0, 0)]
-    steps = [{"view": "corner", "odometry": list(p),
-              "action": {"type": "travel", "distance_m": 20.0} if k % 2 == 0 else {"type": "turn", "angle_deg": 90}}
-             for k, p in enumerate(at)]
-    del steps[-1]["action"]
-    meta = {"passes_through": True} | ({} if matches is None else {"place_matches": matches})
-    return Tableau.from_dict({"format": FORMAT, "steps": steps, "meta": meta})
+    return _square_drive(at, matches)
 
 
 def test_retraced_visits_the_laser_places_elsewhere_are_not_proposed_either():
