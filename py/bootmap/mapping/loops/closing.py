@@ -237,6 +237,7 @@ class Closing:
         # dead reckoning re-anchored at the joins made (None: the drive's own), and the odometry each
         # proposal was made on (gap, metres of drive, re-anchored), as explanations quote it
         self.anchoring: Anchoring | None = None
+        self._rows: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # its rows worked out so far (_way)
         self.figures: dict[tuple[int, int], tuple[float, float, bool]] = {}
 
     # ------------------------------------------------------------------------------------------
@@ -302,7 +303,7 @@ class Closing:
         members = self.dstates.members
         groups = [members[r] for r in members if len(members[r]) > 1]
         self.anchoring = Anchoring(self.along, self.xy, groups, self.closer.radius_m / self.closer.near_share)
-        self._rows: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        self._rows = {}
 
     def _kept(self, prior: Sequence[str]) -> bool:
         """Fold the joins of a map made before (each dstate's visits, in order), dropping those refused;
@@ -362,16 +363,16 @@ class Closing:
         for i, j in (self._fresh_pairs() if fresh else itertools.combinations(range(self.n), 2)):
             if self.heading[i] != self.heading[j]:
                 continue
-            near = self._apart(i, j, self.closer.near_share)  # within the near bound at 1.0 or less
+            near = self.near(i, j)
             agree = self.agreeing(i, j)
             retraced = self.retraced(i, j, agree)
-            if (near <= 1.0 or retraced) and self.elsewhere(i, j):
+            if (near or retraced) and self.elsewhere(i, j):
                 continue  # the laser places j elsewhere: odometry alone does not propose them
-            if near <= 1.0 or retraced:
+            if near or retraced:
                 # nearest in metres, as the truth's places are drawn (not as a share of the drift allowed:
                 # that ranks a pair far apart after a long drive before a close pair after a short one)
                 ranked.append((-agree, self.gap(i, j), i, j))
-                self.kinds[i, j] = "near" if near <= 1.0 else "retraced"
+                self.kinds[i, j] = "near" if near else "retraced"
                 self._note(i, j)
         ranked.sort()
         return [(i, j) for _, _, i, j in ranked] + self.recognised()
