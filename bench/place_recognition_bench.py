@@ -3,7 +3,8 @@
 The map's dstates give a log a handful of revisits (2 on ACES, 6 on CSAIL), too few for a precision-recall
 curve to say much. Here every log is sampled at a visit every 2 m of odometry's path
 (``bootmap.experiments.log.place_recognition_along``): each visit's local map, matched among the earlier
-visits odometry allows to be one place, the method the experiment is judged by. One row per log (every log in
+visits odometry allows to be one place, verified by its surroundings, the best sought within dead reckoning
+re-anchored at the revisits recognised before it: the method the experiment is judged by. One row per log (every log in
 a folder, default ``../shared/logs`` beside the repository, and the MIT Killian Court log): visits, queries
 (visits with an earlier one the robot has left), true revisits, revisits whose best match is right, recall at
 95% and 99% precision, average precision, seconds.

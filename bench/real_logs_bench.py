@@ -4,8 +4,8 @@ One row per log (every log in a folder, default ``../shared/logs`` beside the re
 Killian Court log): scans, visits (dstates chosen), true dstates, the map's share of visits in their
 true dstate beside odometry alone and a dstate per visit, whether it beats both, loop-closure precision
 and recall of the map's dstates, place recognition's recall at 95% precision (by the local maps searched within loop
-closing's reach and verified by their surroundings, the method fixed beforehand: ``log.RECOGNITION_PREFERENCE``; the
-best descriptor on the log beside it), the
+closing's reach, verified by their surroundings and re-anchored at the loops the map closed before each visit, the
+method fixed beforehand: ``log.RECOGNITION_PREFERENCE``; the best descriptor on the log beside it), the
 map with the corrected poses as odometry, and the seconds of the whole run (both experiments).
 
 Targets, on every log: visits in their true dstate >= 90% with at most half the better baseline's

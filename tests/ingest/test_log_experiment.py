@@ -11,8 +11,8 @@ from hypothesis import strategies as st
 from bootmap.cli import main
 from bootmap.errors import BadInput, LogError
 from bootmap.experiments.evaluate import DESCRIPTORS
-from bootmap.experiments.log import (LOCAL_MAP, LOCAL_MAP_IN_REACH, LOCAL_MAP_VERIFIED, SCAN_MATCH,
-                                     headline, place_recognition_along, place_recognition_method,
+from bootmap.experiments.log import (LOCAL_MAP, LOCAL_MAP_IN_REACH, LOCAL_MAP_REANCHORED, LOCAL_MAP_VERIFIED,
+                                     SCAN_MATCH, headline, place_recognition_along, place_recognition_method,
                                      run_log_experiment, visits_along)
 from bootmap.ingest.ingest import read_log
 from bootmap.ingest.places import PlaceDetector
@@ -175,14 +175,18 @@ def test_places_the_laser_shows_are_revisited_lap_after_lap_and_scan_matching_re
     reached = r["place_recognition"][LOCAL_MAP_IN_REACH]
     assert (reached["revisits"], reached["queries"]) == (8, local["queries"])
     assert reached["recall_at_95_precision"] >= local["recall_at_95_precision"]
-    # Verified by their surroundings (the method judged), the same revisits, each found.
+    # Verified by their surroundings, the same revisits, each found; and so within the reach of dead
+    # reckoning re-anchored at the loops the map closed before each visit (the method judged).
     verified = r["place_recognition"][LOCAL_MAP_VERIFIED]
-    assert place_recognition_method(r)[0] == LOCAL_MAP_VERIFIED
     assert (verified["revisits"], verified["queries"]) == (8, local["queries"])
     assert verified["best_correct"] == 8 and verified["recall_at_95_precision"] >= 0.75
+    reanchored = r["place_recognition"][LOCAL_MAP_REANCHORED]
+    assert place_recognition_method(r)[0] == LOCAL_MAP_REANCHORED
+    assert (reanchored["revisits"], reanchored["queries"], reanchored["best_correct"]) == (8, local["queries"], 8)
+    assert reanchored["recall_at_95_precision"] >= 0.75
     # The headline names each method as it is, the judged one as such; only the raw descriptors are scans.
     lines = "\n".join(headline(r))
-    assert "place recognition (local map verified, the one judged;" in lines
+    assert "place recognition (local map re-anchored, the one judged;" in lines
     assert "place recognition (raw scans;" in lines and "local map in reach;" in lines
     # The raw scans of a corner's two visits, a few centimetres apart, are told apart less well.
     assert matched["average_precision"] >= max(r["place_recognition"][d]["average_precision"] for d in DESCRIPTORS)
@@ -270,7 +274,7 @@ def test_place_recognition_along_the_drive_finds_the_second_lap_where_it_was_on_
     surroundings, puts each at the right place; the first lap has nothing earlier to revisit."""
     log = write_drive_log(tmp_path / "ring.log", ring_walls(), ring_poses(laps=2))
     r = place_recognition_along(log, every_m=3.0)
-    assert r["verified"]
+    assert r["verified"] and r["reanchored"]
     # A corridor of one width looks alike all along it: matched place by place, a visit's look-alikes a few
     # metres on outscore it; verified by its surroundings (the corners 6 m on), every revisit is found.
     plain = place_recognition_along(log, every_m=3.0, verify=False)

@@ -7,8 +7,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.distance import cdist
 
-from bootmap.experiments.evaluate import (against_baselines, loop_closure, place_recognition,
-                                          revisit_candidates, sector_of_truth, within_reach)
+from bootmap.experiments.evaluate import (MATCH_SCORE, against_baselines, loop_closure, place_recognition,
+                                          reach_after_joins, reanchored_reach, revisit_candidates,
+                                          sector_of_truth, within_reach)
 from bootmap.ingest.truth import true_dstates, visit_positions
 
 # Five visits on a line: 0 and 3 at one pose, 4 back near 2, 1 alone; the robot leaves each place between,
@@ -84,6 +85,64 @@ def test_searching_within_reach_keeps_the_queries_and_revisits_and_never_detects
     assert len(reached["curve"]) <= len(everywhere["curve"]) and reached["best_correct"] <= reached["revisits"]
     # Everything allowed is the search of every candidate.
     assert place_recognition(scores, poses, allowed=np.ones((len(poses),) * 2, bool)) == everywhere
+
+
+def _corridor_twice():
+    """A 40 m corridor driven out and back, then out again, a visit every 10 m (the true poses), odometry
+    falling behind by 5 cm a metre driven: by the second lap it puts a visit metres from where it was.
+    Visits 0-4 go out, 5-8 come back, 9-12 go out again."""
+    xs = [0, 10, 20, 30, 40, 30, 20, 10, 0, 10, 20, 30, 40]
+    poses = [(float(x), 0.0) for x in xs]
+    driven = 10.0 * np.arange(len(xs))
+    odometry = [(x - 0.05 * d, 0.0) for x, d in zip(xs, driven)]
+    return poses, odometry, driven
+
+
+def test_a_recognised_revisit_reanchors_the_visits_after_it_and_rules_out_the_look_alike():
+    poses, odometry, driven = _corridor_twice()
+    scores = _near(poses).astype(float) * 0.8  # each true revisit is recognised
+    # the corridor looks alike all along: visit 11 (at 30 m) looks most like visit 2 (at 20 m), 10 m away,
+    # which odometry puts 5.5 m away, within the drive's reach (3 m + 5% of 90 m)
+    scores[11, 2] = 0.9
+    plain = within_reach(odometry, driven)
+    assert plain[11, 2]
+    reach = reanchored_reach(odometry, driven, scores)
+    # visit 10 recognised visit 2: from visit 11 back through that revisit (10 m of drive and a radius's
+    # 60 m), odometry puts 2 9.5 m away, out of reach (3 m + 3.5 m); visit 3, its true match, 10 m on from 2,
+    # lies where visit 11 is
+    assert not reach[11, 2] and reach[11, 3]
+    before, after = place_recognition(scores, poses, allowed=plain), place_recognition(scores, poses, allowed=reach)
+    assert after["revisits"] == before["revisits"] and after["best_correct"] == before["best_correct"] + 1
+    assert before["recall_at_95_precision"] == 0.0 and after["recall_at_95_precision"] == 1.0
+    # the map's joins re-anchor the same way: its dstates are the true places here
+    assert reach_after_joins(odometry, driven, [x for x, _ in poses])[11].tolist() == reach[11].tolist()
+
+
+@settings(max_examples=40, deadline=None)
+@given(n=st.integers(1, 20), seed=st.integers(0, 2**16), cut=st.integers(1, 20))
+def test_reanchored_reach_is_the_drives_until_a_revisit_and_reads_only_what_came_before(n, seed, cut):
+    rng = np.random.default_rng(seed)
+    odometry = rng.uniform(0, 30, (n, 2))
+    driven = np.cumsum(rng.uniform(0, 20, n))
+    scores = rng.uniform(0, 1, (n, n))
+    lower = np.tril(within_reach(odometry, driven), -1)
+    # no match strong enough, no join: the drive's own reach, earlier visits only
+    assert (reanchored_reach(odometry, driven, scores * MATCH_SCORE * 0.99) == lower).all()
+    assert (reach_after_joins(odometry, driven, range(n)) == lower).all()
+    # a visit's reach depends on the visits before it and their matches only (what the robot knew then)
+    m = min(cut, n)
+    reach = reanchored_reach(odometry, driven, scores)
+    assert (reanchored_reach(odometry[:m], driven[:m], scores[:m, :m]) == reach[:m, :m]).all()
+    labels = rng.integers(0, 4, n)
+    assert (reach_after_joins(odometry[:m], driven[:m], labels[:m]) == reach_after_joins(
+        odometry, driven, labels)[:m, :m]).all()
+
+
+def test_reanchoring_refuses_scores_or_labels_of_the_wrong_size():
+    with pytest.raises(ValueError, match="scores of shape"):
+        reanchored_reach(POSES, [0, 1, 2, 3, 4], np.zeros((3, 3)))
+    with pytest.raises(ValueError, match="labels for 5 visits"):
+        reach_after_joins(POSES, [0, 1, 2, 3, 4], "ab")
 
 
 def test_without_revisits_recall_is_not_measured():

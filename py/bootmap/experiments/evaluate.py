@@ -48,6 +48,7 @@ import numpy as np
 from scipy.spatial.distance import cdist
 
 from ..mapping.loops import LoopCloser
+from ..mapping.loops.anchoring import Anchoring
 from ..metrics import dstate_accuracy
 from ..views import uncertainty_coefficient
 from ..ingest.scans import Pose
@@ -58,6 +59,9 @@ from ..paths import main_axis
 DESCRIPTORS = ("raw", "shift")
 #: How far odometry may drift per metre driven between two visits of one place: loop closing's bound.
 DRIFT_SHARE = LoopCloser.drift_share
+#: A match this strong is taken as a revisit, to re-anchor dead reckoning at (:func:`reanchored_reach`): loop
+#: closing's own bar for a recognised revisit.
+MATCH_SCORE = LoopCloser.match_score
 #: Beams a shift-tolerant match may turn one scan against another (1 degree a beam: +-10 degrees).
 MAX_SHIFT = 10
 
@@ -284,6 +288,114 @@ def within_reach(odometry, driven, radius_m: float = 3.0, drift_share: float = D
     d = np.asarray(driven, dtype=float)
     reach = radius_m + drift_share * np.abs(d[:, None] - d[None, :])
     return cdist(xy, xy) <= reach if len(xy) else np.zeros((0, 0), dtype=bool)
+
+
+def reanchored_reach(odometry, driven, scores, radius_m: float = 3.0, drift_share: float = DRIFT_SHARE,
+                     accept: float = MATCH_SCORE) -> np.ndarray:
+    """:func:`within_reach` as a loop closer reckons it going along the drive: each visit's reach is that of
+    dead reckoning re-anchored at the revisits recognised before it (:mod:`bootmap.mapping.loops.anchoring`),
+    and a visit whose best match within that reach scores ``accept`` or more is taken as a revisit of that
+    place, to re-anchor at from then on.
+
+    So a loop closed early keeps the later visits of its places within a tight reach, where the drive alone
+    would have drifted far enough to admit a look-alike place down the corridor. A revisit counts as the
+    drive over which odometry may drift a place radius (``radius_m / drift_share``): through it, two visits
+    may lie ``radius_m`` further apart, as through any place. Only earlier visits and their matches decide
+    a visit's reach (causal: what a robot knows when it gets there). With no match reaching ``accept`` this
+    is :func:`within_reach`.
+
+    Parameters
+    ----------
+    odometry, driven : array-like
+        As :func:`within_reach`: each visit's dead-reckoned position and the metres driven by it.
+    scores : numpy.ndarray (n, n)
+        ``scores[j, i]``: how alike visit ``j`` and an earlier visit ``i`` are (only ``i < j`` is read).
+    accept : float
+        The score from which a visit's best match is taken as a revisit.
+
+    Returns
+    -------
+    numpy.ndarray (n, n) of bool
+        ``allowed[j, i]`` for ``i < j``: visit ``i`` is within the re-anchored reach of visit ``j``.
+
+    Examples
+    --------
+    A corridor driven out and back, then out again: visit 3 recognises visit 0 (score 0.9). Visit 4 is dead-
+    reckoned 10 m from visit 1 after 240 m of drive, within the drive's reach (3 m + 12 m), but not within
+    the re-anchored one: from visit 4 back to visit 3 (20 m), through the revisit (a radius: 60 m of drive)
+    and on to visit 1 (20 m), odometry puts them 9.5 m apart, farther than 3 m + 5 m:
+
+    >>> xy, along = [(0, 0), (20, 0), (0, 0), (0.5, 0), (30, 0)], [0, 20, 200, 240, 260]
+    >>> s = np.zeros((5, 5)); s[3, 0] = 0.9
+    >>> bool(within_reach(xy, along)[4, 1]), bool(reanchored_reach(xy, along, s)[4, 1])
+    (True, False)
+    """
+    s = np.asarray(scores, dtype=float)
+
+    def recognised(j: int, reach: np.ndarray) -> int | None:
+        candidates = np.flatnonzero(reach)
+        if not len(candidates):
+            return None
+        i = int(candidates[np.argmax(s[j, candidates])])
+        return i if s[j, i] >= accept else None
+
+    if s.shape != (len(_xy(odometry)),) * 2:
+        raise ValueError(f"scores of shape {s.shape} for {len(_xy(odometry))} visits")
+    return _reach_going_along(odometry, driven, recognised, radius_m, drift_share)
+
+
+def reach_after_joins(odometry, driven, labels: Sequence[Hashable], radius_m: float = 3.0,
+                      drift_share: float = DRIFT_SHARE) -> np.ndarray:
+    """:func:`within_reach` re-anchored, for each visit, at the joins a map made among the visits before it
+    (visits of one label are one dstate or place; :func:`reanchored_reach` for how a join re-anchors).
+
+    >>> xy, along = [(0, 0), (20, 0), (0, 0), (0.5, 0), (30, 0)], [0, 20, 200, 240, 260]
+    >>> bool(reach_after_joins(xy, along, ["a", "b", "c", "a", "d"])[4, 1])
+    False
+    """
+    labels = list(labels)
+
+    def joined(j: int, reach: np.ndarray) -> int | None:
+        return next((t for t in range(j) if labels[t] == labels[j]), None)
+
+    if len(labels) != len(_xy(odometry)):
+        raise ValueError(f"{len(labels)} labels for {len(_xy(odometry))} visits")
+    return _reach_going_along(odometry, driven, joined, radius_m, drift_share)
+
+
+def _reach_going_along(odometry, driven, revisit, radius_m: float, drift_share: float) -> np.ndarray:
+    """Each visit's reach, going along the drive, on dead reckoning re-anchored at the revisits before it:
+    ``revisit(j, reach)`` names the earlier visit that visit ``j`` revisits (None: a new place), given the
+    earlier visits within its reach."""
+    xy = _xy(odometry)
+    d = np.asarray(driven, dtype=float)
+    n = len(xy)
+    if d.shape != (n,):
+        raise ValueError(f"{d.shape[0] if d.ndim else 0} distances for {n} visits")
+    allowed = np.zeros((n, n), dtype=bool)
+    root = list(range(n))
+
+    def find(a: int) -> int:
+        while root[a] != a:
+            root[a] = root[root[a]]
+            a = root[a]
+        return a
+
+    anchoring = None
+    for j in range(n):
+        if anchoring is None:  # made again only once a revisit is taken: its joins are all before j
+            groups: dict[int, list[int]] = defaultdict(list)
+            for t in range(j):
+                groups[find(t)].append(t)
+            anchoring = Anchoring(d, xy, list(groups.values()), radius_m / drift_share)
+        metres, displacement = anchoring.rows([j])
+        reach = np.hypot(displacement[0, :j, 0], displacement[0, :j, 1]) <= radius_m + drift_share * metres[0, :j]
+        allowed[j, :j] = reach
+        i = revisit(j, reach)
+        if i is not None and find(i) != find(j):
+            root[find(j)] = find(i)
+            anchoring = None
+    return allowed
 
 
 def place_recognition(scores: np.ndarray, poses, radius_m: float = 3.0,

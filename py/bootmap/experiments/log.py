@@ -47,7 +47,7 @@ from ..ingest.dstates import JunctionDetector, TurnDetector, odometry_track
 from ..ingest.places import PlaceDetector
 from .evaluate import (DESCRIPTORS, against_baselines, dead_reckoned_dstates, descriptor_scores, loop_closure,
                        map_against_truth, nn_on_revisits, place_of_truth, place_recognition, sector_of_truth,
-                       views_against_truth, within_reach)
+                       reach_after_joins, reanchored_reach, views_against_truth, within_reach)
 from ..ingest.ingest import log_tableau, read_log, travel_ends, turn_ends
 from ..ingest.truth import visit_positions
 from ..ingest.local_maps import local_images
@@ -68,11 +68,16 @@ LOCAL_MAP_IN_REACH = "local map in reach"
 #: ... and those matches, each visit's likeliest three, verified by the places around them
 #: (:class:`~bootmap.surroundings.SurroundingsCheck`).
 LOCAL_MAP_VERIFIED = "local map verified"
+#: ... and those verified matches sought, for each visit, within the reach of dead reckoning re-anchored at
+#: the loops the map closed before it (:func:`~bootmap.experiments.evaluate.reach_after_joins`); along the
+#: drive, where there is no map, at the revisits recognised before it
+#: (:func:`~bootmap.experiments.evaluate.reanchored_reach`).
+LOCAL_MAP_REANCHORED = "local map re-anchored"
 #: Which place recognition the experiment is judged by: the first of these it measured (scan matching is
 #: optional; the scan descriptors always run). The local maps searched within loop closing's reach and
 #: verified by their surroundings first: the hybrid SSH's description of a place, verified geometrically,
 #: among the candidates a loop closer would weigh, and checked against more of the experience than one place.
-RECOGNITION_PREFERENCE = (LOCAL_MAP_VERIFIED, LOCAL_MAP_IN_REACH, LOCAL_MAP, SCAN_MATCH, *DESCRIPTORS)
+RECOGNITION_PREFERENCE = (LOCAL_MAP_REANCHORED, LOCAL_MAP_VERIFIED, LOCAL_MAP_IN_REACH, LOCAL_MAP, SCAN_MATCH, *DESCRIPTORS)
 #: Processes scan matching runs in (its pairs are independent; the result does not depend on how many).
 SCAN_MATCH_JOBS = 2
 #: Each visit's so many likeliest matches by the correlative search alone are aligned and scored in full
@@ -193,11 +198,18 @@ def _experiment(scans, log, lap, seed, k_max, time_limit, quantum_deg, view_crit
 
 class _PlaceMatches:
     """The visits' local maps matched (every pair's score, ``scores``), the pairs loop closing's own dead
-    reckoning allows to be one place (``reach``: its drift bound, on its numbers), and each visit's likeliest
-    matches among those verified by their surroundings (``verified``)."""
+    reckoning allows to be one place (``reach``: its drift bound, on its numbers), each visit's likeliest
+    matches among those verified by their surroundings (``verified``), and the dead reckoning they were
+    reckoned on (each visit's position ``xy`` and the metres ``driven`` by it)."""
 
-    def __init__(self, scores: np.ndarray, reach: np.ndarray, verified: np.ndarray):
-        self.scores, self.reach, self.verified = scores, reach, verified
+    def __init__(self, scores: np.ndarray, reach: np.ndarray, verified: np.ndarray, xy: np.ndarray,
+                 driven: np.ndarray):
+        self.scores, self.reach, self.verified, self.xy, self.driven = scores, reach, verified, xy, driven
+
+    def reach_after(self, labels, radius_m: float = 3.0) -> np.ndarray:
+        """The pairs within reach of dead reckoning re-anchored, for each visit, at the joins a map made
+        among the visits before it (``labels``: each visit's dstate)."""
+        return reach_after_joins(self.xy, self.driven, labels, radius_m)
 
     def pairs(self) -> list[dict]:
         """The verified matches as a tableau carries them (``meta.place_matches``): each later visit ``b``
@@ -217,9 +229,10 @@ def place_matches(tableau, seen, radius_m: float = 3.0, max_range: float = 20.0)
     local = local_images(seen, visits, radius_m, max_range=max_range)
     matcher = _matcher(max_range, radius_m, fov_deg=360.0)
     scores = matcher.scores(local)
-    reach = within_reach(*dead_reckoning(tableau), radius_m)
+    xy, driven = dead_reckoning(tableau)
+    reach = within_reach(xy, driven, radius_m)
     verified = SurroundingsCheck(matcher, reach_m=radius_m).verify(seen, visits, scores, reach)
-    return _PlaceMatches(scores, reach, verified)
+    return _PlaceMatches(scores, reach, verified, xy, driven)
 
 
 def _slam_evaluation(r: dict, images, poses, positions, truth, cmap, dead, radius_m,
@@ -228,8 +241,9 @@ def _slam_evaluation(r: dict, images, poses, positions, truth, cmap, dead, radiu
     """The figures SLAM papers report, against the corrected poses: the map beside both baselines,
     loop closures (the map's and odometry alone's) and place recognition by each descriptor (and by
     scan matching images clipped at ``scan_match_range``, when given, and the visits' local maps rendered
-    all round, ``matched``: among every earlier visit, among the pairs odometry allows alone, and those
-    verified by their surroundings). A loop closure joins
+    all round, ``matched``: among every earlier visit, among the pairs odometry allows alone, those
+    verified by their surroundings, and those within reach of dead reckoning re-anchored at the loops the
+    map closed before each visit). A loop closure joins
     dstates, judged where the truth places their visits (``positions``: a turn's two ends at their middle,
     as the true places are made); place recognition matches images, judged where they were taken
     (``poses``)."""
@@ -254,6 +268,9 @@ def _slam_evaluation(r: dict, images, poses, positions, truth, cmap, dead, radiu
                 recognition[LOCAL_MAP] = place_recognition(matched.scores, poses, radius_m)
                 recognition[LOCAL_MAP_IN_REACH] = place_recognition(matched.scores, poses, radius_m, matched.reach)
                 recognition[LOCAL_MAP_VERIFIED] = place_recognition(matched.verified, poses, radius_m, matched.reach)
+                if cmap is not None:
+                    recognition[LOCAL_MAP_REANCHORED] = place_recognition(
+                        matched.verified, poses, radius_m, matched.reach_after(cmap.dstate_of, radius_m))
     return {"baselines": baselines, "loop_closure": loops, "place_recognition": recognition}
 
 
@@ -363,7 +380,8 @@ def visits_along(scans, every_m: float = ALONG_EVERY_M) -> list[int]:
 
 
 def place_recognition_along(log: str | Path, every_m: float = ALONG_EVERY_M, radius_m: float = 3.0,
-                            max_range: float = 20.0, calibrate: bool = True, verify: bool = True) -> dict:
+                            max_range: float = 20.0, calibrate: bool = True, verify: bool = True,
+                            reanchor: bool = True) -> dict:
     """Place recognition judged along the whole drive, not only at the map's dstates: many more queries
     (a log's few dstate revisits make a precision-recall curve of a handful of points).
 
@@ -372,14 +390,18 @@ def place_recognition_along(log: str | Path, every_m: float = ALONG_EVERY_M, rad
     (:mod:`bootmap.ingest.local_maps`) on the odometry calibrated by the laser (as the experiment's map is
     made), matched by :class:`~bootmap.scan_match.ScanMatcher` among the earlier visits odometry allows to be
     one place (:func:`~bootmap.experiments.evaluate.within_reach`) and, with ``verify``, each visit's likeliest
-    three verified by their surroundings (:class:`~bootmap.surroundings.SurroundingsCheck`; the method the
-    experiment is judged by: ``LOCAL_MAP_VERIFIED``, else ``LOCAL_MAP_IN_REACH``), judged against the
-    corrected poses by :func:`~bootmap.experiments.evaluate.place_recognition`.
+    three verified by their surroundings (:class:`~bootmap.surroundings.SurroundingsCheck`) and, with
+    ``reanchor``, each visit's best match sought within the reach of dead reckoning re-anchored at the
+    revisits recognised before it (:func:`~bootmap.experiments.evaluate.reanchored_reach`; the method the
+    experiment is judged by: ``LOCAL_MAP_REANCHORED``, without it ``LOCAL_MAP_VERIFIED``, unverified
+    ``LOCAL_MAP_IN_REACH``), judged against the corrected poses by
+    :func:`~bootmap.experiments.evaluate.place_recognition`.
 
     Returns
     -------
     dict
-        ``every_m``, ``verified`` and :func:`~bootmap.experiments.evaluate.place_recognition`'s figures.
+        ``every_m``, ``verified``, ``reanchored`` and :func:`~bootmap.experiments.evaluate.place_recognition`'s
+        figures.
 
     Raises
     ------
@@ -399,8 +421,11 @@ def place_recognition_along(log: str | Path, every_m: float = ALONG_EVERY_M, rad
     scores = matcher.scores(local_images(scans, visits, radius_m, max_range=max_range), allowed=reach)
     if verify:
         scores = SurroundingsCheck(matcher, reach_m=radius_m).verify(scans, visits, scores, reach)
+    if reanchor:
+        reach = reanchored_reach(odometry, driven, scores, radius_m)
     poses = [scans[k].truth for k in visits]
-    return {"every_m": every_m, "verified": verify, **place_recognition(scores, poses, radius_m, reach)}
+    return {"every_m": every_m, "verified": verify, "reanchored": reanchor,
+            **place_recognition(scores, poses, radius_m, reach)}
 
 
 def place_recognition_method(r: dict) -> tuple[str, dict]:
