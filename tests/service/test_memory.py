@@ -272,31 +272,58 @@ def test_connections_that_trickle_their_headers_or_send_nothing_are_closed_at_th
 
 
 def test_idle_readers_hold_no_database_connection_and_are_closed_at_the_send_time_out(memory_server, stored):
-    """Forty-five clients ask for a 15 MB tableau (more than the kernel's buffers hold) and read nothing.
-    Each read is copied from the database and the connection given back at once, so /health and other
-    reads are answered meanwhile (before, each idle reader held a database connection: /health answered
-    503 after 30 s). A client that reads nothing for the send time-out (3 s here) has its connection
-    closed, its answer cut short."""
+    """Forty-five clients ask for a 15 MB tableau (more than the kernel's buffers hold) and read it slowly,
+    a few kilobytes at a time. Each read is copied from the database and the connection given back at once,
+    so /health and other reads are answered meanwhile (before, each slow reader held a database connection:
+    the pool of 40 ran dry, and /health answered 503 after the pool's 30 s wait). Then they read nothing: a
+    client that reads nothing for the send time-out (3 s here) has its connection closed, its answer cut
+    short."""
     s = memory_server
     url = urlsplit(s.url)
     small, large = stored["small"], stored["large"]
     with s.client(timeout=120) as c:
         expected = {tid: len(c.get(f"/tableaux/{tid}").content) for tid in (small, large)}
 
-    def idle_reader(tid: int) -> socket.socket:
+    def slow_reader(tid: int) -> socket.socket:
         sock = socket.socket()
         sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)  # a small window: the server must wait
         sock.connect((url.hostname, url.port))
         sock.sendall(f"GET /tableaux/{tid} HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n".encode())
         return sock
 
-    idle = [idle_reader(large) for _ in range(45)]
-    time.sleep(1.0)
-    t0 = time.monotonic()
-    with s.client(timeout=10) as c:
-        assert c.get("/health").status_code == 200
-        assert len(c.get(f"/tableaux/{small}").content) == expected[small]
-    assert time.monotonic() - t0 < 5
+    readers = [slow_reader(large) for _ in range(45)]
+    first = {id(sock): b"" for sock in readers}
+    closed = set()  # readers the server closed while they read: none
+    reading = threading.Event()
+    reading.set()
+
+    def trickle() -> None:  # each reader takes what its small window holds, every 0.2 s: never idle for 3 s
+        while reading.is_set():
+            for sock in readers:
+                sock.settimeout(0.01)
+                try:
+                    got = sock.recv(4096)
+                except (TimeoutError, BlockingIOError):
+                    continue
+                first[id(sock)] += got
+                if not got:
+                    closed.add(id(sock))
+            time.sleep(0.2)
+
+    trickler = threading.Thread(target=trickle, daemon=True)
+    trickler.start()
+    try:
+        time.sleep(1.0)
+        # Well within the pool's 30 s wait, whatever the machine's load: a connection held by each reader
+        # would leave none for these.
+        with s.client(timeout=25) as c:
+            assert c.get("/health").status_code == 200
+            assert len(c.get(f"/tableaux/{small}").content) == expected[small]
+    finally:
+        reading.clear()
+        trickler.join()
+    assert not closed and all(first[id(sock)].startswith(b"HTTP/1.1 200") for sock in readers)  # all answering
+    idle = readers
     time.sleep(3 + 1)
     for sock in idle:
         sock.settimeout(15)
@@ -304,5 +331,6 @@ def test_idle_readers_hold_no_database_connection_and_are_closed_at_the_send_tim
         while chunk := sock.recv(1 << 20):  # what was sent before the time-out, then the server's close
             got += chunk
         sock.close()
+        got = first[id(sock)] + got
         assert got.startswith(b"HTTP/1.1 200") and not got.endswith(b"0\r\n\r\n")  # the chunked body is cut short
         assert len(got) < expected[large]
