@@ -89,3 +89,15 @@ def test_bootmap_map_prints_and_writes_the_confidence(tmp_path, capsys):
         capsys.readouterr().out
     assert main(["map", str(run), "--levels", "causal", "--format", "json"]) == 0
     assert json.loads(capsys.readouterr().out)["confidence"]["minimal_maps"] == 2
+
+
+@settings(max_examples=60, deadline=None)
+@given(maps=st.integers(1, 4).flatmap(lambda k: st.integers(1, 12).flatmap(
+    lambda n: st.lists(st.lists(st.sampled_from("ABCDE"), min_size=n, max_size=n), min_size=k, max_size=k))))
+def test_a_dstates_confusable_time_points_are_those_another_map_puts_with_any_of_its_own(maps):
+    c = Confidence.of(maps, [[None] * len(maps[0])] * len(maps), capped=False)
+    first = maps[0]
+    for d in set(first):
+        mine = {t for t, x in enumerate(first) if x == d}
+        others = {u for m in maps[1:] for t in mine for u, x in enumerate(m) if x == m[t]}
+        assert c.dstates[d]["confusable"] == sorted(others - mine)

@@ -58,14 +58,13 @@ class Confidence:
         groups = _groups(first)
         counted = [(m, Counter(m)) for m in dstates]
         alike = {d: sum(_same_group(m, n, ts) for m, n in counted) for d, ts in groups.items()}
-        confusable = {}
-        for d, ts in groups.items():
-            mine = set(ts)
-            others: set[int] = set()
-            for m in dstates[1:]:
-                labels = {m[t] for t in ts}
-                others |= {t for t, x in enumerate(m) if x in labels}
-            confusable[d] = sorted(others - mine)
+        others: dict[str, set[int]] = {d: set() for d in groups}
+        for m in dstates[1:]:
+            held = _groups(m)  # each of this map's dstates, its time points
+            for d, ts in groups.items():
+                for label in {m[t] for t in ts}:
+                    others[d].update(held[label])
+        confusable = {d: sorted(others[d] - set(ts)) for d, ts in groups.items()}
         settled = sum(len(ts) for d, ts in groups.items() if alike[d] == len(dstates)) / max(1, len(first))
         out_places = {}
         if places and all(p is not None for p in places[0]):
