@@ -354,9 +354,11 @@ def reach_after_joins(odometry, driven, labels: Sequence[Hashable], radius_m: fl
     False
     """
     labels = list(labels)
+    first: dict[Hashable, int] = {}  # each label's first visit
 
     def joined(j: int, reach: np.ndarray) -> int | None:
-        return next((t for t in range(j) if labels[t] == labels[j]), None)
+        i = first.setdefault(labels[j], j)
+        return None if i == j else i
 
     if len(labels) != len(_xy(odometry)):
         raise ValueError(f"{len(labels)} labels for {len(_xy(odometry))} visits")
