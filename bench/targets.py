@@ -27,6 +27,10 @@ class Targets:
         misses its target."""
         ok = value is not None and bool(_OPS[op](value, bound))
         shown = "not measured" if value is None else fmt.format(value) + unit
+        if value is not None and not ok and fmt.format(value) == fmt.format(bound):
+            # rounded as the bound, it would read as met: as many digits as tell the two apart
+            digits = next((d for d in range(3, 13) if f"{value:.{d}g}" != f"{bound:.{d}g}"), 12)
+            shown = f"{value:.{digits}g}{unit}"
         target = bound_text if bound_text is not None else f"{bound:g}{unit}"
         line = f"{name}: {shown} (target {op} {target}: {'ok' if ok else 'MISSED'})"
         (self.met if ok else self.missed).append(line)
