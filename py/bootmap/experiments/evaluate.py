@@ -339,8 +339,9 @@ def reanchored_reach(odometry, driven, scores, radius_m: float = 3.0, drift_shar
         i = int(candidates[np.argmax(s[j, candidates])])
         return i if s[j, i] >= accept else None
 
-    if s.shape != (len(_xy(odometry)),) * 2:
-        raise ValueError(f"scores of shape {s.shape} for {len(_xy(odometry))} visits")
+    n = len(_xy(odometry))
+    if s.shape != (n, n):
+        raise ValueError(f"scores of shape {s.shape} for {n} visits")
     return _reach_going_along(odometry, driven, recognised, radius_m, drift_share)
 
 
@@ -360,8 +361,9 @@ def reach_after_joins(odometry, driven, labels: Sequence[Hashable], radius_m: fl
         i = first.setdefault(labels[j], j)
         return None if i == j else i
 
-    if len(labels) != len(_xy(odometry)):
-        raise ValueError(f"{len(labels)} labels for {len(_xy(odometry))} visits")
+    n = len(_xy(odometry))
+    if len(labels) != n:
+        raise ValueError(f"{len(labels)} labels for {n} visits")
     return _reach_going_along(odometry, driven, joined, radius_m, drift_share)
 
 
@@ -369,33 +371,25 @@ def _reach_going_along(odometry, driven, revisit, radius_m: float, drift_share: 
     """Each visit's reach, going along the drive, on dead reckoning re-anchored at the revisits before it:
     ``revisit(j, reach)`` names the earlier visit that visit ``j`` revisits (None: a new place), given the
     earlier visits within its reach."""
+    from scipy.cluster.hierarchy import DisjointSet  # here: tens of ms to import, for this alone
+
     xy = _xy(odometry)
     d = np.asarray(driven, dtype=float)
     n = len(xy)
     if d.shape != (n,):
         raise ValueError(f"{d.shape[0] if d.ndim else 0} distances for {n} visits")
     allowed = np.zeros((n, n), dtype=bool)
-    root = list(range(n))
-
-    def find(a: int) -> int:
-        while root[a] != a:
-            root[a] = root[root[a]]
-            a = root[a]
-        return a
-
+    places = DisjointSet(range(n))  # the visits taken as revisits of one place so far
     anchoring = None
     for j in range(n):
         if anchoring is None:  # made again only once a revisit is taken: its joins are all before j
-            groups: dict[int, list[int]] = defaultdict(list)
-            for t in range(j):
-                groups[find(t)].append(t)
-            anchoring = Anchoring(d, xy, list(groups.values()), radius_m / drift_share)
+            joined = [sorted(s) for s in places.subsets() if len(s) > 1]
+            anchoring = Anchoring(d, xy, joined, radius_m / drift_share)
         metres, displacement = anchoring.rows([j])
         reach = np.hypot(displacement[0, :j, 0], displacement[0, :j, 1]) <= radius_m + drift_share * metres[0, :j]
         allowed[j, :j] = reach
         i = revisit(j, reach)
-        if i is not None and find(i) != find(j):
-            root[find(j)] = find(i)
+        if i is not None and places.merge(i, j):
             anchoring = None
     return allowed
 
