@@ -72,6 +72,11 @@ MIN_VISITS = 5
 #: A view seen in a context at most this many times is read by its share of the context's visits; one
 #: seen more often is ordinary there.
 SEEN_RARELY = 2
+#: Clear suspects are read as their contexts expect, and found again on the views so read, at most so many
+#: times (:func:`read_as_expected`).
+EXPECTED_ROUNDS = 5
+#: Why a view became a suspect where reading the clear suspects as expected explained the experience.
+AS_EXPECTED = "misread, where the views around the clear suspects, read as expected, show it"
 #: Why a rare view is suspect.
 RARE_VIEW = "a view with one or two images"
 #: Why a view no rule here suspected became a suspect (the resolver finds these: :mod:`.search.abduction`).
@@ -293,6 +298,32 @@ class SuspectWatch:
                 self.suspects.add(t)
             else:
                 self.suspects.discard(t)
+
+
+def read_as_expected(views: Sequence[Hashable], actions: Sequence[Hashable],
+                     rounds: int = EXPECTED_ROUNDS) -> tuple[list, list[int]]:
+    """The views with each clear suspect whose contexts expect one view read as that view, and the time
+    points so read. A misread next to another hides it (each side of one sees the other): once the clearer
+    one is read as expected, the other shows; so the suspects are found again on the views so read, at
+    most ``rounds`` times, until none changes. A guess, not an explanation: the resolver weighs it
+    (:meth:`.search.abduction.MisreadAbduction._as_expected`).
+
+    >>> views = list("ABCD" * 25)
+    >>> views[21] = "A"
+    >>> read, changed = read_as_expected(views, ["turn"] * 100)
+    >>> changed, read[21]
+    ([21], 'B')
+    """
+    read, changed = list(views), []
+    for _ in range(rounds):
+        fresh = [s for s in find_suspects(read, actions)
+                 if s.clear and len(s.expected) == 1 and s.reason != RARE_VIEW and s.t not in changed]
+        if not fresh:
+            break
+        for s in fresh:
+            read[s.t] = s.expected[0]
+            changed.append(s.t)
+    return read, sorted(changed)
 
 
 def context_views(views: Sequence[Hashable], actions: Sequence[Hashable], times: Sequence[int]) -> dict:
