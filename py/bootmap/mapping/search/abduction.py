@@ -246,11 +246,15 @@ class MisreadAbduction:
         been misread from any view its one-step contexts saw. And a context next to a suspect shows the
         suspect's view, misread or not: each time point beside a suspect (and each suspect beside another)
         may also have been misread from what the contexts that skip that suspect saw (three misreads in a
-        row, at places seen four and seven times, each expected only as the next misread showed)."""
+        row, at places seen four and seven times, each expected only as the next misread showed). So may the
+        first and the last time point: each has one side only, and a misread there surprises no context
+        seen more than twice (the last of 600 steps, misread, left no map with the ghosts' bound)."""
         state = self.state
         layout = list(state.classes.lower)
         taken = {s.t for s in chosen}
-        near = sorted({u for t in taken for u in (t - 1, t + 1) if 0 <= u < len(state.tableau)} - taken)
+        last = len(state.tableau) - 1
+        # (and the first and the last time point: each has one side, which a misread there may not surprise)
+        near = sorted(({u for t in taken for u in (t - 1, t + 1) if 0 <= u <= last} | {0, last}) - taken)
         if not near:
             return None
         actions = action_symbols(state.tableau, state.angles)
