@@ -154,7 +154,10 @@ def test_the_suspect_watch_names_what_find_suspects_names_on_every_prefix(seed, 
     for t, view in enumerate(tableau.views):
         watch.append(view, actions[t - 1] if t else None)
         assert watch.suspects == {s.t for s in find_suspects(tableau.views[:t + 1], actions[:t + 1])}, t
-    assert SuspectWatch.of(tableau.views, actions).suspects == watch.suspects
+        # the clear ones, kept as steps arrive, are those the watch reads clear from the contexts now
+        assert watch.clear_suspects == {u for u in watch.suspects if watch.clear(u)}, t
+    whole = SuspectWatch.of(tableau.views, actions)
+    assert whole.suspects == watch.suspects and whole.clear_suspects == watch.clear_suspects
 
 
 @settings(max_examples=4, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -218,7 +221,7 @@ def test_the_replays_class_bounds_are_the_resolvers_on_classes_too_large_for_the
                for k in range(len(bounds))}
     large = [times for times in replay.members.values() if len(times) > EXACT_CLIQUE_UP_TO]
     assert large
-    assert all(replay._lower[key] == members[tuple(times)] for key, times in replay.members.items())
+    assert all(replay._lower[key][1] == members[tuple(times)] for key, times in replay.members.items())
 
 
 def _prepass_and_replay(tableau, resolver, metrical):

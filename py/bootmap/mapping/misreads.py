@@ -231,6 +231,7 @@ class SuspectWatch:
         self._action_ids: dict = {}
         self.contexts = _Contexts([], [], {}, {}, index=True)
         self.suspects: set[int] = set()
+        self.clear_suspects: set[int] = set()  # the suspects that are clear ones (:meth:`clear`)
         self.rare: set = set()
         self._at: dict[int, list[int]] = {}  # view id -> its time points
 
@@ -243,6 +244,7 @@ class SuspectWatch:
         n = len(views)
         watch.rare = _rare(watch._at, n, typical=RARE_AMONG)
         watch.suspects = {t for t in range(n) if watch._suspect(t, n)}
+        watch.clear_suspects = {t for t in watch.suspects if watch.clear(t)}
         return watch
 
     def _suspect(self, t: int, n: int) -> bool:
@@ -293,11 +295,16 @@ class SuspectWatch:
         again |= {u for t in again for u in (t - 1, t + 1) if 0 <= u < n}
         if n == MIN_STEPS:
             again = range(n)
-        for t in again:
+        for t in again:  # (a suspect's sides, and whether its view is rare, change only for these)
             if self._suspect(t, n):
                 self.suspects.add(t)
+                if self.clear(t):
+                    self.clear_suspects.add(t)
+                else:
+                    self.clear_suspects.discard(t)
             else:
                 self.suspects.discard(t)
+                self.clear_suspects.discard(t)
 
 
 def read_as_expected(views: Sequence[Hashable], actions: Sequence[Hashable],

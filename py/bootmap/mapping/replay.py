@@ -153,8 +153,11 @@ class Replay:
         self.members: dict[tuple, list[int]] = {}
         self.watch = SuspectWatch()
         self.maps: list[Partition] = []         # every minimal map, the one shown first
-        self._lower: dict[tuple, int] = {}      # class -> its lower bound, while no step changes it
-        self._without: dict[tuple, int] = {}    # ... and without the clear suspects' views
+        # class -> its lower bound (and the map's dstates in the class that capped its search), while no step
+        # changes the class's time points or the features that tell them apart
+        self._lower: dict[tuple, tuple[int | None, int]] = {}
+        self._without: dict[tuple, tuple[int | None, int]] = {}  # ... and without the clear suspects' views
+        self._values: dict[tuple, dict[tuple, set]] = {}  # class -> feature -> the values its time points show
         self._cleared: frozenset[int] = frozenset()
         self.refuted = False                    # the last extension left no map with as many dstates
 
@@ -260,22 +263,27 @@ class Replay:
         if not self.watch.suspects or count == n_dstates or len(self.views) < MIN_VISITS * count:
             return True
         for key, times in self.members.items():
-            if key not in self._lower:
-                self._lower[key] = apart_clique(times, _telling(times, self.partial), exact=True,
-                                                at_most=self._dstates_in(key))
-        bound = sum(self._lower.values())
+            at_most = self._dstates_in(key)
+            cached = self._lower.get(key)
+            if cached is None or cached[0] != at_most:
+                self._lower[key] = (at_most, apart_clique(times, _telling(times, self.partial), exact=True,
+                                                          at_most=at_most))
+        bound = sum(value for _, value in self._lower.values())
         if bound != n_dstates:
             return False
         clear = self._clear(images)
         if clear != self._cleared:  # the views left out changed: every class's bound without them may too
             self._without, self._cleared = {}, clear
-        without = self.without(clear)
+        without = None  # (made once a class's bound without them is worked out again)
         for key, times in self.members.items():
-            if key not in self._without:
-                self._without[key] = apart_clique([t for t in times if t not in clear],
-                                                  _telling(times, without, self.partial), exact=True,
-                                                  at_most=self._dstates_in(key))
-        return bound - sum(self._without.values()) < len(clear)
+            at_most = self._dstates_in(key)
+            cached = self._without.get(key)
+            if cached is None or cached[0] != at_most:
+                without = self.without(clear) if without is None else without
+                self._without[key] = (at_most, apart_clique([t for t in times if t not in clear],
+                                                            _telling(times, without, self.partial), exact=True,
+                                                            at_most=at_most))
+        return bound - sum(value for _, value in self._without.values()) < len(clear)
 
     def _dstates_in(self, key: tuple) -> int | None:
         """A class's dstates in a map (the first): as many as any set of its time points that pairwise
@@ -285,8 +293,9 @@ class Replay:
     def _clear(self, images: bool) -> frozenset[int]:
         """The suspects the resolver would leave out first: the clear ones, or all where none is clear
         (views with one or two images are suspects only in a tableau of images)."""
-        suspects = [t for t in self.watch.suspects if images or self.views[t] not in self.watch.rare_names]
-        clear = [t for t in suspects if self.watch.clear(t)]
+        rare = () if images else self.watch.rare_names
+        suspects = [t for t in self.watch.suspects if self.views[t] not in rare]
+        clear = [t for t in suspects if t in self.watch.clear_suspects]
         return frozenset(clear or suspects)
 
     def without(self, views_at: frozenset[int]):
@@ -335,9 +344,17 @@ class Replay:
             self.watch.append(view, before)
 
     def _feature(self, t: int, key: tuple, value) -> None:
+        """Time point t shows ``value`` of feature ``key``. Its class's bounds change only where the feature
+        tells some of its time points apart (:func:`_telling`): where the class shows another value of it;
+        a feature the class shows one value of is no evidence (1,774 of a 2,000-step stream's steps add
+        such features to eight time points each, and the bounds were worked out again for each)."""
         self.partial[t][key] = value
-        self._lower.pop(self.class_of[t], None)
-        self._without.pop(self.class_of[t], None)
+        cls = self.class_of[t]
+        shown = self._values.setdefault(cls, {}).setdefault(key, set())
+        if shown and shown != {value}:
+            self._lower.pop(cls, None)
+            self._without.pop(cls, None)
+        shown.add(value)
 
 
 def _telling(times: Sequence[int], features, among=None) -> dict[int, dict]:
