@@ -30,6 +30,34 @@ def exploration(seed: int, turn_sd: float = 3.0, rounding=LOGGED):
                                rounding=rounding), rng
 
 
+def five_percent_misread(seed: int):
+    """The noise bench's 600-step exploration (turns sd 3, drift 1.2, distances 3%) with 5% of its views
+    misread: the clean tableau, the misread one, and the time points misread."""
+    rng = np.random.default_rng(seed)
+    world = random_world(rng, 5, 4, extra_edges=4, landmarks=0.4)
+    clean = with_odometry_noise(walk(world, 600, rng, policy="explore"), 3.0, 1.2, rng, distance_sd=0.03)
+    tableau, wrong = with_misreads(clean, 0.05, np.random.default_rng(seed))
+    return clean, tableau, wrong
+
+
+def resolved_recording(tableau, method: str, time_limit: float = 60):
+    """The tableau resolved, and whether each call of ``MisreadAbduction.<method>`` found a map."""
+    from bootmap.mapping.search.abduction import MisreadAbduction
+
+    found_maps = []
+    real = getattr(MisreadAbduction, method)
+
+    def recorded(self, *args, **kwargs):
+        found = real(self, *args, **kwargs)
+        found_maps.append(found is not None)
+        return found
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(MisreadAbduction, method, recorded)
+        cmap = Resolver(time_limit=time_limit).resolve(tableau)
+    return cmap, found_maps
+
+
 def assert_misreads_named(cmap, tableau, wrong):
     named = {s["t"] for s in cmap.suspect_steps}
     assert cmap.n_dstates == len(set(true_partition(tableau)))
@@ -110,23 +138,8 @@ def test_a_misread_that_looks_ordinary_beside_the_suspect_it_makes_is_found(seed
     # Seed 62: three misreads in a row (t164-t166, at places seen four and seven times), each context
     # showing the next misread: only the contexts that skip a suspect show what the robot saw (before,
     # 75 dstates where 70 are true, in 55 s).
-    from bootmap.mapping.search.abduction import MisreadAbduction
-
-    rng = np.random.default_rng(seed)
-    world = random_world(rng, 5, 4, extra_edges=4, landmarks=0.4)
-    clean = with_odometry_noise(walk(world, 600, rng, policy="explore"), 3.0, 1.2, rng, distance_sd=0.03)
-    tableau, wrong = with_misreads(clean, 0.05, np.random.default_rng(seed))
-    beside = []
-    real = MisreadAbduction._beside
-
-    def recorded(self, exact_facts, chosen, bound):
-        found = real(self, exact_facts, chosen, bound)
-        beside.append(found is not None)
-        return found
-
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(MisreadAbduction, "_beside", recorded)
-        cmap = Resolver(time_limit=30).resolve(tableau)
+    _, tableau, wrong = five_percent_misread(seed)
+    cmap, beside = resolved_recording(tableau, "_beside", time_limit=30)
     assert beside == [True]  # the map came from the layout with the time points beside the suspects
     assert_misreads_named(cmap, tableau, wrong)
     assert dstate_accuracy(true_partition(tableau), cmap.dstate_of) == 1.0
@@ -397,26 +410,11 @@ def test_a_misread_whose_contexts_expect_other_views_is_found_in_the_layout_of_t
     # climbing a dstate at a time, every class a slot more each time, the resolution ended at 75 dstates
     # for 72 (17 s). Read as expected, the clear suspects leave few misreads, which that resolution names;
     # its map lays out the search of the experience as seen, and the truth is in that layout.
-    from bootmap.mapping.search.abduction import MisreadAbduction
-
-    rng = np.random.default_rng(275)
-    world = random_world(rng, 5, 4, extra_edges=4, landmarks=0.4)
-    clean = with_odometry_noise(walk(world, 600, rng, policy="explore"), 3.0, 1.2, rng, distance_sd=0.03)
-    tableau, wrong = with_misreads(clean, 0.05, np.random.default_rng(275))
+    clean, tableau, wrong = five_percent_misread(275)
     angles, _ = read_actions(tableau)
     suspects = {s.t: s for s in find_suspects(tableau.views, action_symbols(tableau, angles))}
     assert suspects[194].clear and clean.steps[194].view not in suspects[194].expected  # the case
-    guessed = []
-    real = MisreadAbduction._as_expected
-
-    def recorded(self, *args, **kwargs):
-        found = real(self, *args, **kwargs)
-        guessed.append(found is not None)
-        return found
-
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(MisreadAbduction, "_as_expected", recorded)
-        cmap = Resolver(time_limit=60).resolve(tableau)
+    cmap, guessed = resolved_recording(tableau, "_as_expected")
     assert guessed == [True]  # the map came from the layout of the guess
     assert_misreads_named(cmap, tableau, wrong)
     assert dstate_accuracy(true_partition(tableau), cmap.dstate_of) == 1.0
@@ -428,26 +426,11 @@ def test_a_misread_last_view_is_allowed_beside_the_suspects():
     # time point has one side, and its misread surprised no context seen more than twice: no rule
     # suspected it, and no map had the ghosts' bound with the time points beside the suspects alone (the
     # resolution ended at 76 dstates for 70). The first and the last time point are allowed beside them.
-    from bootmap.mapping.search.abduction import MisreadAbduction
-
-    rng = np.random.default_rng(277)
-    world = random_world(rng, 5, 4, extra_edges=4, landmarks=0.4)
-    clean = with_odometry_noise(walk(world, 600, rng, policy="explore"), 3.0, 1.2, rng, distance_sd=0.03)
-    tableau, wrong = with_misreads(clean, 0.05, np.random.default_rng(277))
+    _, tableau, wrong = five_percent_misread(277)
     last = len(tableau) - 1
     angles, _ = read_actions(tableau)
     assert last in wrong and last not in {s.t for s in find_suspects(tableau.views, action_symbols(tableau, angles))}
-    beside = []
-    real = MisreadAbduction._beside
-
-    def recorded(self, exact_facts, chosen, bound):
-        found = real(self, exact_facts, chosen, bound)
-        beside.append(found is not None)
-        return found
-
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(MisreadAbduction, "_beside", recorded)
-        cmap = Resolver(time_limit=60).resolve(tableau)
+    cmap, beside = resolved_recording(tableau, "_beside")
     assert beside == [True]
     assert last in {s["t"] for s in cmap.suspect_steps}
     assert_misreads_named(cmap, tableau, wrong)

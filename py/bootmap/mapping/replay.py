@@ -262,28 +262,32 @@ class Replay:
         count = len(self.members)
         if not self.watch.suspects or count == n_dstates or len(self.views) < MIN_VISITS * count:
             return True
-        for key, times in self.members.items():
-            at_most = self._dstates_in(key)
-            cached = self._lower.get(key)
-            if cached is None or cached[0] != at_most:
-                self._lower[key] = (at_most, apart_clique(times, _telling(times, self.partial), exact=True,
-                                                          at_most=at_most))
-        bound = sum(value for _, value in self._lower.values())
+        bound = self._bounds(self._lower, lambda times: (times, _telling(times, self.partial)))
         if bound != n_dstates:
             return False
         clear = self._clear(images)
         if clear != self._cleared:  # the views left out changed: every class's bound without them may too
             self._without, self._cleared = {}, clear
-        without = None  # (made once a class's bound without them is worked out again)
+        without = None  # the features without the clear suspects' views, made once some class needs them
+
+        def left(times: list[int]) -> tuple[list[int], dict]:
+            nonlocal without
+            if without is None:
+                without = self.without(clear)
+            return [t for t in times if t not in clear], _telling(times, without, self.partial)
+
+        return bound - self._bounds(self._without, left) < len(clear)
+
+    def _bounds(self, cache: dict[tuple, tuple[int | None, int]], clique_of) -> int:
+        """The classes' lower bounds added up, each worked out again (``clique_of(times)``: the time points
+        and the features :func:`apart_clique` reads) where ``cache`` has none for the class, or one searched
+        with another cap (the map's dstates in the class)."""
         for key, times in self.members.items():
             at_most = self._dstates_in(key)
-            cached = self._without.get(key)
+            cached = cache.get(key)
             if cached is None or cached[0] != at_most:
-                without = self.without(clear) if without is None else without
-                self._without[key] = (at_most, apart_clique([t for t in times if t not in clear],
-                                                            _telling(times, without, self.partial), exact=True,
-                                                            at_most=at_most))
-        return bound - sum(value for _, value in self._without.values()) < len(clear)
+                cache[key] = (at_most, apart_clique(*clique_of(times), exact=True, at_most=at_most))
+        return sum(value for _, value in cache.values())
 
     def _dstates_in(self, key: tuple) -> int | None:
         """A class's dstates in a map (the first): as many as any set of its time points that pairwise

@@ -189,14 +189,14 @@ class MisreadAbduction:
                 return misread
             state.classes.lower, state.proved = planned, max(proved, lowest + 1)
         misread = search.optimise(None, fewest)
-        guessed = None  # the best map in the layout of a guess, and the misreads it allowed
+        guessed = None  # the best map in the layout of a guess, and the misreads it allowed (then in force)
         if misread is None and exact_facts is not None:
             before = state.proved
             guessed = self._as_expected(exact_facts, chosen)
-            if guessed is not None:
-                self._allow_misreads(exact_facts, chosen)
-            state.classes.lower, state.proved = planned, before
-        others = [s for s in wider if s.t not in state.suspects]
+            if guessed is None:
+                state.classes.lower, state.proved = planned, before
+        taken = {s.t for s in chosen}
+        others = [s for s in wider if s.t not in taken]
         if misread is None and exact_facts is not None and others:
             # The layout stays the one the clear suspects set: the others may join their classes'
             # dstates, but each class keeps its dstates (a small search, where misreads are few). With a
@@ -209,11 +209,12 @@ class MisreadAbduction:
             misread = weigh() if guessed is None else self.budget.within_share(weigh, AS_EXPECTED_SHARE)
             if misread is not None and guessed is not None and _cost(*guessed) < _cost(misread, state.suspects):
                 misread = None
-            if misread is None:  # each dstate more is a slot more for every class, and each suspect's
+            if misread is None and guessed is not None:
+                self._allow_misreads(exact_facts, list(guessed[1].values()))
+            elif misread is None:  # each dstate more is a slot more for every class, and each suspect's
                 self._allow_misreads(exact_facts, chosen)  # other classes' slots with it: too many
                 state.classes.lower, state.proved = planned, proved
         if misread is None and guessed is not None:
-            self._allow_misreads(exact_facts, list(guessed[1].values()))
             return guessed[0]
         cheapest = min((s.cost for s in state.suspects.values()), default=0)
         while misread is None and fewest < ceiling:
@@ -309,9 +310,9 @@ class MisreadAbduction:
         finally:
             _reading_as_expected.reset(flag)
         what = f"the {len(changed)} clear suspects read as their contexts expect, resolved"
-        state.tries.append(Try(what if guess is None else f"{what}: {guess.n_dstates} dstates, "
-                               f"{len(guess.suspect_steps)} misreads", verdict if guess is None else "sat",
-                               time.perf_counter() - t0))
+        if guess is not None:
+            what, verdict = f"{what}: {guess.n_dstates} dstates, {len(guess.suspect_steps)} misreads", "sat"
+        state.tries.append(Try(what, verdict, time.perf_counter() - t0))
         if guess is None:
             return None
         self.budget.check_clock("the layout of the views read as expected")
